@@ -1,0 +1,21 @@
+//! STUB: being written.
+use super::{AccelError, AccelOptions, Hit, RayQuery};
+use crate::math::Ray;
+use crate::scene::Scene;
+
+pub struct EmbreeAccel;
+
+impl EmbreeAccel {
+    pub fn build(_scene: &Scene, _opts: AccelOptions) -> Result<Self, AccelError> {
+        Err(AccelError("not yet implemented".into()))
+    }
+}
+
+impl RayQuery for EmbreeAccel {
+    fn intersect(&self, _ray: &Ray) -> Option<Hit> {
+        None
+    }
+    fn occluded(&self, _ray: &Ray) -> bool {
+        false
+    }
+}

@@ -1,0 +1,139 @@
+//! Ray queries against the scene's triangles: one method set, two interchangeable backends.
+//!
+//! - `embree`: Debian's Embree 3 through our `photon-embree-sys` bindings (the default);
+//!   single rays plus 8-wide packets for coherent batches.
+//! - `bvh`: the pure-Rust obvhs CWBVH, for cross-checking and benchmarking.
+//!
+//! Both answer with the same [`Hit`], so the renderer cannot tell which one answered. Hot loops
+//! dispatch through the closed enum [`Accel`], not a trait object.
+pub mod bvh;
+pub mod embree;
+
+use crate::math::{Ray, Vec3};
+use crate::scene::Scene;
+use std::fmt;
+
+/// A closest hit: distance along the ray (in units of `ray.d`), which mesh and triangle,
+/// barycentrics (`p = (1-u-v) p0 + u p1 + v p2`) and the unit geometric normal
+/// `normalize(cross(p1 - p0, p2 - p0))` (not flipped; see `Mesh::geometric_normal`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    pub t: f32,
+    pub mesh: u32,
+    pub prim: u32,
+    pub u: f32,
+    pub v: f32,
+    pub ng: Vec3,
+}
+
+/// Which backend answers ray queries.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum BackendKind {
+    #[default]
+    Embree,
+    Obvhs,
+}
+
+impl fmt::Display for BackendKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            BackendKind::Embree => "embree",
+            BackendKind::Obvhs => "obvhs",
+        })
+    }
+}
+
+/// Build options shared by both backends.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct AccelOptions {
+    /// Embree's `RTC_SCENE_FLAG_ROBUST` (watertight-leaning, slower); obvhs ignores it.
+    pub robust: bool,
+}
+
+/// An error from building or querying an acceleration structure.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct AccelError(pub String);
+
+impl fmt::Display for AccelError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for AccelError {}
+
+/// The method set every backend implements.
+pub trait RayQuery: Send + Sync {
+    /// Closest hit with `t` in `[ray.tmin, ray.tmax]`, or `None`.
+    fn intersect(&self, ray: &Ray) -> Option<Hit>;
+    /// Whether anything blocks the ray within `[ray.tmin, ray.tmax]`.
+    fn occluded(&self, ray: &Ray) -> bool;
+    /// Closest hits of a batch of (preferably coherent) rays; `out.len() == rays.len()`.
+    fn intersect_batch(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        for (r, o) in rays.iter().zip(out.iter_mut()) {
+            *o = self.intersect(r);
+        }
+    }
+    /// Occlusion of a batch of rays; `out.len() == rays.len()`.
+    fn occluded_batch(&self, rays: &[Ray], out: &mut [bool]) {
+        for (r, o) in rays.iter().zip(out.iter_mut()) {
+            *o = self.occluded(r);
+        }
+    }
+}
+
+/// The closed set of backends; what the renderer holds.
+pub enum Accel {
+    Embree(embree::EmbreeAccel),
+    Obvhs(bvh::BvhAccel),
+}
+
+impl Accel {
+    /// Builds the chosen backend over every mesh of `scene`.
+    pub fn build(
+        scene: &Scene,
+        kind: BackendKind,
+        opts: AccelOptions,
+    ) -> Result<Accel, AccelError> {
+        Ok(match kind {
+            BackendKind::Embree => Accel::Embree(embree::EmbreeAccel::build(scene, opts)?),
+            BackendKind::Obvhs => Accel::Obvhs(bvh::BvhAccel::build(scene, opts)?),
+        })
+    }
+
+    pub fn kind(&self) -> BackendKind {
+        match self {
+            Accel::Embree(_) => BackendKind::Embree,
+            Accel::Obvhs(_) => BackendKind::Obvhs,
+        }
+    }
+}
+
+impl RayQuery for Accel {
+    #[inline]
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        match self {
+            Accel::Embree(a) => a.intersect(ray),
+            Accel::Obvhs(a) => a.intersect(ray),
+        }
+    }
+    #[inline]
+    fn occluded(&self, ray: &Ray) -> bool {
+        match self {
+            Accel::Embree(a) => a.occluded(ray),
+            Accel::Obvhs(a) => a.occluded(ray),
+        }
+    }
+    fn intersect_batch(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        match self {
+            Accel::Embree(a) => a.intersect_batch(rays, out),
+            Accel::Obvhs(a) => a.intersect_batch(rays, out),
+        }
+    }
+    fn occluded_batch(&self, rays: &[Ray], out: &mut [bool]) {
+        match self {
+            Accel::Embree(a) => a.occluded_batch(rays, out),
+            Accel::Obvhs(a) => a.occluded_batch(rays, out),
+        }
+    }
+}

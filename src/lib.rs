@@ -1,0 +1,19 @@
+//! photon: a two-pass photon-mapping renderer (Jensen) for pbrt-v4 scenes.
+//!
+//! The pipeline, in the order a render runs it:
+//! - [`scene::loader`] reads a pbrt-v4 file into a [`scene::Scene`] (meshes, materials, lights,
+//!   camera, film, sampler, filter, integrator settings);
+//! - [`accel`] builds Embree 3 or obvhs over the triangles and answers ray queries;
+//! - [`integrator`] renders: [`camera`] makes rays, [`sampling`] gives the sample streams,
+//!   [`bsdf`] and [`light`] do the shading, [`film`] accumulates pixels;
+//! - [`imageio`] writes EXR (OpenEXRCore) and PNG.
+pub mod accel;
+pub mod bsdf;
+pub mod camera;
+pub mod film;
+pub mod imageio;
+pub mod integrator;
+pub mod light;
+pub mod math;
+pub mod sampling;
+pub mod scene;

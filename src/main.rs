@@ -1,0 +1,2 @@
+//! STUB CLI.
+fn main() {}

@@ -1,0 +1,231 @@
+//! The scene as the renderer sees it: world-space triangle meshes, materials, lights, camera,
+//! film, sampler, pixel filter and integrator settings. Immutable once loaded.
+//!
+//! `loader` reads it from the pbrt-v4 scene format (see the README for the supported subset).
+pub mod loader;
+
+use crate::math::{Mat4, Vec2, Vec3};
+use std::fmt;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+pub use loader::params::ParamSet;
+
+/// Where in a scene file something was written: `file:line:column` (1-based).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Loc {
+    pub file: Arc<PathBuf>,
+    pub line: u32,
+    pub col: u32,
+}
+
+impl fmt::Display for Loc {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}:{}:{}", self.file.display(), self.line, self.col)
+    }
+}
+
+/// An error in a scene: where it is (when known) and what is wrong, as one line.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SceneError {
+    pub loc: Option<Loc>,
+    pub msg: String,
+}
+
+impl SceneError {
+    pub fn at(loc: &Loc, msg: impl Into<String>) -> Self {
+        SceneError {
+            loc: Some(loc.clone()),
+            msg: msg.into(),
+        }
+    }
+
+    pub fn new(msg: impl Into<String>) -> Self {
+        SceneError {
+            loc: None,
+            msg: msg.into(),
+        }
+    }
+}
+
+impl fmt::Display for SceneError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.loc {
+            Some(loc) => write!(f, "{loc}: {}", self.msg),
+            None => write!(f, "{}", self.msg),
+        }
+    }
+}
+
+impl std::error::Error for SceneError {}
+
+/// A triangle mesh in world space.
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    pub positions: Vec<Vec3>,
+    /// Per-vertex shading normals (world space, unit length), if the scene gave them.
+    pub normals: Option<Vec<Vec3>>,
+    pub uvs: Option<Vec<Vec2>>,
+    pub indices: Vec<[u32; 3]>,
+    /// Index into `Scene::materials`.
+    pub material: u32,
+    /// Index into `Scene::lights` of the `Light::Area` this mesh emits as, if any.
+    pub area_light: Option<u32>,
+    /// `ReverseOrientation` xor a handedness-swapping transform: flips the geometric normal
+    /// (pbrt's rule; only matters when the mesh has no shading normals to agree with).
+    pub flip_normals: bool,
+    /// The analytic sphere (centre, radius) this mesh tessellates, for `Shape "sphere"`.
+    pub sphere: Option<(Vec3, f32)>,
+}
+
+impl Mesh {
+    pub fn triangle(&self, prim: u32) -> [Vec3; 3] {
+        let [a, b, c] = self.indices[prim as usize];
+        [
+            self.positions[a as usize],
+            self.positions[b as usize],
+            self.positions[c as usize],
+        ]
+    }
+
+    /// pbrt's geometric normal of triangle `prim`: `cross(p1 - p0, p2 - p0)` normalised, turned
+    /// to agree with the interpolated shading normal when there is one, else flipped by
+    /// `flip_normals`. Area lights emit on this side.
+    pub fn geometric_normal(&self, prim: u32, u: f32, v: f32) -> Vec3 {
+        let [p0, p1, p2] = self.triangle(prim);
+        let n = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+        match self.shading_normal(prim, u, v) {
+            Some(ns) if n.dot(ns) < 0.0 => -n,
+            Some(_) => n,
+            None if self.flip_normals => -n,
+            None => n,
+        }
+    }
+
+    /// The interpolated shading normal at barycentrics `(u, v)` (weights `1-u-v, u, v`).
+    pub fn shading_normal(&self, prim: u32, u: f32, v: f32) -> Option<Vec3> {
+        let normals = self.normals.as_ref()?;
+        let [a, b, c] = self.indices[prim as usize];
+        let n =
+            normals[a as usize] * (1.0 - u - v) + normals[b as usize] * u + normals[c as usize] * v;
+        Some(n.normalize_or_zero())
+    }
+
+    pub fn area(&self, prim: u32) -> f32 {
+        let [p0, p1, p2] = self.triangle(prim);
+        0.5 * (p1 - p0).cross(p2 - p0).length()
+    }
+}
+
+/// The closed set of materials (pbrt-v4 names and defaults).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Material {
+    /// `"diffuse"`: Lambertian, `reflectance` (default 0.5).
+    Diffuse { reflectance: Vec3 },
+    /// `"dielectric"`: smooth glass with relative index `eta` (default 1.5).
+    Dielectric { eta: f32 },
+    /// `"conductor"`: complex index `eta + i k` (from `eta`/`k`, or from `reflectance` as pbrt-v4
+    /// does: eta = 1, k = 2 sqrt(r) / sqrt(1 - r)); Trowbridge-Reitz roughness `alpha_u/v`
+    /// (already remapped when `remaproughness` is true); 0 means a perfect mirror.
+    Conductor {
+        eta: Vec3,
+        k: Vec3,
+        alpha_u: f32,
+        alpha_v: f32,
+    },
+}
+
+/// The closed set of lights. Radiometric values are linear RGB, already multiplied by `scale`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Light {
+    /// `AreaLightSource "diffuse"` on mesh `mesh`: radiance `l` leaving the side of the
+    /// geometric normal (both sides when `two_sided`).
+    Area { mesh: u32, l: Vec3, two_sided: bool },
+    /// `LightSource "point"`: intensity `intensity` (W/sr) at `pos`.
+    Point { pos: Vec3, intensity: Vec3 },
+    /// `LightSource "spot"`: like a point light, inside a cone around unit `dir`, with pbrt-v4's
+    /// smoothstep falloff from `cos_falloff_start` (full) to `cos_falloff_end` (zero).
+    Spot {
+        pos: Vec3,
+        dir: Vec3,
+        intensity: Vec3,
+        cos_falloff_start: f32,
+        cos_falloff_end: f32,
+    },
+    /// `LightSource "distant"`: radiance `l` arriving along unit `dir` (the direction the
+    /// light travels, from `from` to `to`); irradiance on a surface facing it is `l`.
+    Distant { dir: Vec3, l: Vec3 },
+}
+
+/// `Camera "perspective"`: pinhole; `fov` (degrees) spans the shorter image axis (pbrt-v4).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CameraDesc {
+    /// Camera-to-world transform (the inverse of the CTM at `Camera`). pbrt's camera space:
+    /// looks down +z, +y up, and raster x grows towards camera -x... see `camera.rs`.
+    pub world_from_camera: Mat4,
+    pub fov_deg: f32,
+}
+
+/// `Film "rgb"`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FilmDesc {
+    pub xres: u32,
+    pub yres: u32,
+    pub filename: Option<String>,
+}
+
+/// `PixelFilter`: radii in pixels.
+#[derive(Clone, Debug, PartialEq)]
+pub enum FilterDesc {
+    Box { radius: Vec2 },
+    Triangle { radius: Vec2 },
+    Gaussian { radius: Vec2, sigma: f32 },
+}
+
+/// `Sampler`: the pbrt name (kept for the statistics) and samples per pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SamplerDesc {
+    pub name: String,
+    pub pixel_samples: u32,
+}
+
+/// `Integrator`: its name and its parameters, left for the integrator to read (and to report
+/// as errors those it does not use).
+#[derive(Clone, Debug)]
+pub struct IntegratorDesc {
+    pub name: String,
+    pub params: ParamSet,
+    pub loc: Option<Loc>,
+}
+
+/// A loaded scene.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub meshes: Vec<Mesh>,
+    pub materials: Vec<Material>,
+    pub lights: Vec<Light>,
+    pub camera: CameraDesc,
+    pub film: FilmDesc,
+    pub filter: FilterDesc,
+    pub sampler: SamplerDesc,
+    pub integrator: IntegratorDesc,
+    /// The file the scene was read from (outputs default next to the working directory).
+    pub path: PathBuf,
+}
+
+impl Scene {
+    pub fn triangle_count(&self) -> usize {
+        self.meshes.iter().map(|m| m.indices.len()).sum()
+    }
+
+    /// Axis-aligned bounds of all geometry `(min, max)`.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for p in self.meshes.iter().flat_map(|m| m.positions.iter()) {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+        (lo, hi)
+    }
+}
