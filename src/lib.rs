@@ -12,8 +12,9 @@ pub mod bsdf;
 pub mod camera;
 pub mod film;
 pub mod imageio;
-pub mod integrator;
+// pub mod integrator; (enabled once bsdf lands)
 pub mod light;
 pub mod math;
 pub mod sampling;
 pub mod scene;
+// pub mod tools;

@@ -1,1 +1,190 @@
-//! STUB
+//! Integrators and the render driver: tiles in parallel, deterministic sample streams,
+//! per-component images.
+//!
+//! ```text
+//! Integrator "path" "integer maxdepth" [ 5 ]
+//! ```
+//! Whatever integrator a file names, it is rendered by the one given on the command line
+//! (default: the direct-lighting + specular ray tracer until the photon mapper lands); the
+//! statistics say which. Parameters the chosen integrator does not read are errors.
+pub mod direct;
+
+use crate::accel::Accel;
+use crate::camera::Camera;
+use crate::film::{Filter, Radiance};
+use crate::imageio::RgbImage;
+use crate::light::Lights;
+use crate::sampling::Pattern;
+use crate::scene::{Scene, SceneError};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+/// Edge length of a square render tile, in pixels.
+pub const TILE: u32 = 16;
+
+/// The integrators `photon render --integrator` can run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum IntegratorKind {
+    /// Direct light by shadow rays (MIS for glossy surfaces) plus recursive specular and
+    /// glossy reflection/refraction; no diffuse interreflection.
+    #[default]
+    Direct,
+}
+
+/// Everything a render needs besides the scene.
+#[derive(Clone, Debug)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub seed: u64,
+    pub pattern: Pattern,
+    /// Maximum number of bounces (pbrt's `maxdepth`).
+    pub max_depth: u32,
+    /// Shadow rays per shading point.
+    pub light_samples: u32,
+}
+
+impl RenderSettings {
+    /// Settings from the scene file (`Film`, `Sampler`, `Integrator` parameters); unused
+    /// integrator parameters are errors.
+    pub fn from_scene(scene: &Scene) -> Result<RenderSettings, SceneError> {
+        let mut params = scene.integrator.params.clone();
+        let max_depth = params.get_int("maxdepth", 5)?;
+        if max_depth < 0 {
+            let loc = scene.integrator.loc.clone();
+            return Err(SceneError { loc, msg: format!("maxdepth must be >= 0, got {max_depth}") });
+        }
+        params.check_unused()?;
+        Ok(RenderSettings {
+            width: scene.film.xres,
+            height: scene.film.yres,
+            spp: scene.sampler.pixel_samples.max(1),
+            seed: 0,
+            pattern: Pattern::Stratified,
+            max_depth: max_depth as u32,
+            light_samples: 1,
+        })
+    }
+}
+
+/// Ray and time counters of one render.
+#[derive(Debug, Default)]
+pub struct Counters {
+    pub camera_rays: AtomicU64,
+    pub secondary_rays: AtomicU64,
+    pub shadow_rays: AtomicU64,
+}
+
+impl Counters {
+    pub fn total(&self) -> u64 {
+        self.camera_rays.load(Ordering::Relaxed)
+            + self.secondary_rays.load(Ordering::Relaxed)
+            + self.shadow_rays.load(Ordering::Relaxed)
+    }
+}
+
+/// The rendered images and what it took.
+pub struct RenderOutput {
+    pub image: RgbImage,
+    /// `(name, image)` per component; they sum to `image`.
+    pub components: Vec<(&'static str, RgbImage)>,
+    pub seconds: f64,
+    pub counters: Counters,
+}
+
+/// The shared, read-only state every tile renders from.
+pub struct RenderContext<'a> {
+    pub scene: &'a Scene,
+    pub accel: &'a Accel,
+    pub lights: Lights,
+    pub camera: Camera,
+    pub filter: Filter,
+    pub settings: RenderSettings,
+    pub counters: Counters,
+}
+
+/// Renders `scene` with `kind`, calling `progress(tiles_done, tiles_total)` as tiles finish.
+/// Runs on the current rayon pool.
+pub fn render(
+    scene: &Scene,
+    accel: &Accel,
+    settings: &RenderSettings,
+    kind: IntegratorKind,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> RenderOutput {
+    let start = Instant::now();
+    let ctx = RenderContext {
+        scene,
+        accel,
+        lights: Lights::new(scene),
+        camera: Camera::new(&scene.camera, settings.width, settings.height),
+        filter: Filter::new(&scene.filter),
+        settings: settings.clone(),
+        counters: Counters::default(),
+    };
+    let (w, h) = (settings.width, settings.height);
+    let tiles: Vec<(u32, u32)> =
+        (0..h.div_ceil(TILE)).flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE))).collect();
+    let total = tiles.len() as u64;
+    let done = AtomicU64::new(0);
+    let rendered: Vec<((u32, u32), Vec<Radiance>)> = tiles
+        .par_iter()
+        .map(|&(x0, y0)| {
+            let x1 = (x0 + TILE).min(w);
+            let y1 = (y0 + TILE).min(h);
+            let px = match kind {
+                IntegratorKind::Direct => direct::render_tile(&ctx, x0, y0, x1, y1),
+            };
+            progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
+            ((x0, y0), px)
+        })
+        .collect();
+
+    // Assemble the tiles into the combined image and one image per component.
+    let (wu, hu) = (w as usize, h as usize);
+    let mut parts: [RgbImage; 4] = std::array::from_fn(|_| RgbImage::new(wu, hu));
+    let mut image = RgbImage::new(wu, hu);
+    for ((x0, y0), px) in rendered {
+        let tw = ((x0 + TILE).min(w) - x0) as usize;
+        for (i, r) in px.iter().enumerate() {
+            let (x, y) = (x0 as usize + i % tw, y0 as usize + i / tw);
+            let k = y * wu + x;
+            for (part, v) in parts.iter_mut().zip([r.direct, r.specular, r.caustic, r.indirect]) {
+                part.pixels[k] = v.to_array();
+            }
+            image.pixels[k] = r.total().to_array();
+        }
+    }
+    let [direct, specular, caustic, indirect] = parts;
+    RenderOutput {
+        image,
+        components: vec![
+            ("direct", direct),
+            ("specular", specular),
+            ("caustic", caustic),
+            ("indirect", indirect),
+        ],
+        seconds: start.elapsed().as_secs_f64(),
+        counters: ctx.counters,
+    }
+}
+
+/// Pixels of a tile in row-major order: `(x, y)` for `x0..x1`, `y0..y1`.
+pub fn tile_pixels(x0: u32, y0: u32, x1: u32, y1: u32) -> impl Iterator<Item = (u32, u32)> {
+    (y0..y1).flat_map(move |y| (x0..x1).map(move |x| (x, y)))
+}
+
+/// Power heuristic (beta = 2) weight of a strategy with density `a` against one with `b`.
+pub fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2.is_infinite() {
+        return 1.0;
+    }
+    if a2 + b2 > 0.0 {
+        a2 / (a2 + b2)
+    } else {
+        0.0
+    }
+}

@@ -1,0 +1,240 @@
+//! The direct + specular integrator, traced as a wavefront per tile so that coherent rays go to
+//! the backend in batches (Embree's 8-wide packets): all camera rays of a tile's sample pass,
+//! then all their shadow rays, then all continuation rays of the next bounce.
+//!
+//! At each hit: emitted light (MIS-weighted after a glossy bounce); direct light by shadow rays
+//! to a light chosen in proportion to power (power-heuristic MIS with BSDF sampling on glossy
+//! surfaces); then, on specular and glossy surfaces only, a BSDF-sampled continuation.
+//! Diffuse surfaces end the path: diffuse interreflection is the photon mapper's job.
+//!
+//! Components: light reaching the camera after at most one non-delta scattering event is
+//! `direct`; light arriving through further specular/glossy bounces is `specular`.
+use super::{power_heuristic, tile_pixels, RenderContext};
+use crate::accel::{Hit, RayQuery};
+use crate::bsdf::{Bsdf, TransportMode};
+use crate::film::Radiance;
+use crate::math::{offset_ray_origin, Frame, Ray, Vec2, Vec3};
+use crate::sampling::Sampler;
+use std::sync::atomic::Ordering;
+
+/// Dimensions used by the camera sample (pixel filter offset).
+const CAMERA_DIMS: u32 = 2;
+
+/// One path in flight.
+struct PathState {
+    /// Index of the pixel within the tile.
+    pixel: usize,
+    ray: Ray,
+    beta: Vec3,
+    /// Number of scattering events so far.
+    depth: u32,
+    /// BSDF density of the last (non-delta) bounce, for MIS at an emitter; 0 after the camera
+    /// or a delta bounce.
+    prev_pdf: f32,
+    /// Whether all bounces so far were delta (specular).
+    prev_delta: bool,
+    sampler: Sampler,
+}
+
+/// A shadow ray and the radiance it carries if unoccluded.
+struct Shadow {
+    pixel: usize,
+    ray: Ray,
+    contrib: Vec3,
+    direct: bool,
+}
+
+fn dims_per_vertex(light_samples: u32) -> u32 {
+    3 * light_samples + 3
+}
+
+/// Renders the pixels `[x0, x1) x [y0, y1)`; returns per-pixel means in row-major order.
+pub fn render_tile(ctx: &RenderContext, x0: u32, y0: u32, x1: u32, y1: u32) -> Vec<Radiance> {
+    let s = &ctx.settings;
+    let tw = (x1 - x0) as usize;
+    let n = tw * (y1 - y0) as usize;
+    let mut acc = vec![Radiance::default(); n];
+    let mut paths: Vec<PathState> = Vec::with_capacity(n);
+    let mut next: Vec<PathState> = Vec::with_capacity(n);
+    let mut rays: Vec<Ray> = Vec::with_capacity(n);
+    let mut hits: Vec<Option<Hit>> = Vec::with_capacity(n);
+    let mut shadows: Vec<Shadow> = Vec::new();
+    let mut shadow_rays: Vec<Ray> = Vec::new();
+    let mut occluded: Vec<bool> = Vec::new();
+
+    for sample in 0..s.spp {
+        // Camera rays of the whole tile for this sample index.
+        paths.clear();
+        for (i, (x, y)) in tile_pixels(x0, y0, x1, y1).enumerate() {
+            let pixel_id = y as u64 * s.width as u64 + x as u64;
+            let mut sampler = Sampler::new(s.pattern, s.seed, pixel_id, sample, s.spp);
+            let offset = ctx.filter.sample(sampler.next_2d());
+            let ray = ctx.camera.generate_ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset);
+            paths.push(PathState {
+                pixel: i,
+                ray,
+                beta: Vec3::ONE,
+                depth: 0,
+                prev_pdf: 0.0,
+                prev_delta: true,
+                sampler,
+            });
+        }
+        ctx.counters.camera_rays.fetch_add(paths.len() as u64, Ordering::Relaxed);
+
+        while !paths.is_empty() {
+            rays.clear();
+            rays.extend(paths.iter().map(|p| p.ray));
+            hits.clear();
+            hits.resize(rays.len(), None);
+            ctx.accel.intersect_batch(&rays, &mut hits);
+            shadows.clear();
+            next.clear();
+            for (path, hit) in paths.drain(..).zip(hits.iter()) {
+                if let Some(hit) = hit {
+                    shade(ctx, path, hit, &mut acc, &mut shadows, &mut next);
+                }
+            }
+            trace_shadows(ctx, &shadows, &mut shadow_rays, &mut occluded, &mut acc);
+            if !next.is_empty() {
+                ctx.counters.secondary_rays.fetch_add(next.len() as u64, Ordering::Relaxed);
+            }
+            std::mem::swap(&mut paths, &mut next);
+        }
+    }
+    let inv = 1.0 / s.spp as f32;
+    acc.into_iter().map(|r| r * inv).collect()
+}
+
+/// Adds `value` to the pixel's direct or specular component.
+fn add(acc: &mut [Radiance], pixel: usize, direct: bool, value: Vec3) {
+    if direct {
+        acc[pixel].direct += value;
+    } else {
+        acc[pixel].specular += value;
+    }
+}
+
+/// Shades one hit: emission, shadow rays, continuation.
+fn shade(
+    ctx: &RenderContext,
+    mut path: PathState,
+    hit: &Hit,
+    acc: &mut [Radiance],
+    shadows: &mut Vec<Shadow>,
+    next: &mut Vec<PathState>,
+) {
+    let scene = ctx.scene;
+    let mesh = &scene.meshes[hit.mesh as usize];
+    let p = path.ray.at(hit.t);
+    let wo_world = -path.ray.d.normalize();
+    let ng = mesh.geometric_normal(hit.prim, hit.u, hit.v);
+
+    // Emission seen along the ray.
+    if let Some(li) = mesh.area_light {
+        let le = ctx.lights.le(li as usize, ng, wo_world);
+        if le.max_element() > 0.0 {
+            let w = if path.prev_pdf > 0.0 {
+                let light_pdf = ctx.lights.pdf_area(li as usize, path.ray.o, p, ng);
+                power_heuristic(path.prev_pdf, light_pdf)
+            } else {
+                1.0
+            };
+            let direct = path.depth == 0 || (path.depth == 1 && !path.prev_delta);
+            add(acc, path.pixel, direct, path.beta * le * w);
+        }
+    }
+    if path.depth >= ctx.settings.max_depth {
+        return;
+    }
+
+    let bsdf = Bsdf::from_material(&scene.materials[mesh.material as usize]);
+    let ns = mesh.shading_normal(hit.prim, hit.u, hit.v).unwrap_or(ng);
+    let frame = Frame::from_normal(ns);
+    let wo = frame.to_local(wo_world);
+    let ls = ctx.settings.light_samples.max(1);
+    path.sampler.set_dimension(CAMERA_DIMS + path.depth * dims_per_vertex(ls));
+
+    // Direct light by shadow rays.
+    if !bsdf.is_specular() && !ctx.lights.is_empty() {
+        for _ in 0..ls {
+            let u_sel = path.sampler.next_1d();
+            let u = path.sampler.next_2d();
+            let Some(s) = ctx.lights.sample(scene, p, u_sel, u) else { continue };
+            let wi = frame.to_local(s.wi);
+            let f = bsdf.f(wo, wi, TransportMode::Radiance) * wi.z.abs();
+            if f.max_element() <= 0.0 {
+                continue;
+            }
+            let w = if s.delta || !bsdf.is_glossy() {
+                1.0
+            } else {
+                power_heuristic(s.pdf, bsdf.pdf(wo, wi))
+            };
+            let contrib = path.beta * f * s.li * (w / (s.pdf * ls as f32));
+            let o = offset_ray_origin(p, if ng.dot(s.wi) >= 0.0 { ng } else { -ng });
+            let target = if s.n == Vec3::ZERO {
+                s.p
+            } else {
+                offset_ray_origin(s.p, if s.n.dot(o - s.p) >= 0.0 { s.n } else { -s.n })
+            };
+            let ray = Ray::segment(o, target - o, 1.0 - 1e-4);
+            shadows.push(Shadow { pixel: path.pixel, ray, contrib, direct: path.depth == 0 });
+        }
+    } else {
+        for _ in 0..ls {
+            path.sampler.next_1d();
+            path.sampler.next_2d();
+        }
+    }
+
+    // Continue through specular and glossy surfaces.
+    if !(bsdf.is_specular() || bsdf.is_glossy()) {
+        return;
+    }
+    let uc = path.sampler.next_1d();
+    let u = path.sampler.next_2d();
+    let Some(bs) = bsdf.sample(wo, uc, u, TransportMode::Radiance) else { return };
+    if bs.pdf <= 0.0 {
+        return;
+    }
+    let beta = path.beta * bs.f * (bs.wi.z.abs() / bs.pdf);
+    if beta.max_element() <= 0.0 || !beta.is_finite() {
+        return;
+    }
+    let wi_world = frame.to_world(bs.wi);
+    let o = offset_ray_origin(p, if ng.dot(wi_world) >= 0.0 { ng } else { -ng });
+    next.push(PathState {
+        pixel: path.pixel,
+        ray: Ray::new(o, wi_world),
+        beta,
+        depth: path.depth + 1,
+        prev_pdf: if bs.specular { 0.0 } else { bs.pdf },
+        prev_delta: path.prev_delta && bs.specular,
+        sampler: path.sampler,
+    });
+}
+
+/// Traces a batch of shadow rays and adds the unoccluded contributions.
+fn trace_shadows(
+    ctx: &RenderContext,
+    shadows: &[Shadow],
+    rays: &mut Vec<Ray>,
+    occluded: &mut Vec<bool>,
+    acc: &mut [Radiance],
+) {
+    if shadows.is_empty() {
+        return;
+    }
+    rays.clear();
+    rays.extend(shadows.iter().map(|s| s.ray));
+    occluded.clear();
+    occluded.resize(rays.len(), false);
+    ctx.accel.occluded_batch(rays, occluded);
+    ctx.counters.shadow_rays.fetch_add(rays.len() as u64, Ordering::Relaxed);
+    for (s, &blocked) in shadows.iter().zip(occluded.iter()) {
+        if !blocked {
+            add(acc, s.pixel, s.direct, s.contrib);
+        }
+    }
+}

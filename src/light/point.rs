@@ -1,0 +1,25 @@
+//! Isotropic point light: `LightSource "point"`; irradiance `E = I cos(theta) / r^2`.
+use super::{scalar_power, LightSample};
+use crate::math::Vec3;
+use std::f32::consts::PI;
+
+pub fn power(intensity: Vec3) -> f32 {
+    4.0 * PI * scalar_power(intensity)
+}
+
+pub fn sample(pos: Vec3, intensity: Vec3, p_ref: Vec3) -> Option<LightSample> {
+    let to = pos - p_ref;
+    let d2 = to.length_squared();
+    if d2 <= 0.0 {
+        return None;
+    }
+    let wi = to / d2.sqrt();
+    Some(LightSample {
+        li: intensity / d2,
+        wi,
+        p: pos,
+        n: Vec3::ZERO,
+        pdf: 1.0,
+        delta: true,
+    })
+}

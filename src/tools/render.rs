@@ -1,0 +1,174 @@
+//! `photon render SCENE`: load, build the accelerator, render, write EXR + PNG, print stats.
+use super::{parse_resolution, thread_pool, ToolError};
+use crate::accel::{Accel, AccelOptions, BackendKind};
+use crate::imageio::{self, ExrPixel};
+use crate::integrator::{self, IntegratorKind, RenderSettings};
+use crate::sampling::Pattern;
+use crate::scene::loader;
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Options of `photon render`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct RenderOptions {
+    /// The pbrt-v4 scene file.
+    pub scene: PathBuf,
+    /// Output EXR (linear RGB plus layers direct/specular/caustic/indirect). Default: the
+    /// Film's filename with .exr, else the scene's name.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// PNG preview (sRGB). Default: the EXR path with .png.
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Skip the PNG preview.
+    #[arg(long)]
+    pub no_png: bool,
+    /// Samples per pixel (default: the Sampler's pixelsamples).
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Resolution WxH (default: the Film's).
+    #[arg(long, value_parser = parse_resolution)]
+    pub res: Option<(u32, u32)>,
+    /// Ray-query backend.
+    #[arg(long, value_enum, default_value_t = BackendKind::Embree)]
+    pub backend: BackendKind,
+    /// Embree's robust scene flag.
+    #[arg(long)]
+    pub robust: bool,
+    /// Worker threads (0 = all cores).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Seed of every sample stream.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Stratification of each pixel's samples.
+    #[arg(long, value_enum, default_value_t = Pattern::Stratified)]
+    pub pattern: Pattern,
+    /// The integrator (whatever the file asks for).
+    #[arg(long, value_enum, default_value_t = IntegratorKind::Direct)]
+    pub integrator: IntegratorKind,
+    /// Maximum bounces (default: the Integrator's maxdepth, else 5).
+    #[arg(long)]
+    pub max_depth: Option<u32>,
+    /// Shadow rays per shading point.
+    #[arg(long, default_value_t = 1)]
+    pub light_samples: u32,
+    /// Write half floats instead of 32-bit floats.
+    #[arg(long)]
+    pub half: bool,
+    /// PNG exposure in stops.
+    #[arg(long, default_value_t = 0.0)]
+    pub exposure: f32,
+}
+
+/// Where the EXR goes when `-o` is not given.
+fn default_output(film_filename: Option<&str>, scene: &Path) -> PathBuf {
+    let stem = film_filename
+        .and_then(|f| Path::new(f).file_stem().map(|s| s.to_owned()))
+        .or_else(|| scene.file_stem().map(|s| s.to_owned()))
+        .unwrap_or_else(|| "render".into());
+    PathBuf::from(stem).with_extension("exr")
+}
+
+pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
+    // Load and validate everything before any work is done.
+    let t0 = Instant::now();
+    let scene = loader::load(&opts.scene)?;
+    let load_s = t0.elapsed().as_secs_f64();
+    let mut settings = RenderSettings::from_scene(&scene)?;
+    if let Some((w, h)) = opts.res {
+        settings.width = w;
+        settings.height = h;
+    }
+    if let Some(spp) = opts.spp {
+        settings.spp = spp.max(1);
+    }
+    if let Some(d) = opts.max_depth {
+        settings.max_depth = d;
+    }
+    settings.seed = opts.seed;
+    settings.pattern = opts.pattern;
+    settings.light_samples = opts.light_samples.max(1);
+    let exr = opts.output.clone().unwrap_or_else(|| default_output(scene.film.filename.as_deref(), &opts.scene));
+    let png = (!opts.no_png).then(|| opts.png.clone().unwrap_or_else(|| exr.with_extension("png")));
+
+    let pool = thread_pool(opts.threads)?;
+    let t1 = Instant::now();
+    let accel = pool.install(|| Accel::build(&scene, opts.backend, AccelOptions { robust: opts.robust }))?;
+    let build_s = t1.elapsed().as_secs_f64();
+    println!(
+        "scene: {} | {} meshes, {} triangles, {} lights, {} materials | loaded in {:.3} s",
+        opts.scene.display(),
+        scene.meshes.len(),
+        scene.triangle_count(),
+        scene.lights.len(),
+        scene.materials.len(),
+        load_s
+    );
+    println!("accel: {} build {:.3} s{}", opts.backend, build_s, if opts.robust { " (robust)" } else { "" });
+    println!(
+        "render: {}x{}, {} spp ({:?}; file sampler \"{}\"), integrator {:?} (file asks for \"{}\"), max depth {}, {} threads",
+        settings.width,
+        settings.height,
+        settings.spp,
+        settings.pattern,
+        scene.sampler.name,
+        opts.integrator,
+        scene.integrator.name,
+        settings.max_depth,
+        pool.current_num_threads()
+    );
+
+    let bar = progress_bar();
+    let progress = |done: u64, total: u64| {
+        if let Some(b) = &bar {
+            b.set_length(total);
+            b.set_position(done);
+        }
+    };
+    let out = pool.install(|| integrator::render(&scene, &accel, &settings, opts.integrator, &progress));
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    let rays = out.counters.total();
+    println!(
+        "rendered in {:.3} s: {} rays ({:.2} Mrays/s): camera {}, secondary {}, shadow {}",
+        out.seconds,
+        rays,
+        rays as f64 / out.seconds / 1e6,
+        out.counters.camera_rays.load(std::sync::atomic::Ordering::Relaxed),
+        out.counters.secondary_rays.load(std::sync::atomic::Ordering::Relaxed),
+        out.counters.shadow_rays.load(std::sync::atomic::Ordering::Relaxed),
+    );
+    let bad = out.image.count_nonfinite();
+    if bad > 0 {
+        eprintln!("photon: warning: {bad} non-finite pixel values");
+    }
+
+    // Outputs: each written to a temporary file and renamed, so a good file is never
+    // replaced by a half-written one.
+    let layers: Vec<(&str, &imageio::RgbImage)> = out.components.iter().map(|(n, i)| (*n, i)).collect();
+    let pixel = if opts.half { ExrPixel::Half } else { ExrPixel::Float };
+    imageio::write_exr(&exr, &out.image, &layers, pixel)?;
+    println!("wrote {}", exr.display());
+    if let Some(png) = png {
+        imageio::write_png(&png, &out.image, opts.exposure)?;
+        println!("wrote {}", png.display());
+    }
+    Ok(())
+}
+
+/// A progress bar on stderr, only when stderr is a terminal.
+fn progress_bar() -> Option<ProgressBar> {
+    if !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let bar = ProgressBar::new(1);
+    bar.set_style(
+        ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} tiles, eta {eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    Some(bar)
+}
