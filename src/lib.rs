@@ -15,6 +15,7 @@ pub mod imageio;
 // pub mod integrator; (enabled once bsdf lands)
 pub mod light;
 pub mod math;
+pub mod photon;
 pub mod sampling;
 pub mod scene;
 // pub mod tools;

@@ -1,0 +1,73 @@
+//! [`PhotonMap`]: photons stored in kd-tree order beside the [`KdTree`] over their positions.
+use super::kdtree::{KdTree, KnnResult, TooManyPoints};
+use super::record::Photon;
+use crate::math::Vec3;
+
+/// A built photon map. Indices in query results are tree-order slots into [`Self::photons`].
+#[derive(Clone, Debug, Default)]
+pub struct PhotonMap {
+    tree: KdTree,
+    photons: Vec<Photon>,
+}
+
+impl PhotonMap {
+    /// Builds the map. Photons with non-finite positions are dropped.
+    pub fn new(photons: &[Photon]) -> Result<Self, TooManyPoints> {
+        let points: Vec<Vec3> = photons.iter().map(Photon::pos).collect();
+        let (tree, order) = KdTree::build(&points)?;
+        let photons = order.iter().map(|&i| photons[i as usize]).collect();
+        Ok(PhotonMap { tree, photons })
+    }
+
+    /// Number of stored photons.
+    pub fn len(&self) -> usize {
+        self.photons.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.photons.is_empty()
+    }
+
+    /// The photons in tree order.
+    pub fn photons(&self) -> &[Photon] {
+        &self.photons
+    }
+
+    /// The photon in tree-order slot `idx` (from a query result).
+    pub fn photon(&self, idx: u32) -> &Photon {
+        &self.photons[idx as usize]
+    }
+
+    /// The underlying tree.
+    pub fn tree(&self) -> &KdTree {
+        &self.tree
+    }
+
+    /// The up-to-`k` photons nearest to `p` within squared radius `max_r2`, into `out`.
+    pub fn knn(&self, p: Vec3, k: usize, max_r2: f32, out: &mut KnnResult) {
+        self.tree.knn(p, k, max_r2, out);
+    }
+
+    /// k-nearest with a per-photon metric: `metric(photon, offset = photon.pos - p, d2)`
+    /// returns the ranking distance (raised to at least `d2`) or `None` to skip the photon.
+    /// See [`KdTree::knn_by`].
+    pub fn knn_by<F>(&self, p: Vec3, k: usize, max_r2: f32, out: &mut KnnResult, mut metric: F)
+    where
+        F: FnMut(&Photon, Vec3, f32) -> Option<f32>,
+    {
+        let photons = &self.photons[..];
+        self.tree.knn_by(p, k, max_r2, out, |i, off, d2| {
+            metric(&photons[i as usize], off, d2)
+        });
+    }
+
+    /// Calls `f(photon, d2)` for every photon within squared distance `r2` of `p`.
+    pub fn radius_query<F>(&self, p: Vec3, r2: f32, mut f: F)
+    where
+        F: FnMut(&Photon, f32),
+    {
+        let photons = &self.photons[..];
+        self.tree
+            .radius_query(p, r2, |i, d2| f(&photons[i as usize], d2));
+    }
+}
