@@ -137,3 +137,49 @@ impl RayQuery for Accel {
         }
     }
 }
+
+/// Checks what both backends rely on before handing geometry to a builder: every index names
+/// a vertex of its mesh (Embree reads vertices without bounds checks) and every vertex that a
+/// triangle uses is finite. Returns the first problem found as an error.
+pub(crate) fn validate_meshes(scene: &Scene) -> Result<(), AccelError> {
+    for (m, mesh) in scene.meshes.iter().enumerate() {
+        let n = mesh.positions.len();
+        for (p, tri) in mesh.indices.iter().enumerate() {
+            for &i in tri {
+                let Some(pos) = mesh.positions.get(i as usize) else {
+                    return Err(AccelError(format!(
+                        "mesh {m}, triangle {p}: vertex index {i} out of range ({n} vertices)"
+                    )));
+                };
+                if !pos.is_finite() {
+                    return Err(AccelError(format!(
+                        "mesh {m}, triangle {p}: vertex {i} is not finite ({pos})"
+                    )));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The unit geometric normal `normalize(cross(p1 - p0, p2 - p0))` of every triangle of `mesh`
+/// (zero for zero-area triangles). Both backends fill [`Hit::ng`] from this one function so
+/// that they agree bit for bit. Indices must have been checked by [`validate_meshes`].
+pub(crate) fn face_normals(mesh: &crate::scene::Mesh) -> Vec<Vec3> {
+    (0..mesh.indices.len() as u32)
+        .map(|p| {
+            let [p0, p1, p2] = mesh.triangle(p);
+            (p1 - p0).cross(p2 - p0).normalize_or_zero()
+        })
+        .collect()
+}
+
+/// The part of a ray both backends agree to query: `Some((tmin, tmax))` with `tmin` clamped to
+/// 0 (Embree accepts no negative `tnear`), or `None` when the ray cannot hit anything: empty
+/// or NaN interval, non-finite origin, zero or non-finite direction.
+#[inline]
+pub(crate) fn query_interval(ray: &Ray) -> Option<(f32, f32)> {
+    let tmin = ray.tmin.max(0.0);
+    let ok = tmin <= ray.tmax && ray.o.is_finite() && ray.d.is_finite() && ray.d != Vec3::ZERO;
+    ok.then_some((tmin, ray.tmax))
+}
