@@ -204,22 +204,58 @@ fn mrays(n: usize, f: impl FnOnce()) -> f64 {
     n as f64 / start.elapsed().as_secs_f64() / 1e6
 }
 
-/// Builds both backends over `scene`, prints their build times, and returns them.
+/// Builds both backends over `scene`, prints their build times (Embree's device creation
+/// apart, and its robust mode too), and returns them.
 fn build_both(name: &str, scene: &Scene) -> (EmbreeAccel, BvhAccel) {
     embree::enable_flush_denormals();
+    let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
     let t0 = Instant::now();
-    let e = EmbreeAccel::build(scene, AccelOptions::default()).expect("embree build");
-    let te = t0.elapsed();
+    let dev = Device::new("").expect("embree device");
+    let t_dev = ms(t0);
+    let t0 = Instant::now();
+    let e = EmbreeAccel::build_on(&dev, scene, AccelOptions::default()).expect("embree build");
+    let t_e = ms(t0);
+    let t0 = Instant::now();
+    drop(EmbreeAccel::build_on(&dev, scene, AccelOptions { robust: true }).expect("robust"));
+    let t_robust = ms(t0);
     let t0 = Instant::now();
     let b = BvhAccel::build(scene, AccelOptions::default()).expect("obvhs build");
-    let tb = t0.elapsed();
+    let t_b = ms(t0);
     println!(
-        "[{name}] {} triangles: build embree {:.1} ms, obvhs {:.1} ms",
+        "[{name}] {} triangles: embree device {t_dev:.1} ms, scene {t_e:.1} ms (robust \
+         {t_robust:.1} ms); obvhs {t_b:.1} ms",
         scene.triangle_count(),
-        te.as_secs_f64() * 1e3,
-        tb.as_secs_f64() * 1e3
     );
     (e, b)
+}
+
+/// Packet answers must equal single-ray answers bit for bit, except that on an exact tie
+/// between two triangles (coplanar overlap, shared edge) Embree's packet and single-ray
+/// kernels may pick different ones: those are printed and must really be ties (same `t` to
+/// 1e-6 relative).
+fn check_packets(name: &str, rays: &[Ray], packet: &[Option<Hit>], single: &[Option<Hit>]) {
+    let mut ties = 0;
+    for (i, (p, s)) in packet.iter().zip(single).enumerate() {
+        if p == s {
+            continue;
+        }
+        let tie = match (p, s) {
+            (Some(p), Some(s)) => (p.mesh, p.prim) != (s.mesh, s.prim) && rel_close(p.t, s.t, 1e-6),
+            _ => false,
+        };
+        println!(
+            "[{name}] ray {i} packet vs single, tie {tie}: {p:?}\n    single {s:?}\n    {:?}",
+            rays[i]
+        );
+        assert!(
+            tie,
+            "[{name}] ray {i}: packet and single-ray answers differ"
+        );
+        ties += 1;
+    }
+    println!(
+        "[{name}] packets equal single rays except {ties} tie-breaks between coplanar triangles"
+    );
 }
 
 /// Runs `rays` through both backends (single and batch), prints rates, classifies closest-hit
@@ -260,7 +296,7 @@ fn cross_check(name: &str, scene: &Scene, rays: &[Ray]) {
         "[{name}] Mrays/s, 1 thread, random rays: closest embree x1 {r_e:.2}, x8 {p_e:.2}, \
          obvhs {r_b:.2}; occlusion embree x1 {o_e:.2}, x8 {q_e:.2}, obvhs {o_b:.2}"
     );
-    assert_eq!(batch, he, "[{name}] embree packets differ from single rays");
+    check_packets(name, rays, &batch, &he);
     assert_eq!(obatch, oe, "[{name}] embree occlusion packets differ");
 
     let hits = he.iter().filter(|h| h.is_some()).count();
@@ -368,6 +404,7 @@ fn packets_equal_single_rays() {
             let single: Vec<Option<Hit>> = rays.iter().map(|r| accel.intersect(r)).collect();
             let mut batch = vec![None; n];
             accel.intersect_batch(&rays, &mut batch);
+            // No coplanar triangles here: no tie-breaks, answers must be identical.
             assert_eq!(single, batch, "{n} rays");
             assert!(n < 100 || single.iter().filter(|h| h.is_some()).count() > n / 10);
             let single: Vec<bool> = rays.iter().map(|r| accel.occluded(r)).collect();
@@ -409,7 +446,7 @@ fn assert_hit(h: Option<Hit>, prim: u32, t: f32, u: f32, v: f32, ng: Vec3, what:
         panic!("{what}: expected a hit");
     };
     assert_eq!((h.mesh, h.prim), (2, prim), "{what}");
-    assert!((h.t - t).abs() < 1e-5 * t, "{what}: t {} vs {t}", h.t);
+    assert!((h.t - t).abs() < 2e-5 * t, "{what}: t {} vs {t}", h.t);
     assert!(
         (h.u - u).abs() < 1e-5 && (h.v - v).abs() < 1e-5,
         "{what}: {h:?}"
@@ -460,6 +497,11 @@ fn hand_checked_rays() {
         assert!(!a.occluded(&r), "{name}");
         r.tmin = 2.49;
         assert_hit(a.intersect(&r), 0, 2.5, 0.25, 0.25, z, name);
+        // A hit very close to the origin (obvhs's node test alone would cull it).
+        let oz = 5.0f32 - 2e-5;
+        let near = Ray::new(Vec3::new(1.5, 1.0, oz), Vec3::Z);
+        assert_hit(a.intersect(&near), 0, 5.0 - oz, 0.25, 0.25, z, name);
+        assert!(a.occluded(&near), "{name}");
         // Beside the triangle (u + v > 1).
         let beside = Ray::new(Vec3::new(2.5, 2.5, 0.0), d);
         assert_eq!(a.intersect(&beside), None, "{name}");
@@ -583,7 +625,7 @@ fn obvhs_presets() {
         let (mut rc, mut ro) = (0.0f64, 0.0f64);
         for _ in 0..3 {
             rc = rc.max(mrays(rays.len(), || {
-                std::hint::black_box(rays.iter().map(|r| b.intersect(r)).count());
+                std::hint::black_box(rays.iter().filter_map(|r| b.intersect(r)).count());
             }));
             ro = ro.max(mrays(rays.len(), || {
                 occ = rays.iter().map(|r| b.occluded(r)).collect()
@@ -599,4 +641,49 @@ fn obvhs_presets() {
             Some(r) => assert!(r.iter().zip(&occ).filter(|(a, b)| a != b).count() <= 10),
         }
     }
+}
+
+/// The committed scenes are shared across threads: rayon's answers equal sequential ones,
+/// through the `Accel` enum the renderer uses.
+#[test]
+fn parallel_queries_match_sequential() {
+    use photon::accel::{Accel, BackendKind};
+    use rayon::prelude::*;
+    let scene = scene_of(vec![bumpy_sphere(64, 64)]);
+    let rays = random_rays(&scene, 20_000, 5);
+    for kind in [BackendKind::Embree, BackendKind::Obvhs] {
+        let accel = Accel::build(&scene, kind, AccelOptions::default()).unwrap();
+        assert_eq!(accel.kind(), kind);
+        let seq: Vec<Option<Hit>> = rays.iter().map(|r| accel.intersect(r)).collect();
+        let par: Vec<Option<Hit>> = rays.par_iter().map(|r| accel.intersect(r)).collect();
+        assert_eq!(seq, par, "{kind}");
+        assert!(seq.iter().filter(|h| h.is_some()).count() > rays.len() / 10);
+        let par_chunks: Vec<Option<Hit>> = rays
+            .par_chunks(64)
+            .flat_map_iter(|c| {
+                let mut out = vec![None; c.len()];
+                accel.intersect_batch(c, &mut out);
+                out
+            })
+            .collect();
+        assert_eq!(seq, par_chunks, "{kind} batches");
+    }
+}
+
+/// Information only (run with `--ignored`): build times and single-thread rates on a
+/// 1M-triangle bumpy sphere.
+#[test]
+#[ignore]
+fn build_times_1m() {
+    let scene = scene_of(vec![bumpy_sphere(708, 708)]);
+    let rays = random_rays(&scene, 200_000, 9);
+    let (e, b) = build_both("1M sphere", &scene);
+    let n = rays.len();
+    let r_e = mrays(n, || {
+        std::hint::black_box(rays.iter().filter_map(|r| e.intersect(r)).count());
+    });
+    let r_b = mrays(n, || {
+        std::hint::black_box(rays.iter().filter_map(|r| b.intersect(r)).count());
+    });
+    println!("[1M sphere] closest hit Mrays/s, 1 thread: embree {r_e:.2}, obvhs {r_b:.2}");
 }

@@ -13,7 +13,7 @@
 //!   which would cull boxes lying entirely closer than that. We therefore hand obvhs the ray
 //!   with its origin moved back by [`ORIGIN_SHIFT`] along the direction (and the interval moved
 //!   forward by the same amount), while triangles are still tested against the caller's ray.
-//!   Likewise `-0.0` direction components are handed to obvhs as `+0.0` (see [`traversal_ray`]).
+//!   Likewise `-0.0` direction components are handed to obvhs as `+0.0` (see `traversal_ray`).
 //!
 //! ## Build preset
 //! [`BvhAccel::build`] uses [`BvhBuildParams::slow_build`]. Measured on this (shared, noisy)
