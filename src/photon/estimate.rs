@@ -23,7 +23,7 @@ use std::f32::consts::PI;
 
 /// A density-estimation kernel over a disc of radius `r`, normalised so that
 /// `integral over the disc of weight(d^2, r^2) dA = 1`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum Kernel {
     /// Constant `1 / (pi r^2)`.
     Box,
@@ -32,14 +32,9 @@ pub enum Kernel {
     Cone { k: f32 },
     /// Simpson's biweight `3 / (pi r^2) (1 - d^2 / r^2)^2`.
     Biweight,
-    /// Epanechnikov `2 / (pi r^2) (1 - d^2 / r^2)`.
+    /// Epanechnikov `2 / (pi r^2) (1 - d^2 / r^2)` (the default).
+    #[default]
     Epanechnikov,
-}
-
-impl Default for Kernel {
-    fn default() -> Self {
-        Kernel::Epanechnikov
-    }
 }
 
 impl Kernel {
