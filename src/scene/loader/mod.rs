@@ -1,13 +1,39 @@
-//! STUB: the pbrt-v4 loader is being written.
+//! The pbrt-v4 scene loader: [`load`] reads a scene file (and the files it includes and the
+//! PLY meshes it names) into a [`Scene`].
+//!
+//! ```text
+//! LookAt 0 1 6.8  0 1 0  0 1 0
+//! Camera "perspective" "float fov" [ 19.5 ]
+//! Film "rgb" "integer xresolution" [ 1024 ] "integer yresolution" [ 1024 ]
+//! Sampler "independent" "integer pixelsamples" [ 64 ]
+//! WorldBegin
+//! AttributeBegin
+//!     AreaLightSource "diffuse" "rgb L" [ 17 12 4 ]
+//!     Shape "trianglemesh" "point3 P" [ -1 2 -1  1 2 -1  1 2 1 ]
+//! AttributeEnd
+//! Shape "plymesh" "string filename" "meshes/bunny.ply"
+//! ```
+//!
+//! Modules: [`tokenizer`] (tokens with line and column), [`params`] (parameter lists with
+//! used-tracking), [`parser`] (directives and graphics state), [`materials`], [`lights`],
+//! [`shapes`] (meshes, spheres) and [`ply`] (PLY files).
+//!
+//! Whatever the scene says that photon would not render as written is an error, one line,
+//! `file:line:column: what is wrong`: an unknown or unsupported directive or type, a parameter
+//! that is given but never read, a wrong type or count of values, a missing or malformed file.
+//! See the README for the supported subset.
+pub mod lights;
+pub mod materials;
 pub mod params;
+pub mod parser;
+pub mod ply;
+pub mod shapes;
+pub mod tokenizer;
 
 use super::{Scene, SceneError};
 use std::path::Path;
 
 /// Loads a pbrt-v4 scene file (and everything it includes) into a [`Scene`].
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
-    Err(SceneError::new(format!(
-        "{}: loader not yet implemented",
-        path.display()
-    )))
+    parser::Builder::new(path).run()
 }

@@ -1,0 +1,832 @@
+//! Reads directives and their parameter lists and keeps pbrt-v4's graphics state (CTM,
+//! material, area light, `ReverseOrientation`, named coordinate systems) while building the
+//! [`Scene`].
+//!
+//! ```text
+//! LookAt 0 1 6.8  0 1 0  0 1 0          # options block: transforms, Camera, Film, Sampler,
+//! Camera "perspective" "float fov" 40   # Integrator, PixelFilter
+//! WorldBegin                            # CTM reset to identity
+//! AttributeBegin                        # push CTM, material, area light, orientation
+//!   Translate 0 1 0
+//!   Material "diffuse"
+//!   Shape "sphere" "float radius" 0.5
+//! AttributeEnd
+//! Include "more.pbrt"                   # relative to the main file's directory
+//! ```
+//!
+//! Transforms post-multiply the CTM (`CTM = CTM * M`); `Transform`/`ConcatTransform` read 16
+//! numbers column-major as pbrt does (`glam::Mat4::from_cols_array`). The CTM at `Camera` is
+//! camera-from-world; its inverse becomes `world_from_camera` and the named system "camera".
+
+use super::lights::{area_light, light_source, AreaSpec};
+use super::materials::make_material;
+use super::params::{Param, ParamSet, ParamType, ParamValues};
+use super::shapes;
+use super::tokenizer::{unescape, TokKind, Token, Tokenizer};
+use crate::math::{Mat4, Vec2, Vec3};
+use crate::scene::{
+    CameraDesc, FilmDesc, FilterDesc, IntegratorDesc, Loc, Material, Mesh, SamplerDesc, Scene,
+    SceneError,
+};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// How deep `Include`/`Import` may nest (a cycle stops here).
+const MAX_INCLUDE_DEPTH: u32 = 32;
+
+/// The material a shape gets: the default (diffuse 0.5, added to the scene on first use) or
+/// an index into `Scene::materials`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum MatRef {
+    Default,
+    Index(u32),
+}
+
+/// What `AttributeBegin` saves.
+#[derive(Clone, Debug)]
+struct GraphicsState {
+    ctm: Mat4,
+    material: MatRef,
+    area: Option<AreaSpec>,
+    reverse: bool,
+}
+
+/// A pushed block: what it saved and where it began.
+enum Saved {
+    Attribute(GraphicsState),
+    Transform(Mat4),
+}
+
+/// The scene under construction.
+pub struct Builder {
+    main_path: PathBuf,
+    base_dir: PathBuf,
+    gs: GraphicsState,
+    stack: Vec<(Saved, Loc)>,
+    named_coords: HashMap<String, Mat4>,
+    named_materials: HashMap<String, u32>,
+    default_material: Option<u32>,
+    world_begun: bool,
+    meshes: Vec<Mesh>,
+    materials: Vec<Material>,
+    lights: Vec<crate::scene::Light>,
+    camera: CameraDesc,
+    film: FilmDesc,
+    filter: FilterDesc,
+    sampler: SamplerDesc,
+    integrator: IntegratorDesc,
+}
+
+impl Builder {
+    /// A builder for the scene whose main file is `main_path` (pbrt-v4 defaults everywhere).
+    pub fn new(main_path: &Path) -> Self {
+        let base_dir = main_path
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_default();
+        Builder {
+            main_path: main_path.to_path_buf(),
+            base_dir,
+            gs: GraphicsState {
+                ctm: Mat4::IDENTITY,
+                material: MatRef::Default,
+                area: None,
+                reverse: false,
+            },
+            stack: Vec::new(),
+            named_coords: HashMap::new(),
+            named_materials: HashMap::new(),
+            default_material: None,
+            world_begun: false,
+            meshes: Vec::new(),
+            materials: Vec::new(),
+            lights: Vec::new(),
+            camera: CameraDesc {
+                world_from_camera: Mat4::IDENTITY,
+                fov_deg: 90.0,
+            },
+            film: FilmDesc {
+                xres: 1280,
+                yres: 720,
+                filename: None,
+            },
+            filter: FilterDesc::Gaussian {
+                radius: Vec2::splat(1.5),
+                sigma: 0.5,
+            },
+            sampler: SamplerDesc {
+                name: "zsobol".to_string(),
+                pixel_samples: 16,
+            },
+            integrator: IntegratorDesc {
+                name: "default".to_string(),
+                params: ParamSet::new(),
+                loc: None,
+            },
+        }
+    }
+
+    /// Reads the main file and everything it includes, and returns the scene.
+    pub fn run(mut self) -> Result<Scene, SceneError> {
+        let main = self.main_path.clone();
+        let end = self.parse_file(&main, 0, None)?;
+        if let Some((saved, loc)) = self.stack.last() {
+            let what = match saved {
+                Saved::Attribute(_) => "AttributeBegin without a matching AttributeEnd",
+                Saved::Transform(_) => "TransformBegin without a matching TransformEnd",
+            };
+            return Err(SceneError::at(loc, what));
+        }
+        if !self.world_begun {
+            return Err(SceneError::at(&end, "the scene has no WorldBegin"));
+        }
+        Ok(Scene {
+            meshes: self.meshes,
+            materials: self.materials,
+            lights: self.lights,
+            camera: self.camera,
+            film: self.film,
+            filter: self.filter,
+            sampler: self.sampler,
+            integrator: self.integrator,
+            path: self.main_path,
+        })
+    }
+
+    /// Parses one file; `from` is the `Include` that named it. Returns the end-of-file loc.
+    fn parse_file(
+        &mut self,
+        path: &Path,
+        depth: u32,
+        from: Option<&Loc>,
+    ) -> Result<Loc, SceneError> {
+        let fail = |msg: String| match from {
+            Some(loc) => SceneError::at(loc, msg),
+            None => SceneError::new(msg),
+        };
+        let bytes = std::fs::read(path)
+            .map_err(|e| fail(format!("cannot read \"{}\": {e}", path.display())))?;
+        let text = String::from_utf8(bytes)
+            .map_err(|_| fail(format!("\"{}\" is not UTF-8 text", path.display())))?;
+        let mut tok = Tokenizer::new(&text, Arc::new(path.to_path_buf()));
+        while let Some(t) = tok.next()? {
+            if t.kind != TokKind::Word {
+                return Err(tok.err(&t, format!("expected a directive, found {}", t.describe())));
+            }
+            self.directive(&t, &mut tok, depth)?;
+        }
+        Ok(tok.end_loc())
+    }
+
+    /// Carries out the directive `t`, reading its arguments from `tok`.
+    fn directive(&mut self, t: &Token, tok: &mut Tokenizer, depth: u32) -> Result<(), SceneError> {
+        let loc = tok.loc(t);
+        match t.text {
+            "Identity" => self.gs.ctm = Mat4::IDENTITY,
+            "Translate" => {
+                let v = numbers(tok, 3)?;
+                self.gs.ctm *= Mat4::from_translation(Vec3::new(v[0], v[1], v[2]));
+            }
+            "Scale" => {
+                let v = numbers(tok, 3)?;
+                self.gs.ctm *= Mat4::from_scale(Vec3::new(v[0], v[1], v[2]));
+            }
+            "Rotate" => {
+                let v = numbers(tok, 4)?;
+                self.gs.ctm *= rotate(v[0], Vec3::new(v[1], v[2], v[3]), &loc)?;
+            }
+            "LookAt" => {
+                let v = numbers(tok, 9)?;
+                self.gs.ctm *= look_at(&v, &loc)?;
+            }
+            "Transform" => self.gs.ctm = Mat4::from_cols_array(&bracketed16(tok)?),
+            "ConcatTransform" => self.gs.ctm *= Mat4::from_cols_array(&bracketed16(tok)?),
+            "CoordinateSystem" => {
+                let (name, _) = string_arg(tok, "a coordinate system name")?;
+                self.named_coords.insert(name, self.gs.ctm);
+            }
+            "CoordSysTransform" => {
+                let (name, at) = string_arg(tok, "a coordinate system name")?;
+                match self.named_coords.get(&name) {
+                    Some(m) => self.gs.ctm = *m,
+                    None => {
+                        return Err(SceneError::at(
+                            &at,
+                            format!("unknown coordinate system \"{name}\""),
+                        ))
+                    }
+                }
+            }
+            "TransformBegin" => self.stack.push((Saved::Transform(self.gs.ctm), loc)),
+            "TransformEnd" => self.pop(Saved::Transform(Mat4::IDENTITY), t.text, &loc)?,
+            "AttributeBegin" => {
+                self.world_only(t.text, &loc)?;
+                self.stack.push((Saved::Attribute(self.gs.clone()), loc));
+            }
+            "AttributeEnd" => {
+                self.world_only(t.text, &loc)?;
+                self.pop(Saved::Attribute(self.gs.clone()), t.text, &loc)?;
+            }
+            "ReverseOrientation" => {
+                self.world_only(t.text, &loc)?;
+                self.gs.reverse = !self.gs.reverse;
+            }
+            "WorldBegin" => {
+                if self.world_begun {
+                    return Err(SceneError::at(&loc, "WorldBegin given twice"));
+                }
+                self.world_begun = true;
+                self.gs.ctm = Mat4::IDENTITY;
+                self.named_coords
+                    .insert("world".to_string(), Mat4::IDENTITY);
+            }
+            "Camera" | "Film" | "Sampler" | "Integrator" | "PixelFilter" => {
+                self.option(t.text, tok, &loc)?
+            }
+            "Material" | "MakeNamedMaterial" | "NamedMaterial" => {
+                self.world_only(t.text, &loc)?;
+                self.material(t.text, tok)?;
+            }
+            "Shape" => {
+                self.world_only(t.text, &loc)?;
+                self.shape(tok)?;
+            }
+            "AreaLightSource" => {
+                self.world_only(t.text, &loc)?;
+                let (ty, at) = string_arg(tok, "an area light type")?;
+                let mut params = read_params(tok)?;
+                self.gs.area = Some(area_light(&ty, &mut params, &at)?);
+            }
+            "LightSource" => {
+                self.world_only(t.text, &loc)?;
+                let (ty, at) = string_arg(tok, "a light type")?;
+                let mut params = read_params(tok)?;
+                let light = light_source(&ty, &mut params, &at, &self.gs.ctm)?;
+                self.lights.push(light);
+            }
+            "Include" | "Import" => {
+                let (name, _) = string_arg(tok, "a file name")?;
+                if depth >= MAX_INCLUDE_DEPTH {
+                    return Err(SceneError::at(
+                        &loc,
+                        format!(
+                            "{} nested more than {MAX_INCLUDE_DEPTH} deep (a cycle?)",
+                            t.text
+                        ),
+                    ));
+                }
+                let path = self.base_dir.join(&name);
+                self.parse_file(&path, depth + 1, Some(&loc))?;
+            }
+            other => return Err(SceneError::at(&loc, unsupported(other))),
+        }
+        Ok(())
+    }
+
+    /// Errors unless inside the world block.
+    fn world_only(&self, what: &str, loc: &Loc) -> Result<(), SceneError> {
+        if self.world_begun {
+            Ok(())
+        } else {
+            Err(SceneError::at(
+                loc,
+                format!("{what} is only allowed after WorldBegin"),
+            ))
+        }
+    }
+
+    /// Pops the innermost block, which must be of the same kind as `want`.
+    fn pop(&mut self, want: Saved, what: &str, loc: &Loc) -> Result<(), SceneError> {
+        let begin = what.replace("End", "Begin");
+        match (self.stack.pop(), want) {
+            (Some((Saved::Attribute(gs), _)), Saved::Attribute(_)) => self.gs = gs,
+            (Some((Saved::Transform(m), _)), Saved::Transform(_)) => self.gs.ctm = m,
+            (Some((_, open)), _) => {
+                return Err(SceneError::at(
+                    loc,
+                    format!(
+                        "{what} does not match the block opened at line {}",
+                        open.line
+                    ),
+                ))
+            }
+            (None, _) => return Err(SceneError::at(loc, format!("{what} without {begin}"))),
+        }
+        Ok(())
+    }
+
+    /// `Camera`, `Film`, `Sampler`, `Integrator`, `PixelFilter` (before `WorldBegin`).
+    fn option(&mut self, what: &str, tok: &mut Tokenizer, loc: &Loc) -> Result<(), SceneError> {
+        if self.world_begun {
+            return Err(SceneError::at(
+                loc,
+                format!("{what} is not allowed after WorldBegin"),
+            ));
+        }
+        let (ty, at) = string_arg(tok, "a type name")?;
+        let mut params = read_params(tok)?;
+        match what {
+            "Camera" => {
+                self.camera = camera(&ty, &mut params, &at, &self.gs.ctm)?;
+                self.named_coords
+                    .insert("camera".to_string(), self.camera.world_from_camera);
+            }
+            "Film" => self.film = film(&ty, &mut params, &at)?,
+            "Sampler" => self.sampler = sampler(&ty, &mut params, &at)?,
+            "PixelFilter" => self.filter = filter(&ty, &mut params, &at)?,
+            _ => {
+                // Integrator: kept as written for the integrator to read.
+                self.integrator = IntegratorDesc {
+                    name: ty,
+                    params,
+                    loc: Some(loc.clone()),
+                };
+                return Ok(());
+            }
+        }
+        params.check_unused()
+    }
+
+    /// `Material`, `MakeNamedMaterial`, `NamedMaterial`.
+    fn material(&mut self, what: &str, tok: &mut Tokenizer) -> Result<(), SceneError> {
+        let (name, at) = string_arg(tok, "a material name")?;
+        match what {
+            "Material" => {
+                let mut params = read_params(tok)?;
+                let m = make_material(&name, &mut params, &at)?;
+                self.materials.push(m);
+                self.gs.material = MatRef::Index(self.materials.len() as u32 - 1);
+            }
+            "MakeNamedMaterial" => {
+                let mut params = read_params(tok)?;
+                if self.named_materials.contains_key(&name) {
+                    return Err(SceneError::at(
+                        &at,
+                        format!("named material \"{name}\" redefined"),
+                    ));
+                }
+                let Some(ty) = params.get_string_opt("type")? else {
+                    return Err(SceneError::at(
+                        &at,
+                        "MakeNamedMaterial needs \"string type\"",
+                    ));
+                };
+                let ty_loc = params.loc("type").cloned().unwrap_or_else(|| at.clone());
+                let m = make_material(&ty, &mut params, &ty_loc)?;
+                self.materials.push(m);
+                self.named_materials
+                    .insert(name, self.materials.len() as u32 - 1);
+            }
+            _ => match self.named_materials.get(&name) {
+                Some(&i) => self.gs.material = MatRef::Index(i),
+                None => {
+                    return Err(SceneError::at(
+                        &at,
+                        format!("unknown named material \"{name}\""),
+                    ))
+                }
+            },
+        }
+        Ok(())
+    }
+
+    /// `Shape`: builds the world-space mesh, gives it the current material and area light.
+    fn shape(&mut self, tok: &mut Tokenizer) -> Result<(), SceneError> {
+        let (ty, at) = string_arg(tok, "a shape type")?;
+        let mut params = read_params(tok)?;
+        let gs = &self.gs;
+        let mut mesh = match ty.as_str() {
+            "trianglemesh" => {
+                let obj = shapes::triangle_mesh(&mut params, &at)?;
+                params.check_unused()?;
+                shapes::to_world(obj, &gs.ctm, gs.reverse, &at)?
+            }
+            "plymesh" => {
+                // Check the other parameters before reading a possibly large file.
+                params.get_string_opt("filename")?;
+                params.check_unused()?;
+                let obj = shapes::ply_mesh(&mut params, &at, &self.base_dir)?;
+                shapes::to_world(obj, &gs.ctm, gs.reverse, &at)?
+            }
+            "sphere" => {
+                let m = shapes::sphere(&mut params, &at, &gs.ctm, gs.reverse)?;
+                params.check_unused()?;
+                m
+            }
+            other => {
+                return Err(SceneError::at(
+                    &at,
+                    format!("unsupported shape type \"{other}\""),
+                ))
+            }
+        };
+        mesh.material = self.material_index();
+        if let Some(spec) = &self.gs.area {
+            let area = match mesh.sphere {
+                Some((_, r)) => 4.0 * std::f32::consts::PI * r * r,
+                None => (0..mesh.indices.len() as u32).map(|t| mesh.area(t)).sum(),
+            };
+            let l = spec.radiance(area).map_err(|m| SceneError::at(&at, m))?;
+            mesh.area_light = Some(self.lights.len() as u32);
+            self.lights.push(crate::scene::Light::Area {
+                mesh: self.meshes.len() as u32,
+                l,
+                two_sided: spec.two_sided,
+            });
+        }
+        self.meshes.push(mesh);
+        Ok(())
+    }
+
+    /// The current material's index, adding the default diffuse 0.5 on first use.
+    fn material_index(&mut self) -> u32 {
+        match self.gs.material {
+            MatRef::Index(i) => i,
+            MatRef::Default => *self.default_material.get_or_insert_with(|| {
+                self.materials.push(Material::Diffuse {
+                    reflectance: Vec3::splat(0.5),
+                });
+                self.materials.len() as u32 - 1
+            }),
+        }
+    }
+}
+
+/// The message for a directive we do not read.
+fn unsupported(name: &str) -> String {
+    const PBRT_V4: [&str; 11] = [
+        "Attribute",
+        "Texture",
+        "ObjectBegin",
+        "ObjectEnd",
+        "ObjectInstance",
+        "MakeNamedMedium",
+        "MediumInterface",
+        "ColorSpace",
+        "Option",
+        "ActiveTransform",
+        "TransformTimes",
+    ];
+    if name == "WorldEnd" {
+        "unsupported directive \"WorldEnd\" (pbrt-v4 has no WorldEnd: is this a pbrt-v3 file?)"
+            .to_string()
+    } else if PBRT_V4.contains(&name) {
+        format!("unsupported directive \"{name}\"")
+    } else {
+        format!("unknown directive \"{name}\"")
+    }
+}
+
+/// A rotation by `deg` degrees about `axis` (pbrt's `Rotate`).
+fn rotate(deg: f32, axis: Vec3, loc: &Loc) -> Result<Mat4, SceneError> {
+    let a = axis.normalize_or_zero();
+    if a == Vec3::ZERO {
+        return Err(SceneError::at(loc, "Rotate about a zero axis"));
+    }
+    Ok(Mat4::from_axis_angle(a, deg.to_radians()))
+}
+
+/// pbrt's `LookAt eye look up`: the camera-from-world matrix.
+fn look_at(v: &[f32], loc: &Loc) -> Result<Mat4, SceneError> {
+    let eye = Vec3::new(v[0], v[1], v[2]);
+    let look = Vec3::new(v[3], v[4], v[5]);
+    let up = Vec3::new(v[6], v[7], v[8]);
+    let dir = (look - eye).normalize_or_zero();
+    if dir == Vec3::ZERO {
+        return Err(SceneError::at(
+            loc,
+            "LookAt: the eye and the look-at point coincide",
+        ));
+    }
+    let right = up.normalize_or_zero().cross(dir).normalize_or_zero();
+    if right == Vec3::ZERO {
+        return Err(SceneError::at(
+            loc,
+            "LookAt: the up vector is zero or along the view direction",
+        ));
+    }
+    let new_up = dir.cross(right);
+    let world_from_camera = Mat4::from_cols(
+        right.extend(0.0),
+        new_up.extend(0.0),
+        dir.extend(0.0),
+        eye.extend(1.0),
+    );
+    Ok(world_from_camera.inverse())
+}
+
+/// `n` bare numbers.
+fn numbers(tok: &mut Tokenizer, n: usize) -> Result<Vec<f32>, SceneError> {
+    (0..n)
+        .map(|_| {
+            let t = tok.next_required("a number")?;
+            parse_float(tok, &t)
+        })
+        .collect()
+}
+
+/// `[ 16 numbers ]`.
+fn bracketed16(tok: &mut Tokenizer) -> Result<[f32; 16], SceneError> {
+    let open = tok.next_required("\"[\"")?;
+    if open.kind != TokKind::Open {
+        return Err(tok.err(&open, format!("expected \"[\", found {}", open.describe())));
+    }
+    let mut m = [0.0f32; 16];
+    for slot in m.iter_mut() {
+        let t = tok.next_required("a number")?;
+        *slot = parse_float(tok, &t)?;
+    }
+    let close = tok.next_required("\"]\"")?;
+    if close.kind != TokKind::Close {
+        return Err(tok.err(
+            &close,
+            format!(
+                "expected \"]\" after 16 numbers, found {}",
+                close.describe()
+            ),
+        ));
+    }
+    Ok(m)
+}
+
+/// A quoted string argument and its location.
+fn string_arg(tok: &mut Tokenizer, what: &str) -> Result<(String, Loc), SceneError> {
+    let t = tok.next_required(what)?;
+    if t.kind != TokKind::Str {
+        return Err(tok.err(
+            &t,
+            format!("expected {what} in quotes, found {}", t.describe()),
+        ));
+    }
+    Ok((unescape(t.text).into_owned(), tok.loc(&t)))
+}
+
+/// A finite number.
+fn parse_float(tok: &Tokenizer, t: &Token) -> Result<f32, SceneError> {
+    if t.kind != TokKind::Num {
+        return Err(tok.err(t, format!("expected a number, found {}", t.describe())));
+    }
+    match t.text.parse::<f32>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(tok.err(t, format!("\"{}\" is not a finite number", t.text))),
+    }
+}
+
+/// The parameter list following a directive's arguments.
+pub fn read_params(tok: &mut Tokenizer) -> Result<ParamSet, SceneError> {
+    let mut set = ParamSet::new();
+    while let Some(t) = tok.peek()? {
+        if t.kind != TokKind::Str {
+            break;
+        }
+        tok.next()?;
+        set.push(read_param(tok, &t)?)?;
+    }
+    Ok(set)
+}
+
+/// One `"type name" value-or-list`, `decl` being the declaration token.
+fn read_param(tok: &mut Tokenizer, decl: &Token) -> Result<Param, SceneError> {
+    let mut words = decl.text.split_whitespace();
+    let (Some(ty_name), Some(name), None) = (words.next(), words.next(), words.next()) else {
+        return Err(tok.err(
+            decl,
+            format!(
+                "expected a parameter declaration \"type name\", found \"{}\"",
+                decl.text
+            ),
+        ));
+    };
+    let Some(ty) = ParamType::from_name(ty_name) else {
+        return Err(tok.err(
+            decl,
+            format!("unknown parameter type \"{ty_name}\" in \"{}\"", decl.text),
+        ));
+    };
+    let values = read_values(tok, ty, decl)?;
+    Ok(Param::new(ty, ty_name, name, values, tok.loc(decl)))
+}
+
+/// The value tokens of a parameter: one token, or everything between `[` and `]`.
+fn read_values(
+    tok: &mut Tokenizer,
+    ty: ParamType,
+    decl: &Token,
+) -> Result<ParamValues, SceneError> {
+    let first = tok.next_required("a parameter value")?;
+    let mut vals = Values::new(ty, &first);
+    if first.kind != TokKind::Open {
+        vals.push(tok, &first, decl)?;
+        return Ok(vals.finish());
+    }
+    loop {
+        let t = tok.next_required("\"]\"")?;
+        match t.kind {
+            TokKind::Close => return Ok(vals.finish()),
+            TokKind::Open => return Err(tok.err(&t, "\"[\" inside a parameter list")),
+            _ => vals.push(tok, &t, decl)?,
+        }
+    }
+}
+
+/// Accumulates typed values.
+struct Values {
+    ty: ParamType,
+    out: ParamValues,
+}
+
+impl Values {
+    /// Chooses the storage for `ty` (spectra: strings if the first value is quoted).
+    fn new(ty: ParamType, first: &Token) -> Self {
+        let out = match ty {
+            ParamType::Integer => ParamValues::Ints(Vec::new()),
+            ParamType::Bool => ParamValues::Bools(Vec::new()),
+            ParamType::String | ParamType::Texture => ParamValues::Strings(Vec::new()),
+            ParamType::Spectrum if first.kind == TokKind::Str => ParamValues::Strings(Vec::new()),
+            _ => ParamValues::Floats(Vec::new()),
+        };
+        Values { ty, out }
+    }
+
+    fn finish(self) -> ParamValues {
+        self.out
+    }
+
+    /// Converts and appends one value token.
+    fn push(&mut self, tok: &Tokenizer, t: &Token, decl: &Token) -> Result<(), SceneError> {
+        let bad = |what: &str| {
+            tok.err(
+                t,
+                format!(
+                    "parameter \"{}\": expected {what}, found {}",
+                    decl.text,
+                    t.describe()
+                ),
+            )
+        };
+        match &mut self.out {
+            ParamValues::Floats(v) => {
+                if t.kind != TokKind::Num {
+                    return Err(bad("a number"));
+                }
+                v.push(parse_float(tok, t)?);
+            }
+            ParamValues::Ints(v) => {
+                let i = (t.kind == TokKind::Num)
+                    .then(|| t.text.parse::<i32>().ok())
+                    .flatten();
+                v.push(i.ok_or_else(|| bad("an integer"))?);
+            }
+            ParamValues::Bools(v) => {
+                let b = match (t.kind, t.text) {
+                    (TokKind::Word | TokKind::Str, "true") => true,
+                    (TokKind::Word | TokKind::Str, "false") => false,
+                    _ => return Err(bad("true or false")),
+                };
+                v.push(b);
+            }
+            ParamValues::Strings(v) => {
+                if t.kind != TokKind::Str {
+                    let what = if self.ty == ParamType::Spectrum {
+                        "a spectrum name"
+                    } else {
+                        "a quoted string"
+                    };
+                    return Err(bad(what));
+                }
+                v.push(unescape(t.text).into_owned());
+            }
+        }
+        Ok(())
+    }
+}
+
+/// `Camera "perspective"`: `fov`, `lensradius` 0 only. The CTM is camera-from-world.
+fn camera(ty: &str, params: &mut ParamSet, at: &Loc, ctm: &Mat4) -> Result<CameraDesc, SceneError> {
+    if ty != "perspective" {
+        return Err(SceneError::at(
+            at,
+            format!("unsupported camera type \"{ty}\""),
+        ));
+    }
+    let fov_deg = params.get_float("fov", 90.0)?;
+    if !(fov_deg > 0.0 && fov_deg < 180.0) {
+        let p = params.peek("fov").expect("a bad fov came from the file");
+        return Err(p.err("fov must lie in (0, 180) degrees"));
+    }
+    if params.get_float("lensradius", 0.0)? != 0.0 {
+        let p = params.peek("lensradius").expect("given");
+        return Err(p.err("depth of field is not supported (lensradius must be 0)"));
+    }
+    let world_from_camera = ctm.inverse();
+    if !world_from_camera.is_finite() {
+        return Err(SceneError::at(at, "the camera transform is singular"));
+    }
+    Ok(CameraDesc {
+        world_from_camera,
+        fov_deg,
+    })
+}
+
+/// `Film "rgb"`: `xresolution`, `yresolution`, `filename`.
+fn film(ty: &str, params: &mut ParamSet, at: &Loc) -> Result<FilmDesc, SceneError> {
+    if ty != "rgb" {
+        return Err(SceneError::at(
+            at,
+            format!("unsupported film type \"{ty}\""),
+        ));
+    }
+    let mut res = [0u32; 2];
+    for (r, (name, default)) in res
+        .iter_mut()
+        .zip([("xresolution", 1280), ("yresolution", 720)])
+    {
+        let v = params.get_int(name, default)?;
+        if v <= 0 {
+            return Err(params.peek(name).expect("given").err("must be positive"));
+        }
+        *r = v as u32;
+    }
+    Ok(FilmDesc {
+        xres: res[0],
+        yres: res[1],
+        filename: params.get_string_opt("filename")?,
+    })
+}
+
+/// `Sampler`: any pbrt-v4 name; `pixelsamples`, or `xsamples` x `ysamples` (and `jitter`) for
+/// `stratified`.
+fn sampler(ty: &str, params: &mut ParamSet, at: &Loc) -> Result<SamplerDesc, SceneError> {
+    const NAMES: [&str; 7] = [
+        "independent",
+        "stratified",
+        "sobol",
+        "zsobol",
+        "halton",
+        "paddedsobol",
+        "pmj02bn",
+    ];
+    if !NAMES.contains(&ty) {
+        return Err(SceneError::at(
+            at,
+            format!("unsupported sampler type \"{ty}\""),
+        ));
+    }
+    let n = if ty == "stratified" {
+        params.get_bool("jitter", true)?;
+        let x = positive_int(params, "xsamples", 4)?;
+        let y = positive_int(params, "ysamples", 4)?;
+        x.checked_mul(y)
+            .ok_or_else(|| SceneError::at(at, "xsamples * ysamples is too large"))?
+    } else {
+        positive_int(params, "pixelsamples", 16)?
+    };
+    Ok(SamplerDesc {
+        name: ty.to_string(),
+        pixel_samples: n,
+    })
+}
+
+/// An `integer` parameter that must be positive.
+fn positive_int(params: &mut ParamSet, name: &str, default: i32) -> Result<u32, SceneError> {
+    let v = params.get_int(name, default)?;
+    if v <= 0 {
+        return Err(params.peek(name).expect("given").err("must be positive"));
+    }
+    Ok(v as u32)
+}
+
+/// `PixelFilter`: `box` (radius 0.5), `triangle` (2), `gaussian` (1.5, `sigma` 0.5).
+fn filter(ty: &str, params: &mut ParamSet, at: &Loc) -> Result<FilterDesc, SceneError> {
+    let default = match ty {
+        "box" => 0.5,
+        "triangle" => 2.0,
+        "gaussian" => 1.5,
+        other => {
+            return Err(SceneError::at(
+                at,
+                format!("unsupported pixel filter \"{other}\""),
+            ))
+        }
+    };
+    let mut r = [0.0f32; 2];
+    for (slot, name) in r.iter_mut().zip(["xradius", "yradius"]) {
+        *slot = params.get_float(name, default)?;
+        if slot.is_nan() || *slot <= 0.0 {
+            return Err(params.peek(name).expect("given").err("must be positive"));
+        }
+    }
+    let radius = Vec2::new(r[0], r[1]);
+    Ok(match ty {
+        "box" => FilterDesc::Box { radius },
+        "triangle" => FilterDesc::Triangle { radius },
+        _ => {
+            let sigma = params.get_float("sigma", 0.5)?;
+            if sigma.is_nan() || sigma <= 0.0 {
+                return Err(params.peek("sigma").expect("given").err("must be positive"));
+            }
+            FilterDesc::Gaussian { radius, sigma }
+        }
+    })
+}

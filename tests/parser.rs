@@ -1,0 +1,1525 @@
+//! Tests of the pbrt-v4 loader: the three shared scenes, every supported directive against
+//! hand-computed values, and every error path with its exact `file:line`.
+//!
+//! Scenes written by the tests go to a fresh directory under the system temp dir.
+
+use photon::math::{Mat4, Vec2, Vec3};
+use photon::scene::loader::load;
+use photon::scene::{FilterDesc, Light, Material, Scene, SceneError};
+use std::f32::consts::PI;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU32, Ordering};
+
+// ---------------------------------------------------------------------------------------------
+// helpers
+
+/// A scratch directory removed when dropped.
+struct TempDir(PathBuf);
+
+impl TempDir {
+    fn new() -> TempDir {
+        static N: AtomicU32 = AtomicU32::new(0);
+        let n = N.fetch_add(1, Ordering::SeqCst);
+        let dir = std::env::temp_dir().join(format!("photon-parser-{}-{n}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        TempDir(dir)
+    }
+
+    /// Writes `contents` to `name` (creating subdirectories) and returns its path.
+    fn write(&self, name: &str, contents: impl AsRef<[u8]>) -> PathBuf {
+        let p = self.0.join(name);
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(&p, contents).unwrap();
+        p
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// Loads `src` written as `scene.pbrt` in a fresh directory.
+fn load_src(src: &str) -> Result<Scene, SceneError> {
+    let dir = TempDir::new();
+    load(&dir.write("scene.pbrt", src))
+}
+
+/// Loads a scene that must load.
+fn ok(src: &str) -> Scene {
+    match load_src(src) {
+        Ok(s) => s,
+        Err(e) => panic!("scene failed to load: {e}"),
+    }
+}
+
+/// Checks that `r` failed at `file_suffix:line` with a one-line message containing `needles`.
+#[track_caller]
+fn assert_err(r: Result<Scene, SceneError>, file_suffix: &str, line: u32, needles: &[&str]) {
+    let e = match r {
+        Ok(_) => panic!("expected an error at {file_suffix}:{line}, the scene loaded"),
+        Err(e) => e,
+    };
+    let text = e.to_string();
+    let loc = e
+        .loc
+        .as_ref()
+        .unwrap_or_else(|| panic!("no location in: {text}"));
+    assert!(
+        loc.file.to_string_lossy().ends_with(file_suffix),
+        "wrong file in: {text}"
+    );
+    assert_eq!(loc.line, line, "wrong line in: {text}");
+    assert!(text.starts_with(&format!(
+        "{}:{}:{}: ",
+        loc.file.display(),
+        loc.line,
+        loc.col
+    )));
+    assert!(!text.contains('\n'), "message is not one line: {text:?}");
+    for n in needles {
+        assert!(text.contains(n), "{text:?} does not mention {n:?}");
+    }
+}
+
+/// Checks an error of a scene given as source text, written as `scene.pbrt`.
+#[track_caller]
+fn assert_src_err(src: &str, line: u32, needles: &[&str]) {
+    assert_err(load_src(src), "scene.pbrt", line, needles);
+}
+
+fn close(a: f32, b: f32, tol: f32) -> bool {
+    (a - b).abs() <= tol * b.abs().max(1.0)
+}
+
+#[track_caller]
+fn assert_vec(a: Vec3, b: Vec3, tol: f32) {
+    assert!((a - b).abs().max_element() <= tol, "{a:?} != {b:?}");
+}
+
+/// The mesh vertices of the only mesh of a scene.
+fn only_mesh(s: &Scene) -> &photon::scene::Mesh {
+    assert_eq!(s.meshes.len(), 1);
+    &s.meshes[0]
+}
+
+const TRI: &str =
+    r#"Shape "trianglemesh" "point3 P" [ 1 0 0  0 1 0  0 0 1 ] "integer indices" [ 0 1 2 ]"#;
+
+fn shared(p: &str) -> PathBuf {
+    Path::new("../shared/scenes").join(p)
+}
+
+/// Every number inside the `[ ... ]` following each occurrence of `key` in `text`: a separate,
+/// simple reading of the file to compare the loader with.
+fn lists_after(text: &str, key: &str) -> Vec<Vec<f64>> {
+    let mut out = Vec::new();
+    let mut rest = text;
+    while let Some(i) = rest.find(key) {
+        rest = &rest[i + key.len()..];
+        let open = rest.find('[').unwrap();
+        let close = rest.find(']').unwrap();
+        out.push(
+            rest[open + 1..close]
+                .split_whitespace()
+                .map(|w| w.parse().unwrap())
+                .collect(),
+        );
+    }
+    out
+}
+
+// ---------------------------------------------------------------------------------------------
+// the shared scenes
+
+#[test]
+fn cornell_box_loads() {
+    let path = shared("cornell-box/scene-v4.pbrt");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let s = load(&path).unwrap_or_else(|e| panic!("{e}"));
+
+    let tris: usize = lists_after(&text, "\"integer indices\"")
+        .iter()
+        .map(|l| l.len() / 3)
+        .sum();
+    assert_eq!(s.triangle_count(), tris);
+    assert_eq!(s.meshes.len(), text.matches("Shape ").count());
+    assert_eq!(s.materials.len(), text.matches("MakeNamedMaterial").count());
+    assert_eq!(s.materials.len(), 8);
+    assert_eq!(s.lights.len(), 1);
+    let Light::Area { mesh, l, two_sided } = &s.lights[0] else {
+        panic!("not an area light: {:?}", s.lights[0]);
+    };
+    assert_eq!(*l, Vec3::new(17.0, 12.0, 4.0));
+    assert!(!two_sided);
+    assert_eq!(s.meshes[*mesh as usize].area_light, Some(0));
+    assert_eq!(
+        s.materials[s.meshes[*mesh as usize].material as usize],
+        Material::Diffuse {
+            reflectance: Vec3::ZERO
+        }
+    );
+    // The light is the last shape: 0.47 x 0.38 at y = 1.98.
+    let lm = &s.meshes[*mesh as usize];
+    let area: f32 = (0..2).map(|t| lm.area(t)).sum();
+    assert!(close(area, 0.47 * 0.38, 1e-5));
+    // Floor material: LeftWall colour appears on the left wall.
+    let red = Material::Diffuse {
+        reflectance: Vec3::new(0.63, 0.065, 0.05),
+    };
+    assert_eq!(s.materials.iter().filter(|m| **m == red).count(), 1);
+
+    let cam = s.camera.world_from_camera;
+    assert_vec(
+        cam.transform_point3(Vec3::ZERO),
+        Vec3::new(0.0, 1.0, 6.8),
+        1e-5,
+    );
+    assert_vec(
+        cam.transform_vector3(Vec3::Z),
+        Vec3::new(0.0, 0.0, -1.0),
+        1e-6,
+    );
+    assert_eq!(s.camera.fov_deg, 19.5);
+    assert_eq!((s.film.xres, s.film.yres), (1024, 1024));
+    assert_eq!(s.film.filename.as_deref(), Some("cornell-box.png"));
+    assert_eq!(s.filter, FilterDesc::Triangle { radius: Vec2::ONE });
+    assert_eq!(
+        (s.sampler.name.as_str(), s.sampler.pixel_samples),
+        ("sobol", 64)
+    );
+    assert_eq!(s.integrator.name, "path");
+    assert_eq!(s.integrator.loc.as_ref().unwrap().line, 1);
+    let mut ip = s.integrator.params.clone();
+    assert!(
+        ip.check_unused().is_err(),
+        "the loader must leave integrator params unread"
+    );
+    assert_eq!(ip.get_int("maxdepth", 5).unwrap(), 65);
+    ip.check_unused().unwrap();
+    // Shading normals as given (unit, the floor's is +y).
+    let floor = &s.meshes[0];
+    assert_vec(floor.normals.as_ref().unwrap()[0], Vec3::Y, 1e-6);
+    assert_eq!(floor.uvs.as_ref().unwrap()[2], Vec2::new(1.0, 1.0));
+}
+
+#[test]
+fn veach_mis_loads() {
+    let path = shared("veach-mis/scene-v4.pbrt");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let s = load(&path).unwrap_or_else(|e| panic!("{e}"));
+
+    let n_area = text.matches("AreaLightSource").count();
+    assert_eq!(n_area, 3, "the shared copy has three sphere lights");
+    assert_eq!(s.lights.len(), n_area);
+    // (centre, radius, L) read off the file by hand.
+    let want = [
+        (Vec3::new(0.0, 6.5, -2.8), 1.0, 7.599088),
+        (Vec3::new(0.0, 6.5, 0.0), 0.5, 30.396353),
+        (Vec3::new(0.0, 6.5, 2.7), 0.05, 3039.6353),
+    ];
+    for (light, (c, r, lv)) in s.lights.iter().zip(want) {
+        let Light::Area { mesh, l, .. } = light else {
+            panic!("{light:?}")
+        };
+        assert_eq!(*l, Vec3::splat(lv));
+        let m = &s.meshes[*mesh as usize];
+        let (mc, mr) = m.sphere.expect("sphere light keeps its analytic sphere");
+        assert_vec(mc, c, 1e-6);
+        assert!(close(mr, r, 1e-6));
+        let area: f64 = (0..m.indices.len() as u32).map(|t| m.area(t) as f64).sum();
+        let exact = 4.0 * std::f64::consts::PI * (r as f64).powi(2);
+        let rel = (area - exact).abs() / exact;
+        assert!(rel < 1e-3, "tessellated area off by {rel}");
+        for p in &m.positions {
+            assert!(((*p - c).length() - r).abs() < 1e-5 * r.max(1.0));
+        }
+    }
+    // Conductors, copper RGB, alpha = roughness since remaproughness is false.
+    let mut alphas: Vec<f32> = s
+        .materials
+        .iter()
+        .filter_map(|m| match m {
+            Material::Conductor {
+                eta,
+                k,
+                alpha_u,
+                alpha_v,
+            } => {
+                assert_eq!(*eta, Vec3::new(0.200438, 0.924033, 1.102212));
+                assert_eq!(*k, Vec3::new(3.912949, 2.452848, 2.142188));
+                assert_eq!(alpha_u, alpha_v);
+                Some(*alpha_u)
+            }
+            _ => None,
+        })
+        .collect();
+    alphas.sort_by(f32::total_cmp);
+    assert_eq!(alphas, vec![0.01, 0.05, 0.1, 0.25]);
+    assert_eq!((s.film.xres, s.film.yres), (1280, 720));
+    assert!(close(s.camera.fov_deg, 20.114292, 1e-7));
+    // Camera: Transform column 3 is (0, -3.5, 28.2792); the camera sits where it maps to 0.
+    let cam_from_world = s.camera.world_from_camera.inverse();
+    let eye = s.camera.world_from_camera.transform_point3(Vec3::ZERO);
+    assert_vec(cam_from_world.transform_point3(eye), Vec3::ZERO, 1e-4);
+    assert_vec(eye, Vec3::new(28.2792, 3.5, 0.0), 1e-3);
+}
+
+#[test]
+fn cornell_spheres_loads() {
+    let path = shared("cornell-spheres/scene.pbrt");
+    let s = load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let plys: Vec<_> = s
+        .meshes
+        .iter()
+        .filter(|m| m.indices.len() == 20480)
+        .collect();
+    assert_eq!(plys.len(), 2);
+    assert_eq!(s.triangle_count(), 5 * 2 + 2 * 20480 + 2);
+    for m in plys {
+        assert_eq!(m.positions.len(), 10242);
+        let (lo, hi) = m.positions.iter().fold(
+            (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        let c = 0.5 * (lo + hi);
+        for p in &m.positions {
+            let d = (*p - c).length();
+            assert!((d - 0.1).abs() < 1e-4, "vertex at distance {d} from {c:?}");
+        }
+        // resting on the floor (the file leaves a 0.5 mm gap)
+        assert!(lo.y >= 0.0 && lo.y < 1e-3, "lowest point {}", lo.y);
+        assert!(m.normals.is_none() && m.sphere.is_none());
+    }
+    let glass = Material::Dielectric { eta: 1.5 };
+    assert!(s.materials.contains(&glass));
+    let mirror = s.materials.iter().find_map(|m| match m {
+        Material::Conductor {
+            eta, k, alpha_u, ..
+        } => Some((*eta, *k, *alpha_u)),
+        _ => None,
+    });
+    let (eta, k, alpha) = mirror.expect("mirror conductor");
+    assert_eq!(eta, Vec3::ONE);
+    let k_expect = 2.0 * (1.0f64 - 1e-7).sqrt() / 1e-7f64.sqrt();
+    assert!(close(k.x, k_expect as f32, 1e-3), "k {k:?} vs {k_expect}");
+    assert_eq!(alpha, 0.0);
+    // Scale -1 1 1 before LookAt: camera +x is world +x (red wall on the left of the image).
+    let cam = s.camera.world_from_camera;
+    assert_vec(
+        cam.transform_point3(Vec3::ZERO),
+        Vec3::new(0.0, 0.28, 1.08),
+        1e-6,
+    );
+    assert_vec(
+        cam.transform_vector3(Vec3::Z),
+        Vec3::new(0.0, 0.0, -1.0),
+        1e-6,
+    );
+    assert_vec(cam.transform_vector3(Vec3::X), Vec3::X, 1e-6);
+    assert_vec(cam.transform_vector3(Vec3::Y), Vec3::Y, 1e-6);
+    assert_eq!(
+        s.filter,
+        FilterDesc::Box {
+            radius: Vec2::splat(0.5)
+        }
+    );
+    assert_eq!(s.lights.len(), 1);
+    assert!(matches!(s.lights[0], Light::Area { l, .. } if l == Vec3::splat(20.0)));
+}
+
+#[test]
+fn shared_scenes_load_quickly() {
+    for p in [
+        "cornell-box/scene-v4.pbrt",
+        "veach-mis/scene-v4.pbrt",
+        "cornell-spheres/scene.pbrt",
+    ] {
+        let t = std::time::Instant::now();
+        let s = load(&shared(p)).unwrap();
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        println!("load {p}: {ms:.2} ms, {} triangles", s.triangle_count());
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// transforms
+
+/// The world positions of the unit triangle (1,0,0) (0,1,0) (0,0,1) after `prefix`.
+fn tri_after(prefix: &str) -> Vec<Vec3> {
+    let s = ok(&format!("WorldBegin\n{prefix}\n{TRI}\n"));
+    only_mesh(&s).positions.clone()
+}
+
+#[test]
+fn translate_then_rotate_post_multiplies() {
+    // CTM = T(1,0,0) R_z(90): a point is rotated first, then translated.
+    let p = tri_after("Translate 1 0 0\nRotate 90 0 0 1");
+    assert_vec(p[0], Vec3::new(1.0, 1.0, 0.0), 1e-6);
+    assert_vec(p[1], Vec3::new(0.0, 0.0, 0.0), 1e-6);
+    assert_vec(p[2], Vec3::new(1.0, 0.0, 1.0), 1e-6);
+    // Rotate about a non-unit axis (normalised): 120 degrees about (1,1,1) cycles x->y->z.
+    let p = tri_after("Rotate 120 2 2 2");
+    assert_vec(p[0], Vec3::Y, 1e-6);
+    assert_vec(p[1], Vec3::Z, 1e-6);
+}
+
+#[test]
+fn scale_and_identity() {
+    let p = tri_after("Scale 2 3 4");
+    assert_vec(p[0], Vec3::new(2.0, 0.0, 0.0), 0.0);
+    assert_vec(p[2], Vec3::new(0.0, 0.0, 4.0), 0.0);
+    let p = tri_after("Translate 5 5 5\nIdentity");
+    assert_vec(p[1], Vec3::Y, 0.0);
+}
+
+#[test]
+fn transform_replaces_and_concat_post_multiplies() {
+    // Transform = translation (5,6,7) (elements 12..14), then ConcatTransform scale 2:
+    // CTM = T S, so (1,0,0) -> (2,0,0) + (5,6,7).
+    let p = tri_after(
+        "Translate 100 0 0\nTransform [1 0 0 0 0 1 0 0 0 0 1 0 5 6 7 1]\n\
+         ConcatTransform [2 0 0 0 0 2 0 0 0 0 2 0 0 0 0 1]",
+    );
+    assert_vec(p[0], Vec3::new(7.0, 6.0, 7.0), 1e-6);
+    assert_vec(p[2], Vec3::new(5.0, 6.0, 9.0), 1e-6);
+    // Column-major: a shear matrix whose column 0 is (1, 2, 0): x feeds y.
+    let p = tri_after("Transform [1 2 0 0  0 1 0 0  0 0 1 0  0 0 0 1]");
+    assert_vec(p[0], Vec3::new(1.0, 2.0, 0.0), 0.0);
+    assert_vec(p[1], Vec3::new(0.0, 1.0, 0.0), 0.0);
+}
+
+#[test]
+fn look_at_camera_and_coordinate_systems() {
+    let s = ok(r#"LookAt 1 2 3  1 2 0  0 1 0
+Camera "perspective" "float fov" 45
+WorldBegin
+CoordSysTransform "camera"
+LightSource "point" "point3 from" [ 0 0 1 ]
+Translate 0 5 0
+CoordinateSystem "mine"
+Identity
+CoordSysTransform "mine"
+LightSource "point" "point3 from" [ 1 0 0 ]
+"#);
+    let cam = s.camera.world_from_camera;
+    assert_vec(
+        cam.transform_point3(Vec3::ZERO),
+        Vec3::new(1.0, 2.0, 3.0),
+        1e-6,
+    );
+    // pbrt's LookAt: camera +z = dir, +x = cross(up, dir), +y = cross(dir, right).
+    assert_vec(
+        cam.transform_vector3(Vec3::Z),
+        Vec3::new(0.0, 0.0, -1.0),
+        1e-6,
+    );
+    assert_vec(
+        cam.transform_vector3(Vec3::X),
+        Vec3::new(-1.0, 0.0, 0.0),
+        1e-6,
+    );
+    assert_vec(
+        cam.transform_vector3(Vec3::Y),
+        Vec3::new(0.0, 1.0, 0.0),
+        1e-6,
+    );
+    assert_eq!(s.camera.fov_deg, 45.0);
+    // "camera": one unit in front of the eye.
+    let Light::Point { pos, .. } = s.lights[0] else {
+        panic!()
+    };
+    assert_vec(pos, Vec3::new(1.0, 2.0, 2.0), 1e-6);
+    // "mine" = world_from_camera * T(0,5,0): camera-space (1,5,0) is eye - 1 x + 5 y.
+    let Light::Point { pos, .. } = s.lights[1] else {
+        panic!()
+    };
+    assert_vec(pos, Vec3::new(0.0, 7.0, 3.0), 1e-5);
+}
+
+#[test]
+fn transform_and_attribute_blocks_restore_state() {
+    let s = ok(&format!(
+        r#"TransformBegin
+Translate 9 9 9
+TransformEnd
+WorldBegin
+Material "diffuse" "rgb reflectance" [ 0.1 0.2 0.3 ]
+AttributeBegin
+  Translate 0 0 10
+  Material "dielectric"
+  ReverseOrientation
+  AreaLightSource "diffuse"
+  TransformBegin
+    Translate 0 0 10
+  TransformEnd
+  {TRI}
+AttributeEnd
+{TRI}
+"#
+    ));
+    assert_eq!(s.meshes.len(), 2);
+    let (inner, outer) = (&s.meshes[0], &s.meshes[1]);
+    assert_vec(inner.positions[0], Vec3::new(1.0, 0.0, 10.0), 0.0);
+    assert_eq!(
+        s.materials[inner.material as usize],
+        Material::Dielectric { eta: 1.5 }
+    );
+    assert!(inner.flip_normals && inner.area_light == Some(0));
+    assert_vec(outer.positions[0], Vec3::X, 0.0);
+    let want = Material::Diffuse {
+        reflectance: Vec3::new(0.1, 0.2, 0.3),
+    };
+    assert_eq!(s.materials[outer.material as usize], want);
+    assert!(!outer.flip_normals && outer.area_light.is_none());
+    assert_eq!(s.lights.len(), 1);
+}
+
+#[test]
+fn reverse_orientation_and_handedness_flip() {
+    let n = r#""normal N" [ 0 0 1  0 0 1  0 0 1 ]"#;
+    let s = ok(&format!(
+        "WorldBegin\n{TRI}\nAttributeBegin\nReverseOrientation\n{TRI}\n\
+         Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] {n}\nAttributeEnd\n\
+         AttributeBegin\nScale -1 1 1\n{TRI}\nReverseOrientation\n{TRI}\nAttributeEnd\n"
+    ));
+    let flips: Vec<bool> = s.meshes.iter().map(|m| m.flip_normals).collect();
+    assert_eq!(flips, vec![false, true, true, true, false]);
+    // The unit triangle's winding normal is (1,1,1)/sqrt 3; reversed it is the opposite.
+    let g = |i: usize| s.meshes[i].geometric_normal(0, 0.3, 0.3);
+    let k = 1.0 / 3f32.sqrt();
+    assert_vec(g(0), Vec3::splat(k), 1e-6);
+    assert_vec(g(1), Vec3::splat(-k), 1e-6);
+    // Given normals are negated by ReverseOrientation (pbrt-v4's TriangleMesh).
+    assert_vec(s.meshes[2].normals.as_ref().unwrap()[0], -Vec3::Z, 0.0);
+    // Mirrored by Scale -1 1 1 the winding normal is (1,-1,-1)/sqrt 3; the handedness flip
+    // turns it to (-1,1,1)/sqrt 3, the mirror image of the original normal.
+    assert_vec(g(3), Vec3::new(-k, k, k), 1e-6);
+    assert_vec(g(4), Vec3::new(k, -k, -k), 1e-6);
+}
+
+#[test]
+fn normals_use_the_inverse_transpose() {
+    // Plane x + y = 1 scaled by (1, 2, 1): its normal (1,1,0) becomes (1, 1/2, 0), normalised.
+    let s = ok(r#"WorldBegin
+Scale 1 2 1
+Shape "trianglemesh" "point3 P" [ 1 0 0  0 1 0  0 1 1 ] "normal N" [ 1 1 0  1 1 0  1 1 0 ]
+"#);
+    let m = only_mesh(&s);
+    let n = m.normals.as_ref().unwrap()[0];
+    assert_vec(
+        n,
+        Vec3::new(2.0 / 5f32.sqrt(), 1.0 / 5f32.sqrt(), 0.0),
+        1e-6,
+    );
+    // It is perpendicular to the transformed surface.
+    assert!(n.dot(m.positions[1] - m.positions[0]).abs() < 1e-6);
+    assert_eq!(m.indices, vec![[0, 1, 2]], "three points need no indices");
+}
+
+// ---------------------------------------------------------------------------------------------
+// options
+
+#[test]
+fn options_and_defaults() {
+    let s = ok("WorldBegin\n");
+    assert_eq!(s.integrator.name, "default");
+    assert!(s.integrator.params.is_empty() && s.integrator.loc.is_none());
+    assert_eq!(
+        (s.film.xres, s.film.yres, s.film.filename.clone()),
+        (1280, 720, None)
+    );
+    assert_eq!(
+        s.filter,
+        FilterDesc::Gaussian {
+            radius: Vec2::splat(1.5),
+            sigma: 0.5
+        }
+    );
+    assert_eq!(s.camera.fov_deg, 90.0);
+    assert_eq!(s.camera.world_from_camera, Mat4::IDENTITY);
+    assert_eq!(s.sampler.pixel_samples, 16);
+    assert!(s.meshes.is_empty() && s.materials.is_empty() && s.lights.is_empty());
+
+    let s = ok(
+        r#"Sampler "stratified" "integer xsamples" 2 "integer ysamples" [ 3 ] "bool jitter" "false"
+PixelFilter "gaussian" "float xradius" 2 "float sigma" 0.25
+Film "rgb" "integer xresolution" 64 "string filename" "out.exr"
+Camera "perspective" "float lensradius" 0
+Integrator "photonmap" "integer photons" 1000 "float radius" 0.1
+WorldBegin
+"#,
+    );
+    assert_eq!(
+        (s.sampler.name.as_str(), s.sampler.pixel_samples),
+        ("stratified", 6)
+    );
+    assert_eq!(
+        s.filter,
+        FilterDesc::Gaussian {
+            radius: Vec2::new(2.0, 1.5),
+            sigma: 0.25
+        }
+    );
+    assert_eq!((s.film.xres, s.film.yres), (64, 720));
+    assert_eq!(s.film.filename.as_deref(), Some("out.exr"));
+    assert_eq!(s.integrator.name, "photonmap");
+    assert_eq!(s.integrator.loc.as_ref().unwrap().line, 5);
+    let mut p = s.integrator.params.clone();
+    assert_eq!(p.get_int("photons", 0).unwrap(), 1000);
+    assert_eq!(p.get_float("radius", 0.0).unwrap(), 0.1);
+    p.check_unused().unwrap();
+
+    let s =
+        ok("PixelFilter \"triangle\"\nSampler \"halton\" \"integer pixelsamples\" 7\nWorldBegin\n");
+    assert_eq!(
+        s.filter,
+        FilterDesc::Triangle {
+            radius: Vec2::splat(2.0)
+        }
+    );
+    assert_eq!(
+        (s.sampler.name.as_str(), s.sampler.pixel_samples),
+        ("halton", 7)
+    );
+    let s = ok("PixelFilter \"box\" \"float yradius\" 1\nWorldBegin\n");
+    assert_eq!(
+        s.filter,
+        FilterDesc::Box {
+            radius: Vec2::new(0.5, 1.0)
+        }
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// materials
+
+/// The material of the single shape of a world whose body is `body`.
+fn material_of(body: &str) -> Material {
+    let s = ok(&format!("WorldBegin\n{body}\n{TRI}\n"));
+    s.materials[only_mesh(&s).material as usize].clone()
+}
+
+#[test]
+fn materials() {
+    assert_eq!(
+        material_of(""),
+        Material::Diffuse {
+            reflectance: Vec3::splat(0.5)
+        }
+    );
+    assert_eq!(
+        material_of(r#"Material "dielectric" "float eta" 1.33"#),
+        Material::Dielectric { eta: 1.33 }
+    );
+    assert_eq!(
+        material_of(r#"Material "dielectric" "spectrum eta" [ 1.7 ] "float roughness" 0"#),
+        Material::Dielectric { eta: 1.7 }
+    );
+    assert_eq!(
+        material_of(r#"Material "dielectric" "spectrum eta" [ 400 1.6 700 1.6 ]"#),
+        Material::Dielectric { eta: 1.6 }
+    );
+    // Default conductor: copper, smooth.
+    assert_eq!(
+        material_of(r#"Material "conductor""#),
+        Material::Conductor {
+            eta: Vec3::new(0.200438, 0.924033, 1.102212),
+            k: Vec3::new(3.912949, 2.452848, 2.142188),
+            alpha_u: 0.0,
+            alpha_v: 0.0
+        }
+    );
+    // reflectance 0.64: eta 1, k = 2 * 0.8 / 0.6; roughness 0.09 remapped to alpha 0.3.
+    let Material::Conductor {
+        eta,
+        k,
+        alpha_u,
+        alpha_v,
+    } = material_of(
+        r#"Material "conductor" "rgb reflectance" [ 0.64 0 0.36 ] "float roughness" 0.09"#,
+    )
+    else {
+        panic!()
+    };
+    assert_eq!(eta, Vec3::ONE);
+    assert_vec(k, Vec3::new(2.0 * 0.8 / 0.6, 0.0, 2.0 * 0.6 / 0.8), 1e-5);
+    assert!(close(alpha_u, 0.3, 1e-6) && close(alpha_v, 0.3, 1e-6));
+    // Anisotropic, not remapped; named gold spectra.
+    assert_eq!(
+        material_of(
+            r#"Material "conductor" "spectrum eta" "metal-Au-eta" "spectrum k" "metal-Au-k"
+               "float uroughness" 0.2 "float vroughness" 0.04 "bool remaproughness" false"#
+        ),
+        Material::Conductor {
+            eta: Vec3::new(0.143119, 0.374957, 1.44248),
+            k: Vec3::new(3.98316, 2.38572, 1.60322),
+            alpha_u: 0.2,
+            alpha_v: 0.04
+        }
+    );
+    let Material::Conductor {
+        eta,
+        k,
+        alpha_u,
+        alpha_v,
+    } = material_of(
+        r#"Material "conductor" "spectrum eta" "metal-Al-eta" "rgb k" [1 2 3] "float uroughness" 0.25"#,
+    )
+    else {
+        panic!()
+    };
+    assert_eq!(
+        (eta, k),
+        (
+            Vec3::new(1.65746, 0.880369, 0.521229),
+            Vec3::new(1.0, 2.0, 3.0)
+        )
+    );
+    assert!(close(alpha_u, 0.5, 1e-6) && alpha_v == 0.0);
+    // Named materials keep their index; "color" is an alias of rgb.
+    let s = ok(&format!(
+        r#"WorldBegin
+MakeNamedMaterial "a" "string type" "diffuse" "color reflectance" [ 0.2 0.2 0.2 ]
+MakeNamedMaterial "b" "string type" "conductor" "spectrum eta" "metal-Ag-eta" "spectrum k" "metal-Ag-k"
+NamedMaterial "b"
+{TRI}
+NamedMaterial "a"
+{TRI}
+Material "diffuse"
+{TRI}
+"#
+    ));
+    let mats: Vec<&Material> = s
+        .meshes
+        .iter()
+        .map(|m| &s.materials[m.material as usize])
+        .collect();
+    assert!(
+        matches!(mats[0], Material::Conductor { eta, .. } if *eta == Vec3::new(0.155265, 0.116723, 0.138342))
+    );
+    assert_eq!(
+        *mats[1],
+        Material::Diffuse {
+            reflectance: Vec3::splat(0.2)
+        }
+    );
+    assert_eq!(
+        *mats[2],
+        Material::Diffuse {
+            reflectance: Vec3::splat(0.5)
+        }
+    );
+    assert_eq!(
+        s.materials.len(),
+        3,
+        "the default material is added only when used"
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// lights
+
+#[test]
+fn point_spot_distant_lights() {
+    let s = ok(r#"WorldBegin
+Translate 1 0 0
+LightSource "point" "point3 from" [ 1 2 3 ] "rgb I" [ 1 2 3 ] "float scale" 2
+LightSource "point" "float power" 100
+Identity
+Rotate 90 0 0 1
+LightSource "spot" "point3 from" [ 0 5 0 ] "point3 to" [ 0 0 0 ] "float coneangle" 30 "float conedelta" 10
+LightSource "spot" "float power" 10
+Identity
+LightSource "distant" "point3 from" [ 0 10 0 ] "point3 to" [ 0 0 0 ] "rgb L" [ 1 1 1 ] "float scale" 2
+"#);
+    assert_eq!(
+        s.lights[0],
+        Light::Point {
+            pos: Vec3::new(2.0, 2.0, 3.0),
+            intensity: Vec3::new(2.0, 4.0, 6.0)
+        }
+    );
+    let Light::Point { pos, intensity } = s.lights[1] else {
+        panic!()
+    };
+    assert_eq!(pos, Vec3::X);
+    assert_vec(intensity, Vec3::splat(100.0 / (4.0 * PI)), 1e-5);
+    // R_z(90) maps (x, y) to (-y, x).
+    let Light::Spot {
+        pos,
+        dir,
+        intensity,
+        cos_falloff_start,
+        cos_falloff_end,
+    } = s.lights[2]
+    else {
+        panic!()
+    };
+    assert_vec(pos, Vec3::new(-5.0, 0.0, 0.0), 1e-6);
+    assert_vec(dir, Vec3::X, 1e-6);
+    assert_eq!(intensity, Vec3::ONE);
+    assert!(close(cos_falloff_end, 0.866_025_4, 1e-6));
+    assert!(close(cos_falloff_start, 0.939_692_6, 1e-6));
+    // Defaults 30 / 5 degrees; power 10 over pbrt-v4's k_e = 2 pi (1 - (cs + ce) / 2).
+    let Light::Spot {
+        dir,
+        intensity,
+        cos_falloff_start,
+        cos_falloff_end,
+        ..
+    } = s.lights[3]
+    else {
+        panic!()
+    };
+    assert_vec(dir, Vec3::Z, 1e-6); // (0,0,1) is not moved by R_z
+    let (cs, ce) = (25f32.to_radians().cos(), 30f32.to_radians().cos());
+    assert!(close(cos_falloff_start, cs, 1e-6) && close(cos_falloff_end, ce, 1e-6));
+    let k = 10.0 / (2.0 * PI * (1.0 - 0.5 * (cs + ce)));
+    assert_vec(intensity, Vec3::splat(k), 1e-3);
+    assert_eq!(
+        s.lights[4],
+        Light::Distant {
+            dir: -Vec3::Y,
+            l: Vec3::splat(2.0)
+        }
+    );
+}
+
+#[test]
+fn area_lights() {
+    let quad = r#"Shape "trianglemesh" "point3 P" [ 0 0 0 2 0 0 2 1 0 0 1 0 ] "integer indices" [ 0 1 2 0 2 3 ]"#;
+    let s = ok(&format!(
+        r#"WorldBegin
+AttributeBegin
+AreaLightSource "diffuse" "rgb L" [ 1 2 3 ] "float scale" 3 "bool twosided" true
+{quad}
+{quad}
+AttributeEnd
+{quad}
+AttributeBegin
+AreaLightSource "diffuse" "float power" 10 "bool twosided" true
+{quad}
+AttributeEnd
+AttributeBegin
+AreaLightSource "diffuse" "float power" 10
+Scale 2 2 2
+Shape "sphere" "float radius" 0.5
+AttributeEnd
+"#
+    ));
+    assert_eq!(s.lights.len(), 4);
+    assert_eq!(s.meshes.len(), 5);
+    for (i, light) in s.lights.iter().enumerate() {
+        let Light::Area { mesh, .. } = light else {
+            panic!()
+        };
+        assert_eq!(s.meshes[*mesh as usize].area_light, Some(i as u32));
+    }
+    assert_eq!(
+        s.lights[0],
+        Light::Area {
+            mesh: 0,
+            l: Vec3::new(3.0, 6.0, 9.0),
+            two_sided: true
+        }
+    );
+    assert!(matches!(s.lights[1], Light::Area { mesh: 1, .. }));
+    assert!(s.meshes[2].area_light.is_none());
+    // power 10 over a two-sided 2 x 1 quad: L = 10 / (pi * 2 * 2).
+    let Light::Area {
+        mesh: 3,
+        l,
+        two_sided: true,
+    } = s.lights[2]
+    else {
+        panic!()
+    };
+    assert_vec(l, Vec3::splat(10.0 / (4.0 * PI)), 1e-5);
+    // power 10 over a one-sided sphere of world radius 1: L = 10 / (pi * 4 pi).
+    let Light::Area {
+        mesh: 4,
+        l,
+        two_sided: false,
+    } = s.lights[3]
+    else {
+        panic!()
+    };
+    assert_vec(l, Vec3::splat(10.0 / (4.0 * PI * PI)), 1e-5);
+}
+
+// ---------------------------------------------------------------------------------------------
+// shapes
+
+#[test]
+fn spheres() {
+    let s = ok(r#"WorldBegin
+AttributeBegin
+Translate 1 2 3
+Scale 2 2 2
+Rotate 30 1 0 0
+Shape "sphere" "float radius" 0.5 "float zmin" -0.5 "float phimax" 360
+AttributeEnd
+AttributeBegin
+ReverseOrientation
+Shape "sphere"
+AttributeEnd
+AttributeBegin
+Scale -1 1 1
+Shape "sphere"
+AttributeEnd
+"#);
+    for (i, m) in s.meshes.iter().enumerate() {
+        let (c, r) = m.sphere.unwrap();
+        if i == 0 {
+            assert_vec(c, Vec3::new(1.0, 2.0, 3.0), 1e-6);
+            assert!(close(r, 1.0, 1e-6));
+        } else {
+            assert_eq!((c, r), (Vec3::ZERO, 1.0));
+        }
+        let inward = i == 1;
+        assert_eq!(m.flip_normals, inward);
+        let normals = m.normals.as_ref().unwrap();
+        for (p, n) in m.positions.iter().zip(normals) {
+            assert!(((*p - c).length() - r).abs() < 1e-5);
+            let out = (*p - c) / r;
+            assert_vec(*n, if inward { -out } else { out }, 1e-5);
+        }
+        for t in 0..m.indices.len() as u32 {
+            // Winding normal agrees with the shading normals' side.
+            let [p0, p1, p2] = m.triangle(t);
+            let w = (p1 - p0).cross(p2 - p0);
+            assert!(
+                w.dot(p0 + p1 + p2 - 3.0 * c) > 0.0,
+                "mesh {i} triangle {t} winds inward"
+            );
+            let g = m.geometric_normal(t, 0.3, 0.3);
+            assert_eq!(g.dot(p0 - c) > 0.0, !inward);
+        }
+        assert_eq!(m.uvs.as_ref().map(|u| u.len()), Some(m.positions.len()));
+    }
+}
+
+/// An ASCII PLY with one quad (split in two), normals and (s, t) coordinates.
+const ASCII_PLY: &str = "ply
+format ascii 1.0
+comment a unit quad
+element vertex 4
+property float x
+property float y
+property float z
+property float nx
+property float ny
+property float nz
+property float s
+property float t
+element face 1
+property list uchar int vertex_indices
+end_header
+0 0 0 0 0 1 0 0
+1 0 0 0 0 1 1 0
+1 1 0 0 0 1 1 1
+0 1 0 0 0 1 0 1
+4 0 1 2 3
+";
+
+/// A binary PLY: `n` vertices (x y z as f64) and triangle faces with the given index type.
+fn binary_ply(big_endian: bool, verts: &[[f64; 3]], faces: &[Vec<u16>]) -> Vec<u8> {
+    let fmt = if big_endian {
+        "binary_big_endian"
+    } else {
+        "binary_little_endian"
+    };
+    let mut out = format!(
+        "ply\nformat {fmt} 1.0\nelement vertex {}\nproperty double x\nproperty double y\n\
+         property double z\nproperty uchar red\nelement face {}\n\
+         property list uchar ushort vertex_indices\nend_header\n",
+        verts.len(),
+        faces.len()
+    )
+    .into_bytes();
+    for v in verts {
+        for c in v {
+            out.extend(if big_endian {
+                c.to_be_bytes()
+            } else {
+                c.to_le_bytes()
+            });
+        }
+        out.push(200);
+    }
+    for f in faces {
+        out.push(f.len() as u8);
+        for i in f {
+            out.extend(if big_endian {
+                i.to_be_bytes()
+            } else {
+                i.to_le_bytes()
+            });
+        }
+    }
+    out
+}
+
+#[test]
+fn ply_meshes() {
+    let dir = TempDir::new();
+    dir.write("meshes/quad.ply", ASCII_PLY);
+    let verts = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+    ];
+    let faces = vec![vec![0, 1, 2], vec![0, 2, 3], vec![1, 2, 3, 0]];
+    dir.write("be.ply", binary_ply(true, &verts, &faces));
+    dir.write("le.ply", binary_ply(false, &verts, &faces));
+    let scene = dir.write(
+        "scene.pbrt",
+        r#"WorldBegin
+Translate 0 0 5
+Shape "plymesh" "string filename" "meshes/quad.ply"
+Shape "plymesh" "string filename" "be.ply"
+Shape "plymesh" "string filename" "le.ply"
+"#,
+    );
+    let s = load(&scene).unwrap_or_else(|e| panic!("{e}"));
+    let q = &s.meshes[0];
+    assert_eq!(q.indices, vec![[0, 1, 2], [0, 2, 3]]);
+    assert_vec(q.positions[2], Vec3::new(1.0, 1.0, 5.0), 0.0);
+    assert_eq!(q.normals.as_ref().unwrap()[3], Vec3::Z);
+    assert_eq!(q.uvs.as_ref().unwrap()[2], Vec2::new(1.0, 1.0));
+    for m in &s.meshes[1..] {
+        assert_eq!(m.indices, vec![[0, 1, 2], [0, 2, 3], [1, 2, 3], [1, 3, 0]]);
+        assert_vec(m.positions[3], Vec3::new(0.0, 0.0, 6.0), 0.0);
+        assert!(m.normals.is_none() && m.uvs.is_none());
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// syntax
+
+#[test]
+fn syntax_details() {
+    // Comments, bare and quoted bools, single values without brackets, strings with escapes,
+    // include and import relative to the main file's directory (also from a subdirectory).
+    let dir = TempDir::new();
+    dir.write(
+        "sub/a.pbrt",
+        "# included\nMakeNamedMaterial \"m\" \"string type\" \"diffuse\"\nImport \"sub/b.pbrt\"\n",
+    );
+    dir.write("sub/b.pbrt", format!("NamedMaterial \"m\"\n{TRI}\n"));
+    let scene = dir.write(
+        "scene.pbrt",
+        format!(
+            "Film \"rgb\" \"string filename\" \"a\\\"b.exr\" # comment \"not a string\n\
+         WorldBegin # ok\nInclude \"sub/a.pbrt\"\n\
+         AreaLightSource \"diffuse\" \"bool twosided\" true\n\
+         Shape \"trianglemesh\" \"point P\" [1 0 0 0 1 0 0 0 1]\n\
+         AreaLightSource \"diffuse\" \"bool twosided\" [ \"false\" ]\n{TRI}\n"
+        ),
+    );
+    let s = load(&scene).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.film.filename.as_deref(), Some("a\"b.exr"));
+    assert_eq!(s.meshes.len(), 3);
+    assert_eq!(
+        s.materials[s.meshes[0].material as usize],
+        Material::Diffuse {
+            reflectance: Vec3::splat(0.5)
+        }
+    );
+    assert!(matches!(
+        s.lights[0],
+        Light::Area {
+            two_sided: true,
+            ..
+        }
+    ));
+    assert!(matches!(
+        s.lights[1],
+        Light::Area {
+            two_sided: false,
+            ..
+        }
+    ));
+    assert_eq!(s.path, scene);
+}
+
+// ---------------------------------------------------------------------------------------------
+// errors
+
+#[test]
+fn error_unknown_and_unsupported_directives() {
+    assert_src_err(
+        "WorldBegin\n\n  Shap \"sphere\"\n",
+        3,
+        &["unknown directive \"Shap\""],
+    );
+    assert_src_err(
+        "WorldBegin\nTexture \"t\" \"spectrum\" \"imagemap\"\n",
+        2,
+        &["unsupported directive \"Texture\""],
+    );
+    assert_src_err(
+        "WorldBegin\nAttribute \"shape\" \"float radius\" 2\n",
+        2,
+        &["unsupported directive \"Attribute\""],
+    );
+    assert_src_err("WorldBegin\nWorldEnd\n", 2, &["\"WorldEnd\""]);
+    assert_src_err(
+        "WorldBegin\nShape \"disk\"\n",
+        2,
+        &["unsupported shape type \"disk\""],
+    );
+    assert_src_err(
+        "WorldBegin\nMaterial \"coateddiffuse\"\n",
+        2,
+        &["unsupported material type \"coateddiffuse\""],
+    );
+    assert_src_err(
+        "WorldBegin\nMakeNamedMaterial \"x\"\n \"string type\" \"interface\"\n",
+        3,
+        &["\"interface\""],
+    );
+    assert_src_err(
+        "WorldBegin\nLightSource \"infinite\"\n",
+        2,
+        &["unsupported light type \"infinite\""],
+    );
+    assert_src_err("WorldBegin\nAreaLightSource \"spot\"\n", 2, &["\"spot\""]);
+    assert_src_err(
+        "Camera \"orthographic\"\nWorldBegin\n",
+        1,
+        &["\"orthographic\""],
+    );
+    assert_src_err("Film \"gbuffer\"\nWorldBegin\n", 1, &["\"gbuffer\""]);
+    assert_src_err(
+        "PixelFilter \"mitchell\"\nWorldBegin\n",
+        1,
+        &["\"mitchell\""],
+    );
+    assert_src_err("Sampler \"magic\"\nWorldBegin\n", 1, &["\"magic\""]);
+    assert_src_err("WorldBegin\n[ 1 ]\n", 2, &["expected a directive"]);
+    assert_src_err(
+        "Shape \"sphere\"\nWorldBegin\n",
+        1,
+        &["only allowed after WorldBegin"],
+    );
+    assert_src_err(
+        "WorldBegin\nCamera \"perspective\"\n",
+        2,
+        &["not allowed after WorldBegin"],
+    );
+    assert_src_err("WorldBegin\nWorldBegin\n", 2, &["WorldBegin given twice"]);
+    assert_src_err("Camera \"perspective\"\n", 2, &["no WorldBegin"]);
+}
+
+#[test]
+fn error_parameter_types_and_values() {
+    assert_src_err(
+        "Camera \"perspective\"\n    \"integer fov\" 30\nWorldBegin\n",
+        2,
+        &["\"integer fov\"", "expected float"],
+    );
+    assert_src_err(
+        "WorldBegin\nMaterial \"diffuse\"\n  \"rgb reflectance\" [ 0.5 0.5 ]\n",
+        3,
+        &["\"rgb reflectance\"", "expected 3 numbers, got 2"],
+    );
+    assert_src_err(
+        "WorldBegin\nMaterial \"diffuse\" \"texture reflectance\" \"t\"\n",
+        2,
+        &["textures are not supported"],
+    );
+    assert_src_err(
+        "WorldBegin\nLightSource \"point\"\n \"blackbody I\" 5500\n",
+        3,
+        &["blackbody"],
+    );
+    assert_src_err(
+        "WorldBegin\nMaterial \"diffuse\" \"rgb reflectance\" [ 1.5 0 0 ]\n",
+        2,
+        &["[0, 1]"],
+    );
+    assert_src_err(
+        "Film \"rgb\"\n \"integer xresolution\" [ 1.5 ]\nWorldBegin\n",
+        2,
+        &["expected an integer, found number 1.5"],
+    );
+    assert_src_err(
+        "Film \"rgb\" \"integer xresolution\" [ 0 ]\nWorldBegin\n",
+        1,
+        &["must be positive"],
+    );
+    assert_src_err(
+        "WorldBegin\nMaterial \"diffuse\" \"colour reflectance\" [ 1 1 1 ]\n",
+        2,
+        &["unknown parameter type \"colour\""],
+    );
+    assert_src_err(
+        "WorldBegin\nMaterial \"diffuse\" \"reflectance\" [ 1 1 1 ]\n",
+        2,
+        &["\"type name\""],
+    );
+    assert_src_err(
+        "WorldBegin\nLightSource \"point\" \"float scale\" 1\n\"float scale\" 2\n",
+        3,
+        &["given twice"],
+    );
+    assert_src_err(
+        "WorldBegin\nLightSource \"point\" \"bool x\" maybe\n",
+        2,
+        &["true or false"],
+    );
+    assert_src_err(
+        "WorldBegin\nLightSource \"point\" \"float scale\" [ 1 [ 2 ] ]\n",
+        2,
+        &["\"[\" inside"],
+    );
+    assert_src_err(
+        "WorldBegin\nLightSource \"point\"\n \"float scale\" [ 1 2\n",
+        4,
+        &["unexpected end of file"],
+    );
+    assert_src_err(
+        "WorldBegin\nTranslate 1 2\n",
+        3,
+        &["unexpected end of file", "number"],
+    );
+    assert_src_err("WorldBegin\nTranslate 1 x 2\n", 2, &["expected a number"]);
+    assert_src_err(
+        "WorldBegin\nTransform [ 1 0 0 ]\n",
+        2,
+        &["expected a number, found \"]\""],
+    );
+    assert_src_err("WorldBegin\nRotate 10 0 0 0\n", 2, &["zero axis"]);
+    assert_src_err("LookAt 0 0 0 0 0 1 0 0 1\nWorldBegin\n", 1, &["up vector"]);
+    assert_src_err(
+        "WorldBegin\nLightSource \"distant\" \"float illuminance\" 3\n",
+        2,
+        &["\"illuminance\""],
+    );
+    assert_src_err(
+        "Camera \"perspective\"\n \"float lensradius\" 0.1\nWorldBegin\n",
+        2,
+        &["lensradius"],
+    );
+    assert_src_err(
+        "WorldBegin\nMaterial \"dielectric\"\n \"float roughness\" 0.1\n",
+        3,
+        &["rough dielectrics"],
+    );
+    assert_src_err(
+        "WorldBegin\nMaterial \"dielectric\"\n \"spectrum eta\" \"glass-BK7\"\n",
+        3,
+        &["glass-BK7"],
+    );
+    assert_src_err(
+        "WorldBegin\nMaterial \"conductor\"\n \"spectrum eta\" \"metal-Pt-eta\"\n",
+        3,
+        &["metal-Pt-eta"],
+    );
+    assert_src_err(
+        "WorldBegin\nMaterial \"conductor\" \"rgb reflectance\" [1 1 1]\n \"rgb k\" [1 1 1]\n",
+        3,
+        &["not both"],
+    );
+    assert_src_err(
+        "WorldBegin\nMakeNamedMaterial \"x\" \"rgb reflectance\" [1 1 1]\n",
+        2,
+        &["\"string type\""],
+    );
+    assert_src_err("WorldBegin\nMakeNamedMaterial \"x\" \"string type\" \"diffuse\"\nMakeNamedMaterial \"x\" \"string type\" \"diffuse\"\n", 3, &["redefined"]);
+    assert_src_err(
+        "WorldBegin\nCoordSysTransform \"nowhere\"\n",
+        2,
+        &["unknown coordinate system \"nowhere\""],
+    );
+}
+
+#[test]
+fn error_unused_parameters() {
+    assert_src_err(
+        "WorldBegin\nLightSource \"point\"\n  \"rgb I\" [ 1 1 1 ]\n  \"float foo\" 1\n",
+        4,
+        &["unused parameter \"float foo\""],
+    );
+    assert_src_err(
+        "Camera \"perspective\" \"float screenwindow\" [ -1 1 -1 1 ]\nWorldBegin\n",
+        1,
+        &["unused parameter \"float screenwindow\""],
+    );
+    assert_src_err(
+        "Film \"rgb\"\n\"float iso\" 100\nWorldBegin\n",
+        2,
+        &["unused parameter \"float iso\""],
+    );
+    assert_src_err(
+        "Sampler \"stratified\" \"integer pixelsamples\" 4\nWorldBegin\n",
+        1,
+        &["unused parameter \"integer pixelsamples\""],
+    );
+    assert_src_err(
+        "PixelFilter \"box\" \"float sigma\" 1\nWorldBegin\n",
+        1,
+        &["unused parameter \"float sigma\""],
+    );
+    assert_src_err(
+        "WorldBegin\nMaterial \"diffuse\" \"texture normalmap\" \"n\"\n",
+        2,
+        &["unused parameter \"texture normalmap\""],
+    );
+    assert_src_err("WorldBegin\nMaterial \"conductor\" \"float uroughness\" 0.1 \"float vroughness\" 0.1\n \"float roughness\" 0.2\n", 3, &["unused parameter \"float roughness\""]);
+    assert_src_err(
+        &format!("WorldBegin\n{TRI}\n  \"float alpha\" 0.5\n"),
+        3,
+        &["unused parameter \"float alpha\""],
+    );
+    assert_src_err(
+        "WorldBegin\nShape \"sphere\" \"float radius\" 1\n \"float zmax\" 0.5\n",
+        3,
+        &["partial spheres"],
+    );
+    assert_src_err(
+        "WorldBegin\nAreaLightSource \"diffuse\" \"string filename\" \"x.exr\"\n",
+        2,
+        &["unused parameter \"string filename\""],
+    );
+    assert_src_err("WorldBegin\nShape \"plymesh\" \"string filename\" \"x.ply\"\n\"texture displacement\" \"d\"\n", 3, &["unused parameter \"texture displacement\""]);
+}
+
+#[test]
+fn error_named_material_and_blocks() {
+    assert_src_err(
+        "WorldBegin\nMakeNamedMaterial \"a\" \"string type\" \"diffuse\"\n\nNamedMaterial \"b\"\n",
+        4,
+        &["unknown named material \"b\""],
+    );
+    assert_src_err(
+        "WorldBegin\nAttributeBegin\nAttributeEnd\nAttributeEnd\n",
+        4,
+        &["AttributeEnd without AttributeBegin"],
+    );
+    assert_src_err(
+        "TransformEnd\nWorldBegin\n",
+        1,
+        &["TransformEnd without TransformBegin"],
+    );
+    assert_src_err(
+        "WorldBegin\nAttributeBegin\nTransformBegin\nAttributeEnd\n",
+        4,
+        &["does not match the block opened at line 3"],
+    );
+    assert_src_err(
+        "WorldBegin\nShape \"sphere\"\nAttributeBegin\n",
+        3,
+        &["AttributeBegin without a matching AttributeEnd"],
+    );
+}
+
+#[test]
+fn error_shapes() {
+    assert_src_err(
+        "WorldBegin\nShape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ]\n  \"integer indices\" [ 0 1 5 ]\n",
+        3,
+        &["\"integer indices\"", "index 5", "out of range"],
+    );
+    assert_src_err("WorldBegin\nShape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ]\n \"integer indices\" [ 0 -1 2 ]\n", 3, &["index -1"]);
+    assert_src_err("WorldBegin\nShape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ]\n \"integer indices\" [ 0 1 ]\n", 3, &["multiple of 3"]);
+    assert_src_err(
+        "WorldBegin\nShape \"trianglemesh\"\n \"point3 P\" [ 0 0 0 1 0 0 0 1 0 0 ]\n",
+        3,
+        &["multiple of 3"],
+    );
+    assert_src_err(
+        "WorldBegin\nShape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 1 1 1 ]\n",
+        2,
+        &["\"integer indices\""],
+    );
+    assert_src_err(
+        "WorldBegin\nShape \"trianglemesh\" \"integer indices\" [ 0 1 2 ]\n",
+        2,
+        &["\"point3 P\""],
+    );
+    assert_src_err("WorldBegin\nShape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ]\n \"normal N\" [ 0 0 1 ]\n", 3, &["1 values given for 3 points"]);
+    assert_src_err("WorldBegin\nShape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ]\n \"point2 uv\" [ 0 0 1 0 1 ]\n", 3, &["multiple of 2"]);
+    assert_src_err("WorldBegin\nShape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ]\n \"normal P\" [ 0 0 1 ]\n", 3, &["given twice"]);
+    assert_src_err(
+        "WorldBegin\nScale 1 2 1\nShape \"sphere\"\n",
+        3,
+        &["similarity"],
+    );
+    assert_src_err("WorldBegin\nAreaLightSource \"diffuse\" \"float power\" 1\nShape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 2 0 0 ]\n", 3, &["zero area"]);
+}
+
+#[test]
+fn error_unterminated_string() {
+    let r = load_src("WorldBegin\nMaterial \"diffuse\"\n  Shape \"trianglemesh\n");
+    assert_err(r, "scene.pbrt", 3, &["unterminated string"]);
+    let e = load_src("WorldBegin\nNamedMaterial \"abc").unwrap_err();
+    assert_eq!(
+        (e.loc.as_ref().unwrap().line, e.loc.as_ref().unwrap().col),
+        (2, 15)
+    );
+    assert!(e.msg.contains("unterminated string"));
+}
+
+#[test]
+fn error_includes() {
+    let dir = TempDir::new();
+    let main = dir.write("scene.pbrt", "WorldBegin\n\nInclude \"missing.pbrt\"\n");
+    assert_err(
+        load(&main),
+        "scene.pbrt",
+        3,
+        &["missing.pbrt", "cannot read"],
+    );
+    // An error inside an included file names that file and its line.
+    dir.write(
+        "parts/inc.pbrt",
+        "# part\nAttributeBegin\n  Shape \"cone\"\nAttributeEnd\n",
+    );
+    let main = dir.write("scene2.pbrt", "WorldBegin\nInclude \"parts/inc.pbrt\"\n");
+    assert_err(
+        load(&main),
+        "parts/inc.pbrt",
+        3,
+        &["unsupported shape type \"cone\""],
+    );
+    // A cycle stops at the depth limit, at an Include line.
+    let main = dir.write("loop.pbrt", "WorldBegin\nImport \"loop2.pbrt\"\n");
+    dir.write("loop2.pbrt", "\nInclude \"loop3.pbrt\"\n");
+    dir.write("loop3.pbrt", "Include \"loop2.pbrt\"\n");
+    let e = load(&main).unwrap_err();
+    assert!(e.msg.contains("nested more than"), "{e}");
+    // A missing main file is an error (without a line).
+    assert!(load(&dir.0.join("nope.pbrt"))
+        .unwrap_err()
+        .msg
+        .contains("nope.pbrt"));
+}
+
+/// A scene with one plymesh named `file` on line 3.
+fn ply_scene(dir: &TempDir, file: &str) -> PathBuf {
+    dir.write(
+        "scene.pbrt",
+        format!(
+            "WorldBegin\nMaterial \"diffuse\"\nShape \"plymesh\" \"string filename\" \"{file}\"\n"
+        ),
+    )
+}
+
+#[test]
+fn error_ply_files() {
+    let dir = TempDir::new();
+    let scene = ply_scene(&dir, "none.ply");
+    assert_err(load(&scene), "scene.pbrt", 3, &["none.ply", "cannot open"]);
+
+    // Truncated binary: every cut inside the payload is an error naming the file, no panic.
+    let verts = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    let full = binary_ply(false, &verts, &[vec![0, 1, 2]]);
+    let header_len = full.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+    for cut in header_len..full.len() {
+        dir.write("cut.ply", &full[..cut]);
+        let scene = ply_scene(&dir, "cut.ply");
+        assert_err(load(&scene), "scene.pbrt", 3, &["cut.ply", "truncated"]);
+    }
+    // and every cut inside the header is an error too.
+    for cut in 0..header_len {
+        dir.write("cut.ply", &full[..cut]);
+        assert_err(
+            load(&ply_scene(&dir, "cut.ply")),
+            "scene.pbrt",
+            3,
+            &["cut.ply"],
+        );
+    }
+
+    dir.write(
+        "hdr.ply",
+        "ply\nformat ascii 1.0\nelement vertex 1\nproperty floot x\nend_header\n0\n",
+    );
+    assert_err(
+        load(&ply_scene(&dir, "hdr.ply")),
+        "scene.pbrt",
+        3,
+        &["hdr.ply", "malformed header"],
+    );
+    dir.write(
+        "bad.ply",
+        ASCII_PLY.replace("1 1 0 0 0 1 1 1", "1 1 0 0 0 1 x 1"),
+    );
+    assert_err(
+        load(&ply_scene(&dir, "bad.ply")),
+        "scene.pbrt",
+        3,
+        &["bad.ply", "malformed"],
+    );
+    dir.write("range.ply", ASCII_PLY.replace("4 0 1 2 3", "4 0 1 2 4"));
+    assert_err(
+        load(&ply_scene(&dir, "range.ply")),
+        "scene.pbrt",
+        3,
+        &["range.ply", "index 4 out of range"],
+    );
+    dir.write("penta.ply", ASCII_PLY.replace("4 0 1 2 3", "5 0 1 2 3 0"));
+    assert_err(
+        load(&ply_scene(&dir, "penta.ply")),
+        "scene.pbrt",
+        3,
+        &["penta.ply", "5 vertices"],
+    );
+    dir.write("noface.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n");
+    assert_err(
+        load(&ply_scene(&dir, "noface.ply")),
+        "scene.pbrt",
+        3,
+        &["noface.ply", "face"],
+    );
+    let huge = "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\nproperty float y\nproperty float z\nend_header\n\0\0";
+    dir.write("huge.ply", huge);
+    assert_err(
+        load(&ply_scene(&dir, "huge.ply")),
+        "scene.pbrt",
+        3,
+        &["huge.ply", "truncated"],
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// robustness
+
+#[test]
+fn never_panics_on_cut_or_mangled_input() {
+    let text = std::fs::read(shared("cornell-box/scene-v4.pbrt")).unwrap();
+    let dir = TempDir::new();
+    let path = dir.0.join("fuzz.pbrt");
+    let mut loaded = 0;
+    for cut in (0..text.len()).step_by(37) {
+        std::fs::write(&path, &text[..cut]).unwrap();
+        if load(&path).is_ok() {
+            loaded += 1;
+        }
+    }
+    // A simple LCG flips bytes to characters that matter to the syntax.
+    let mut state = 12345u64;
+    let specials = b"[]\"#\n -.e0x";
+    for _ in 0..300 {
+        let mut t = text.clone();
+        for _ in 0..3 {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let at = (state >> 33) as usize % t.len();
+            t[at] = specials[(state >> 20) as usize % specials.len()];
+        }
+        std::fs::write(&path, &t).unwrap();
+        let _ = load(&path);
+    }
+    // Files cut before WorldBegin fail; the complete file loads.
+    assert!(loaded < text.len() / 37);
+    std::fs::write(&path, &text).unwrap();
+    assert!(load(&path).is_ok());
+}
