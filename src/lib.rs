@@ -12,10 +12,10 @@ pub mod bsdf;
 pub mod camera;
 pub mod film;
 pub mod imageio;
-// pub mod integrator; (enabled once bsdf lands)
+pub mod integrator;
 pub mod light;
 pub mod math;
 pub mod photon;
 pub mod sampling;
 pub mod scene;
-// pub mod tools;
+pub mod tools;

@@ -1,2 +1,32 @@
-//! STUB CLI.
-fn main() {}
+//! The `photon` command line. Only argument parsing and exit codes live here; each subcommand
+//! is one function in `photon::tools`.
+use clap::{Parser, Subcommand};
+use photon::tools::render::{self, RenderOptions};
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "photon", version, about = "A two-pass photon-mapping renderer for pbrt-v4 scenes")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a pbrt-v4 scene to a linear EXR (with per-component layers) and a PNG preview.
+    Render(RenderOptions),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(opts) => render::run(&opts),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("photon: {e}");
+            ExitCode::from(2)
+        }
+    }
+}

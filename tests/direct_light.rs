@@ -1,0 +1,178 @@
+//! Direct lighting against analytic irradiance: a Lambertian floor of reflectance rho lit by a
+//! point, spot or distant light (E = I cos(theta) / r^2, E = L cos(theta)) and by a small
+//! square area light (the exact form factor of a parallel rectangle). Radiance L = rho / pi E.
+use photon::accel::{Accel, AccelOptions, BackendKind};
+use photon::camera::Camera;
+use photon::integrator::{self, IntegratorKind, RenderSettings};
+use photon::math::{Vec2, Vec3};
+use photon::scene::{loader, Scene};
+use std::f32::consts::PI;
+use std::path::PathBuf;
+
+const RHO: [f32; 3] = [0.5, 0.6, 0.7];
+
+fn write_scene(name: &str, camera_y: f32, res: u32, spp: u32, lights: &str) -> PathBuf {
+    let text = format!(
+        r#"LookAt 0 {camera_y} 0  0 0 0  0 0 1
+Camera "perspective" "float fov" [ 70 ]
+Film "rgb" "integer xresolution" [ {res} ] "integer yresolution" [ {res} ]
+PixelFilter "box" "float xradius" [ 0.0001 ] "float yradius" [ 0.0001 ]
+Sampler "stratified" "integer xsamples" [ {spp} ] "integer ysamples" [ 1 ] "bool jitter" true
+Integrator "path" "integer maxdepth" [ 1 ]
+WorldBegin
+Material "diffuse" "rgb reflectance" [ {} {} {} ]
+Shape "trianglemesh" "point3 P" [ -5 0 -5  5 0 -5  5 0 5  -5 0 5 ] "integer indices" [ 0 1 2 0 2 3 ]
+{lights}
+"#,
+        RHO[0], RHO[1], RHO[2]
+    );
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("direct_light");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(format!("{name}.pbrt"));
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// Renders `path` and returns, per pixel, (rendered, floor point seen through the centre).
+fn render(path: &PathBuf, backend: BackendKind) -> (Scene, Vec<(Vec3, Vec3)>) {
+    let scene = loader::load(path).expect("scene loads");
+    let accel = Accel::build(&scene, backend, AccelOptions::default()).expect("accel");
+    let settings = RenderSettings::from_scene(&scene).expect("settings");
+    let out = integrator::render(
+        &scene,
+        &accel,
+        &settings,
+        IntegratorKind::Direct,
+        &|_, _| {},
+    );
+    let cam = Camera::new(&scene.camera, settings.width, settings.height);
+    let mut px = Vec::new();
+    for y in 0..settings.height {
+        for x in 0..settings.width {
+            let ray = cam.generate_ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
+            let t = -ray.o.y / ray.d.y;
+            let v = out.image.pixels[(y * settings.width + x) as usize];
+            px.push((Vec3::from_array(v), ray.at(t)));
+        }
+    }
+    (scene, px)
+}
+
+fn rho() -> Vec3 {
+    Vec3::from_array(RHO)
+}
+
+/// Worst relative error over pixels with expected radiance above `floor`.
+fn worst(px: &[(Vec3, Vec3)], expected: impl Fn(Vec3) -> Vec3, floor: f32) -> (f32, usize) {
+    let mut worst = 0.0f32;
+    let mut n = 0;
+    for &(got, p) in px {
+        let want = expected(p);
+        if want.min_element() <= floor {
+            continue;
+        }
+        n += 1;
+        worst = worst.max(((got - want) / want).abs().max_element());
+    }
+    (worst, n)
+}
+
+#[test]
+fn point_light_irradiance() {
+    let (pos, i) = (Vec3::new(0.4, 1.2, -0.3), Vec3::new(2.0, 3.0, 4.0));
+    let path = write_scene(
+        "point",
+        3.0,
+        48,
+        1,
+        "LightSource \"point\" \"rgb I\" [ 2 3 4 ] \"point3 from\" [ 0.4 1.2 -0.3 ]",
+    );
+    for backend in [BackendKind::Embree, BackendKind::Obvhs] {
+        let (_, px) = render(&path, backend);
+        let (err, n) = worst(
+            &px,
+            |p| {
+                let d = pos - p;
+                rho() / PI * i * (d.y / d.length()) / d.length_squared()
+            },
+            1e-6,
+        );
+        println!("point light ({backend}): worst relative error {err:.2e} over {n} pixels");
+        assert!(n > 2000 && err < 0.01, "{backend}: {err}");
+    }
+}
+
+#[test]
+fn spot_and_distant_light_irradiance() {
+    // Spot pointing straight down from height 2: full intensity inside 20 degrees, none past 30.
+    let spot = "LightSource \"spot\" \"rgb I\" [ 5 5 5 ] \"point3 from\" [ 0 2 0 ] \"point3 to\" [ 0 0 0 ] \"float coneangle\" [ 30 ] \"float conedelta\" [ 10 ]";
+    let (_, px) = render(&write_scene("spot", 3.0, 48, 1, spot), BackendKind::Embree);
+    let (mut inside, mut outside) = (0, 0);
+    for &(got, p) in &px {
+        let d = Vec3::new(0.0, 2.0, 0.0) - p;
+        let angle = (d.y / d.length()).acos().to_degrees();
+        if angle < 19.5 {
+            let want = rho() / PI * 5.0 * (d.y / d.length()) / d.length_squared();
+            assert!(
+                ((got - want) / want).abs().max_element() < 0.01,
+                "spot at {p}: {got} vs {want}"
+            );
+            inside += 1;
+        } else if angle > 30.5 {
+            assert_eq!(got, Vec3::ZERO, "spot outside the cone at {p}");
+            outside += 1;
+        }
+    }
+    println!("spot: {inside} pixels inside checked, {outside} outside dark");
+    assert!(inside > 200 && outside > 200);
+
+    // Distant light from direction (1, 2, 0): E = L cos(theta) everywhere.
+    let distant = "LightSource \"distant\" \"rgb L\" [ 1 2 3 ] \"point3 from\" [ 1 2 0 ] \"point3 to\" [ 0 0 0 ]";
+    let (_, px) = render(
+        &write_scene("distant", 3.0, 32, 1, distant),
+        BackendKind::Embree,
+    );
+    let cos = 2.0 / 5.0f32.sqrt();
+    let (err, n) = worst(&px, |_| rho() / PI * Vec3::new(1.0, 2.0, 3.0) * cos, 0.0);
+    println!("distant: worst relative error {err:.2e} over {n} pixels");
+    assert!(n == 32 * 32 && err < 0.01);
+}
+
+/// Form factor from a point to a rectangle `[0, x] x [0, y]` in a parallel plane at unit
+/// height, one corner straight above (odd in x and in y, so signed corners combine).
+fn corner_factor(x: f32, y: f32) -> f32 {
+    let (a, b) = ((1.0 + x * x).sqrt(), (1.0 + y * y).sqrt());
+    (x / a * (y / a).atan() + y / b * (x / b).atan()) / (2.0 * PI)
+}
+
+#[test]
+fn quad_light_irradiance() {
+    // A 0.5 x 0.5 light at height 1, centred at (0.2, 1, -0.1), facing down; the camera sits
+    // under it at height 0.5 looking at the floor.
+    let (h, half, c) = (1.0f32, 0.25f32, Vec2::new(0.2, -0.1));
+    let l = 5.0;
+    let light = "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [ 5 5 5 ]\nShape \"trianglemesh\" \"point3 P\" [ -0.05 1 -0.35  0.45 1 -0.35  0.45 1 0.15  -0.05 1 0.15 ] \"integer indices\" [ 0 1 2 0 2 3 ]\nAttributeEnd";
+    let (_, px) = render(
+        &write_scene("quad", 0.5, 24, 256, light),
+        BackendKind::Embree,
+    );
+    let expected = |p: Vec3| {
+        let (x0, x1) = ((c.x - half - p.x) / h, (c.x + half - p.x) / h);
+        let (z0, z1) = ((c.y - half - p.z) / h, (c.y + half - p.z) / h);
+        let f = corner_factor(x1, z1) - corner_factor(x0, z1) - corner_factor(x1, z0)
+            + corner_factor(x0, z0);
+        rho() / PI * (PI * l * f)
+    };
+    let (mut sum_got, mut sum_want) = (Vec3::ZERO, Vec3::ZERO);
+    for &(got, p) in &px {
+        sum_got += got;
+        sum_want += expected(p);
+    }
+    let mean_err = ((sum_got - sum_want) / sum_want).abs().max_element();
+    let (err, n) = worst(&px, expected, 0.0);
+    println!(
+        "quad light: mean relative error {mean_err:.2e}, worst pixel {err:.2e} over {n} pixels"
+    );
+    assert!(mean_err < 0.01, "mean {mean_err}");
+    assert!(err < 0.05, "worst pixel {err}");
+}
