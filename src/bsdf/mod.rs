@@ -1,1 +1,260 @@
-//! STUB
+//! Scattering functions (BSDFs) for the materials a scene can name, in pbrt-v4's conventions.
+//!
+//! Everything works in the local shading frame (z = shading normal). `wo` points away from
+//! the surface towards the viewer (or the previous path vertex), `wi` towards the light (or
+//! the next vertex); both are unit vectors. Colours are linear RGB [`Vec3`]s.
+//!
+//! The materials map to BSDFs as follows (scene syntax, pbrt-v4):
+//!
+//! ```text
+//! Material "diffuse"    "rgb reflectance" [ .5 .5 .5 ]          -> Bsdf::Diffuse (Lambertian)
+//! Material "dielectric" "float eta" [ 1.5 ]                     -> Bsdf::Dielectric (smooth)
+//! Material "conductor"  "spectrum eta" ... "spectrum k" ...
+//!                       "float roughness" [ 0 ]                 -> Bsdf::Conductor (mirror)
+//! Material "conductor"  "rgb reflectance" [ .9 .6 .3 ]
+//!                       "float uroughness" [ .1 ] "float vroughness" [ .3 ]
+//!                                                               -> Bsdf::Conductor (GGX)
+//! ```
+//!
+//! Delta lobes (smooth glass, mirrors) follow pbrt-v4: `f` is the Fresnel weight divided by
+//! `|cos wi|` (and by `eta^2` for radiance through a refraction), `pdf` the discrete lobe
+//! probability, so `f |cos wi| / pdf` is the path throughput weight; `f()` and `pdf()` are 0
+//! for them.
+pub mod conductor;
+pub mod dielectric;
+pub mod diffuse;
+pub mod fresnel;
+pub mod microfacet;
+mod warp;
+
+#[cfg(test)]
+pub(crate) mod testutil;
+
+pub use conductor::Conductor;
+pub use dielectric::Dielectric;
+pub use diffuse::Diffuse;
+pub use microfacet::TrowbridgeReitz;
+
+use crate::math::{Vec2, Vec3};
+use crate::scene::Material;
+
+/// What a path carries: radiance (camera paths) or importance (photons). Only refraction
+/// through a delta interface differs: radiance is scaled by `1 / eta^2`, importance is not.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TransportMode {
+    Radiance,
+    Importance,
+}
+
+/// One sampled scattering direction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BsdfSample {
+    /// Sampled unit direction (local frame).
+    pub wi: Vec3,
+    /// BSDF value for `(wo, wi)` (for a delta lobe: Fresnel / |cos wi|, see the module docs).
+    pub f: Vec3,
+    /// Solid-angle density of `wi`, or the discrete lobe probability for a delta lobe.
+    pub pdf: f32,
+    /// A delta lobe (mirror reflection or refraction).
+    pub specular: bool,
+    /// `wi` is on the other side of the surface from `wo`.
+    pub transmission: bool,
+    /// Relative index of refraction crossed (`eta` entering, `1/eta` leaving); 1 for
+    /// reflection.
+    pub eta: f32,
+}
+
+/// The BSDF at a surface point (a closed set; no dynamic dispatch).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Bsdf {
+    Diffuse(Diffuse),
+    Dielectric(Dielectric),
+    Conductor(Conductor),
+}
+
+/// True when `a` and `b` are strictly on the same side of the surface.
+pub(crate) fn same_hemisphere(a: Vec3, b: Vec3) -> bool {
+    a.z * b.z > 0.0
+}
+
+impl Bsdf {
+    /// The BSDF of a scene material (bad parameters are sanitised: see each variant's `new`).
+    pub fn from_material(m: &Material) -> Bsdf {
+        match m {
+            Material::Diffuse { reflectance } => Bsdf::Diffuse(Diffuse::new(*reflectance)),
+            Material::Dielectric { eta } => Bsdf::Dielectric(Dielectric::new(*eta)),
+            Material::Conductor {
+                eta,
+                k,
+                alpha_u,
+                alpha_v,
+            } => Bsdf::Conductor(Conductor::new(*eta, *k, *alpha_u, *alpha_v)),
+        }
+    }
+
+    /// BSDF value for the pair `(wo, wi)`; 0 for delta lobes. `mode` does not matter for the
+    /// non-delta lobes here (they are symmetric).
+    pub fn f(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> Vec3 {
+        if wo.z == 0.0 {
+            return Vec3::ZERO;
+        }
+        match self {
+            Bsdf::Diffuse(b) => b.f(wo, wi),
+            Bsdf::Dielectric(_) => Vec3::ZERO,
+            Bsdf::Conductor(b) => b.f(wo, wi),
+        }
+    }
+
+    /// Solid-angle density with which [`Self::sample`] picks `wi`; 0 for delta lobes.
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if wo.z == 0.0 {
+            return 0.0;
+        }
+        match self {
+            Bsdf::Diffuse(b) => b.pdf(wo, wi),
+            Bsdf::Dielectric(_) => 0.0,
+            Bsdf::Conductor(b) => b.pdf(wo, wi),
+        }
+    }
+
+    /// Samples an incident direction for `wo`.
+    ///
+    /// - `uc`: uniform in `[0,1)`, picks the lobe (dielectric reflection vs refraction);
+    /// - `u`: uniform in `[0,1)^2`, picks the direction within a lobe;
+    /// - `mode`: radiance or importance transport.
+    ///
+    /// `None` when nothing can be sampled (grazing `wo`, black surface, a microfacet
+    /// reflection leaving through the surface), never a sample with zero `f` or `pdf`.
+    pub fn sample(&self, wo: Vec3, uc: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+        if wo.z == 0.0 || !wo.is_finite() {
+            return None;
+        }
+        let s = match self {
+            Bsdf::Diffuse(b) => b.sample(wo, u),
+            Bsdf::Dielectric(b) => b.sample(wo, uc, mode),
+            Bsdf::Conductor(b) => b.sample(wo, u),
+        }?;
+        let valid = s.pdf > 0.0
+            && s.pdf.is_finite()
+            && s.wi.z != 0.0
+            && s.f.is_finite()
+            && s.f.max_element() > 0.0;
+        valid.then_some(s)
+    }
+
+    /// Only delta lobes (smooth glass, mirror conductor): no direct lighting or photon
+    /// storage there.
+    pub fn is_specular(&self) -> bool {
+        match self {
+            Bsdf::Diffuse(_) => false,
+            Bsdf::Dielectric(_) => true,
+            Bsdf::Conductor(c) => c.is_smooth(),
+        }
+    }
+
+    /// Has a Lambertian part (photons are stored here).
+    pub fn is_diffuse(&self) -> bool {
+        matches!(self, Bsdf::Diffuse(_))
+    }
+
+    /// A rough (non-delta, non-Lambertian) lobe: direct lighting uses MIS.
+    pub fn is_glossy(&self) -> bool {
+        matches!(self, Bsdf::Conductor(c) if !c.is_smooth())
+    }
+
+    /// A rough albedo for Russian roulette: the diffuse reflectance, 1 for a dielectric, the
+    /// normal-incidence Fresnel reflectance for a conductor.
+    pub fn reflectance_estimate(&self) -> Vec3 {
+        match self {
+            Bsdf::Diffuse(b) => b.reflectance,
+            Bsdf::Dielectric(_) => Vec3::ONE,
+            Bsdf::Conductor(c) => c.normal_reflectance(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn material_mapping_and_flags() {
+        let diffuse = Bsdf::from_material(&Material::Diffuse {
+            reflectance: Vec3::new(0.1, 0.2, 0.3),
+        });
+        assert!(diffuse.is_diffuse() && !diffuse.is_specular() && !diffuse.is_glossy());
+        assert_eq!(diffuse.reflectance_estimate(), Vec3::new(0.1, 0.2, 0.3));
+
+        let glass = Bsdf::from_material(&Material::Dielectric { eta: 1.5 });
+        assert!(glass.is_specular() && !glass.is_diffuse() && !glass.is_glossy());
+        assert_eq!(glass.reflectance_estimate(), Vec3::ONE);
+        let wo = Vec3::new(0.6, 0.0, 0.8);
+        assert_eq!(
+            glass.f(wo, Vec3::new(-0.6, 0.0, 0.8), TransportMode::Radiance),
+            Vec3::ZERO
+        );
+        assert_eq!(glass.pdf(wo, Vec3::new(-0.6, 0.0, 0.8)), 0.0);
+
+        // pbrt-v4's "reflectance" conductor: eta = 1, k = 2 sqrt(r) / sqrt(1 - r) gives a
+        // normal-incidence reflectance of exactly r.
+        let r = Vec3::new(0.9, 0.6, 0.3);
+        let k = Vec3::new(
+            2.0 * r.x.sqrt() / (1.0 - r.x).sqrt(),
+            2.0 * r.y.sqrt() / (1.0 - r.y).sqrt(),
+            2.0 * r.z.sqrt() / (1.0 - r.z).sqrt(),
+        );
+        for (a, smooth) in [(0.0f32, true), (5e-4, true), (0.2, false)] {
+            let m = Material::Conductor {
+                eta: Vec3::ONE,
+                k,
+                alpha_u: a,
+                alpha_v: a,
+            };
+            let b = Bsdf::from_material(&m);
+            assert_eq!(b.is_specular(), smooth);
+            assert_eq!(b.is_glossy(), !smooth);
+            assert!(!b.is_diffuse());
+            assert!((b.reflectance_estimate() - r).abs().max_element() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn smooth_conductor_mirror_sample() {
+        let eta = Vec3::new(0.2, 0.9, 1.1);
+        let k = Vec3::new(3.9, 2.4, 2.0);
+        let b = Bsdf::Conductor(Conductor::new(eta, k, 0.0, 0.0));
+        for wo in [Vec3::new(0.6, 0.0, 0.8), Vec3::new(0.0, 0.28, -0.96)] {
+            let s = b
+                .sample(wo, 0.3, Vec2::splat(0.4), TransportMode::Radiance)
+                .unwrap();
+            assert!(s.specular && !s.transmission && s.pdf == 1.0 && s.eta == 1.0);
+            assert!((s.wi - Vec3::new(-wo.x, -wo.y, wo.z)).length() < 1e-7);
+            let weight = s.f * s.wi.z.abs() / s.pdf;
+            let want = fresnel::fr_complex(wo.z.abs(), eta, k);
+            assert!((weight - want).abs().max_element() < 1e-6);
+            assert_eq!(b.f(wo, s.wi, TransportMode::Radiance), Vec3::ZERO);
+            assert_eq!(b.pdf(wo, s.wi), 0.0);
+        }
+    }
+
+    #[test]
+    fn degenerate_inputs_give_no_sample() {
+        let all = [
+            Bsdf::Diffuse(Diffuse::new(Vec3::splat(0.5))),
+            Bsdf::Dielectric(Dielectric::new(1.5)),
+            Bsdf::Conductor(Conductor::new(Vec3::ONE, Vec3::splat(3.0), 0.0, 0.0)),
+            Bsdf::Conductor(Conductor::new(Vec3::ONE, Vec3::splat(3.0), 0.3, 0.3)),
+        ];
+        for b in all {
+            let grazing = Vec3::X;
+            assert!(b
+                .sample(grazing, 0.5, Vec2::splat(0.5), TransportMode::Radiance)
+                .is_none());
+            assert_eq!(b.f(grazing, Vec3::Z, TransportMode::Radiance), Vec3::ZERO);
+            let nan = Vec3::new(f32::NAN, 0.0, 1.0);
+            assert!(b
+                .sample(nan, 0.5, Vec2::splat(0.5), TransportMode::Radiance)
+                .is_none());
+        }
+    }
+}
