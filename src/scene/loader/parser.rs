@@ -715,6 +715,11 @@ fn camera(ty: &str, params: &mut ParamSet, at: &Loc, ctm: &Mat4) -> Result<Camer
         let p = params.peek("fov").expect("a bad fov came from the file");
         return Err(p.err("fov must lie in (0, 180) degrees"));
     }
+    for name in ["screenwindow", "frameaspectratio", "focaldistance"] {
+        if let Some(p) = params.get_param(name) {
+            return Err(p.err("not supported by photon's perspective camera"));
+        }
+    }
     if params.get_float("lensradius", 0.0)? != 0.0 {
         let p = params.peek("lensradius").expect("given");
         return Err(p.err("depth of field is not supported (lensradius must be 0)"));
