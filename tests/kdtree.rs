@@ -230,6 +230,40 @@ fn photon_map_reorders_payloads_with_the_tree() {
     check_knn(&odd, q, 20, f32::INFINITY, &got, out.r2());
 }
 
+#[test]
+fn ellipsoid_metric_matches_brute_force() {
+    // Flattened search: m = d2 + 15 h^2 (h: offset along n), points on and around a plane.
+    let mut pts = random_points(20_000, 1.0, 14);
+    for p in pts.iter_mut().step_by(2) {
+        p.z = 0.5;
+    }
+    let n = Vec3::new(0.1, -0.2, 1.0).normalize();
+    let metric = |off: Vec3, d2: f32| d2 + 15.0 * off.dot(n) * off.dot(n);
+    let (tree, order) = KdTree::build(&pts).unwrap();
+    let mut out = KnnResult::new();
+    for q in random_points(50, 1.0, 15) {
+        let q = Vec3::new(q.x, q.y, 0.5);
+        for (k, max_r2) in [(50usize, f32::INFINITY), (200, 0.003)] {
+            tree.knn_by(q, k, max_r2, &mut out, |_, off, d2| Some(metric(off, d2)));
+            let mut got: Vec<(f32, u32)> = out
+                .neighbors()
+                .iter()
+                .map(|nb| (nb.d2, order[nb.idx as usize]))
+                .collect();
+            got.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let mut want: Vec<(f32, u32)> = pts
+                .iter()
+                .enumerate()
+                .map(|(i, p)| (metric(*p - q, dist2(*p, q)), i as u32))
+                .filter(|w| w.0 <= max_r2)
+                .collect();
+            want.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            want.truncate(k);
+            assert_eq!(got, want, "q={q:?} k={k}");
+        }
+    }
+}
+
 fn kiddo_tree(points: &[Vec3]) -> ImmutableKdTree<f32, 3> {
     let arr: Vec<[f32; 3]> = points.iter().map(|p| p.to_array()).collect();
     ImmutableKdTree::new_from_slice(&arr).unwrap()

@@ -127,7 +127,7 @@ pub fn irradiance_with(
         f32::INFINITY // f <= 0 or NaN: only photons exactly on the plane
     };
     map.knn_by(p, params.k, params.max_r2, buf, |ph, off, d2| {
-        if ph.dir().dot(n) >= 0.0 {
+        if !ph.arrives_against(n) {
             return None;
         }
         let h = off.dot(n);

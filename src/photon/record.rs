@@ -77,6 +77,13 @@ impl Photon {
         decode_dir(self.dir)
     }
 
+    /// True when the photon travels against `n` (`dot(dir, n) < 0`): it arrived on the side
+    /// `n` points to. Cheaper than `dir().dot(n) < 0.0` (no normalisation).
+    #[inline]
+    pub fn arrives_against(&self, n: Vec3) -> bool {
+        decode_dir_unnormalized(self.dir).dot(n) < 0.0
+    }
+
     /// The flag byte given to [`Photon::new`].
     #[inline]
     pub fn flags(&self) -> u8 {
@@ -185,6 +192,12 @@ fn encode_dir(d: Vec3) -> [u8; 2] {
 /// Inverse of [`encode_dir`]: a unit vector.
 #[inline]
 fn decode_dir(code: [u8; 2]) -> Vec3 {
+    decode_dir_unnormalized(code).normalize()
+}
+
+/// The decoded direction before normalisation (the point on the octahedron).
+#[inline]
+fn decode_dir_unnormalized(code: [u8; 2]) -> Vec3 {
     let x = code[0] as f32 * (2.0 / 255.0) - 1.0;
     let y = code[1] as f32 * (2.0 / 255.0) - 1.0;
     let z = 1.0 - x.abs() - y.abs();
@@ -196,7 +209,7 @@ fn decode_dir(code: [u8; 2]) -> Vec3 {
     } else {
         (x, y)
     };
-    Vec3::new(x, y, z).normalize()
+    Vec3::new(x, y, z)
 }
 
 #[cfg(test)]
@@ -291,6 +304,7 @@ mod tests {
         assert_eq!(p.pos(), pos);
         assert!(p.has(Photon::CAUSTIC) && !p.has(Photon::DIRECT));
         assert_eq!(p.flags(), 1);
+        assert!(p.arrives_against(Vec3::Z) && !p.arrives_against(-Vec3::Z));
         // A degenerate direction does not produce NaN.
         let q = Photon::new(pos, Vec3::ONE, Vec3::ZERO, 0);
         assert!(q.dir().is_finite());
