@@ -1561,3 +1561,21 @@ fn param_set_is_clone_debug_send_sync() {
     check::<photon::scene::ParamSet>();
     check::<Scene>();
 }
+
+#[test]
+fn repo_scenes_load() {
+    let mut n = 0;
+    for entry in std::fs::read_dir("scenes").unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "pbrt") {
+            let s = load(&path).unwrap_or_else(|e| panic!("{e}"));
+            assert!(
+                s.triangle_count() > 0 && !s.lights.is_empty(),
+                "{}",
+                path.display()
+            );
+            n += 1;
+        }
+    }
+    assert!(n > 0, "no scenes in scenes/");
+}

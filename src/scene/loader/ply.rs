@@ -16,7 +16,7 @@
 use super::shapes::ObjMesh;
 use crate::math::{Vec2, Vec3};
 use ply_rs_bw::parser::{Parser, Reader};
-use ply_rs_bw::ply::{ElementDef, PropertyAccess, PropertyAccessResult};
+use ply_rs_bw::ply::{ElementDef, Encoding, PropertyAccess, PropertyAccessResult};
 use std::fs::File;
 use std::io::BufReader;
 use std::path::Path;
@@ -120,8 +120,14 @@ impl PropertyAccess for Elem {
 }
 
 /// Makes a crate error one line: newlines and tabs folded into single spaces.
+/// Only the first sentence group is kept: the crate appends the nested parser's error after
+/// "Error:", which repeats the line or lists grammar alternatives.
 fn one_line(s: &str) -> String {
-    s.split_whitespace().collect::<Vec<_>>().join(" ")
+    let folded = s.split_whitespace().collect::<Vec<_>>().join(" ");
+    match folded.find(" Error: ") {
+        Some(i) => folded[..i].to_string(),
+        None => folded,
+    }
 }
 
 /// Reads the PLY file at `path`.
@@ -138,7 +144,7 @@ pub fn read_ply(path: &Path) -> Result<ObjMesh, String> {
     for (name, def) in &header.elements {
         let elems = parser
             .read_payload_for_element(&mut reader, def, &header)
-            .map_err(|e| payload_error(name, &e))?;
+            .map_err(|e| payload_error(name, &e, header.encoding == Encoding::Ascii))?;
         match name.as_str() {
             "vertex" => {
                 vertices(def, &elems, &mut mesh)?;
@@ -162,16 +168,20 @@ pub fn read_ply(path: &Path) -> Result<ObjMesh, String> {
 }
 
 /// Describes a payload error, naming truncation as such.
-fn payload_error(element: &str, e: &ply_rs_bw::parser::ParseError) -> String {
+/// Binary files have no lines, so the crate's "Line N:" prefix is dropped for them.
+fn payload_error(element: &str, e: &ply_rs_bw::parser::ParseError, ascii: bool) -> String {
     let what = if e.kind() == std::io::ErrorKind::UnexpectedEof {
         "truncated file"
     } else {
         "malformed data"
     };
-    format!(
-        "{what} in element \"{element}\": {}",
-        one_line(&e.to_string())
-    )
+    let mut msg = one_line(&e.to_string());
+    if !ascii && msg.starts_with("Line ") {
+        if let Some(i) = msg.find(": ") {
+            msg = msg[i + 2..].to_string();
+        }
+    }
+    format!("{what} in element \"{element}\": {msg}")
 }
 
 /// Whether `def` has a property called `name`.
