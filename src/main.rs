@@ -1,11 +1,16 @@
 //! The `photon` command line. Only argument parsing and exit codes live here; each subcommand
 //! is one function in `photon::tools`.
 use clap::{Parser, Subcommand};
+use photon::tools::compare::{self, CompareOptions};
 use photon::tools::render::{self, RenderOptions};
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "photon", version, about = "A two-pass photon-mapping renderer for pbrt-v4 scenes")]
+#[command(
+    name = "photon",
+    version,
+    about = "A two-pass photon-mapping renderer for pbrt-v4 scenes"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -15,15 +20,20 @@ struct Cli {
 enum Command {
     /// Render a pbrt-v4 scene to a linear EXR (with per-component layers) and a PNG preview.
     Render(RenderOptions),
+    /// Compare an EXR with a reference: relMSE, RMSE, MAE, max error, PSNR (exit 1 above
+    /// --max-relmse).
+    Compare(CompareOptions),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Render(opts) => render::run(&opts),
+        Command::Render(opts) => render::run(&opts).map(|()| true),
+        Command::Compare(opts) => compare::run(&opts),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(true) => ExitCode::SUCCESS,
+        Ok(false) => ExitCode::from(1),
         Err(e) => {
             eprintln!("photon: {e}");
             ExitCode::from(2)

@@ -34,7 +34,7 @@ Shape "trianglemesh" "point3 P" [ -5 0 -5  5 0 -5  5 0 5  -5 0 5 ] "integer indi
 }
 
 /// Renders `path` and returns, per pixel, (rendered, floor point seen through the centre).
-fn render(path: &PathBuf, backend: BackendKind) -> (Scene, Vec<(Vec3, Vec3)>) {
+fn render(path: &std::path::Path, backend: BackendKind) -> (Scene, Vec<(Vec3, Vec3)>) {
     let scene = loader::load(path).expect("scene loads");
     let accel = Accel::build(&scene, backend, AccelOptions::default()).expect("accel");
     let settings = RenderSettings::from_scene(&scene).expect("settings");

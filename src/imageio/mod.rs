@@ -17,6 +17,7 @@
 //! # Ok::<(), photon::imageio::ImageError>(())
 //! ```
 pub mod exr;
+pub mod metrics;
 pub mod png;
 
 pub use exr::{read_exr, read_exr_layer, write_exr, ExrPixel};

@@ -156,7 +156,7 @@ pub const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 /// Splits `n` samples into `nx * ny = n` strata as square as possible (`nx <= ny`).
 pub fn strata(n: u32) -> (u32, u32) {
     let mut nx = (n as f64).sqrt() as u32;
-    while nx > 1 && n % nx != 0 {
+    while nx > 1 && !n.is_multiple_of(nx) {
         nx -= 1;
     }
     let nx = nx.max(1);

@@ -1,4 +1,5 @@
 //! The subcommands of the `photon` binary, one module each, callable from tests too.
+pub mod compare;
 pub mod render;
 
 use std::fmt;
@@ -24,13 +25,25 @@ macro_rules! from_error {
         }
     )*};
 }
-from_error!(crate::scene::SceneError, crate::accel::AccelError, crate::imageio::ImageError);
+from_error!(
+    crate::scene::SceneError,
+    crate::accel::AccelError,
+    crate::imageio::ImageError
+);
 
 /// Parses `WxH` (e.g. `256x256`).
 pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WxH, got {s:?}"))?;
-    let w: u32 = w.trim().parse().map_err(|_| format!("bad width in {s:?}"))?;
-    let h: u32 = h.trim().parse().map_err(|_| format!("bad height in {s:?}"))?;
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WxH, got {s:?}"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad width in {s:?}"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad height in {s:?}"))?;
     if w == 0 || h == 0 || w > 1 << 15 || h > 1 << 15 {
         return Err(format!("resolution {w}x{h} out of range (1..32768)"));
     }

@@ -91,12 +91,27 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     settings.seed = opts.seed;
     settings.pattern = opts.pattern;
     settings.light_samples = opts.light_samples.max(1);
-    let exr = opts.output.clone().unwrap_or_else(|| default_output(scene.film.filename.as_deref(), &opts.scene));
-    let png = (!opts.no_png).then(|| opts.png.clone().unwrap_or_else(|| exr.with_extension("png")));
+    let exr = opts
+        .output
+        .clone()
+        .unwrap_or_else(|| default_output(scene.film.filename.as_deref(), &opts.scene));
+    let png = (!opts.no_png).then(|| {
+        opts.png
+            .clone()
+            .unwrap_or_else(|| exr.with_extension("png"))
+    });
 
     let pool = thread_pool(opts.threads)?;
     let t1 = Instant::now();
-    let accel = pool.install(|| Accel::build(&scene, opts.backend, AccelOptions { robust: opts.robust }))?;
+    let accel = pool.install(|| {
+        Accel::build(
+            &scene,
+            opts.backend,
+            AccelOptions {
+                robust: opts.robust,
+            },
+        )
+    })?;
     let build_s = t1.elapsed().as_secs_f64();
     println!(
         "scene: {} | {} meshes, {} triangles, {} lights, {} materials | loaded in {:.3} s",
@@ -107,7 +122,12 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
         scene.materials.len(),
         load_s
     );
-    println!("accel: {} build {:.3} s{}", opts.backend, build_s, if opts.robust { " (robust)" } else { "" });
+    println!(
+        "accel: {} build {:.3} s{}",
+        opts.backend,
+        build_s,
+        if opts.robust { " (robust)" } else { "" }
+    );
     println!(
         "render: {}x{}, {} spp ({:?}; file sampler \"{}\"), integrator {:?} (file asks for \"{}\"), max depth {}, {} threads",
         settings.width,
@@ -128,7 +148,8 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
             b.set_position(done);
         }
     };
-    let out = pool.install(|| integrator::render(&scene, &accel, &settings, opts.integrator, &progress));
+    let out =
+        pool.install(|| integrator::render(&scene, &accel, &settings, opts.integrator, &progress));
     if let Some(b) = bar {
         b.finish_and_clear();
     }
@@ -138,9 +159,15 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
         out.seconds,
         rays,
         rays as f64 / out.seconds / 1e6,
-        out.counters.camera_rays.load(std::sync::atomic::Ordering::Relaxed),
-        out.counters.secondary_rays.load(std::sync::atomic::Ordering::Relaxed),
-        out.counters.shadow_rays.load(std::sync::atomic::Ordering::Relaxed),
+        out.counters
+            .camera_rays
+            .load(std::sync::atomic::Ordering::Relaxed),
+        out.counters
+            .secondary_rays
+            .load(std::sync::atomic::Ordering::Relaxed),
+        out.counters
+            .shadow_rays
+            .load(std::sync::atomic::Ordering::Relaxed),
     );
     let bad = out.image.count_nonfinite();
     if bad > 0 {
@@ -149,8 +176,13 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
 
     // Outputs: each written to a temporary file and renamed, so a good file is never
     // replaced by a half-written one.
-    let layers: Vec<(&str, &imageio::RgbImage)> = out.components.iter().map(|(n, i)| (*n, i)).collect();
-    let pixel = if opts.half { ExrPixel::Half } else { ExrPixel::Float };
+    let layers: Vec<(&str, &imageio::RgbImage)> =
+        out.components.iter().map(|(n, i)| (*n, i)).collect();
+    let pixel = if opts.half {
+        ExrPixel::Half
+    } else {
+        ExrPixel::Float
+    };
     imageio::write_exr(&exr, &out.image, &layers, pixel)?;
     println!("wrote {}", exr.display());
     if let Some(png) = png {

@@ -1,0 +1,99 @@
+//! `photon compare IMAGE.exr REFERENCE.exr`: error metrics of a render against a reference.
+use super::ToolError;
+use crate::imageio::metrics::{self, MaskOptions, Metrics};
+use crate::imageio::{read_exr, write_png};
+use std::path::PathBuf;
+
+/// Options of `photon compare`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct CompareOptions {
+    /// The image to judge (EXR).
+    pub image: PathBuf,
+    /// The reference (EXR). Non-finite reference pixels are masked and counted.
+    pub reference: PathBuf,
+    /// Box-filter the larger image down to the smaller one's size (integer factors only).
+    #[arg(long)]
+    pub downsample: bool,
+    /// Also leave out pixels next to reference pixels brighter than this (visible emitters).
+    #[arg(long)]
+    pub mask_above: Option<f32>,
+    /// Write a false-colour relative-error image (log scale 1e-4 .. 1).
+    #[arg(long)]
+    pub error_png: Option<PathBuf>,
+    /// Print the metrics as JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Exit with code 1 when the overall relMSE exceeds this.
+    #[arg(long)]
+    pub max_relmse: Option<f64>,
+}
+
+/// Runs the comparison; `Ok(false)` when `--max-relmse` is exceeded.
+pub fn run(opts: &CompareOptions) -> Result<bool, ToolError> {
+    let image = read_exr(&opts.image)?;
+    let reference = read_exr(&opts.reference)?;
+    let (image, reference) = if opts.downsample {
+        metrics::match_sizes(image, reference).map_err(ToolError)?
+    } else {
+        (image, reference)
+    };
+    let mask = MaskOptions {
+        mask_above: opts.mask_above,
+    };
+    let m = metrics::compare(&image, &reference, mask).map_err(ToolError)?;
+    if let Some(path) = &opts.error_png {
+        write_png(path, &metrics::error_image(&image, &reference, mask), 0.0)?;
+    }
+    if opts.json {
+        println!("{}", to_json(&m));
+    } else {
+        println!("{}", summary(&m));
+    }
+    Ok(opts.max_relmse.is_none_or(|t| m.overall.relmse <= t))
+}
+
+/// One line: the overall metrics and what was masked.
+pub fn summary(m: &Metrics) -> String {
+    let o = &m.overall;
+    format!(
+        "relMSE {:.6} RMSE {:.6} MAE {:.6} max {:.4} PSNR {:.2} dB | relMSE R/G/B {:.6}/{:.6}/{:.6} | {} px, masked: {} non-finite ref, {} near emitters; {} non-finite in image",
+        o.relmse,
+        o.rmse,
+        o.mae,
+        o.max_abs,
+        o.psnr,
+        m.channels[0].relmse,
+        m.channels[1].relmse,
+        m.channels[2].relmse,
+        m.pixels,
+        m.masked_nonfinite,
+        m.masked_emitter,
+        m.image_nonfinite
+    )
+}
+
+fn channel_json(c: &metrics::ChannelError) -> String {
+    let psnr = if c.psnr.is_finite() {
+        format!("{}", c.psnr)
+    } else {
+        "null".into()
+    };
+    format!(
+        "{{\"relmse\":{},\"rmse\":{},\"mae\":{},\"max_abs\":{},\"psnr\":{}}}",
+        c.relmse, c.rmse, c.mae, c.max_abs, psnr
+    )
+}
+
+pub fn to_json(m: &Metrics) -> String {
+    format!(
+        "{{\"overall\":{},\"r\":{},\"g\":{},\"b\":{},\"pixels\":{},\"masked_nonfinite\":{},\"masked_emitter\":{},\"image_nonfinite\":{}}}",
+        channel_json(&m.overall),
+        channel_json(&m.channels[0]),
+        channel_json(&m.channels[1]),
+        channel_json(&m.channels[2]),
+        m.pixels,
+        m.masked_nonfinite,
+        m.masked_emitter,
+        m.image_nonfinite
+    )
+}
