@@ -69,7 +69,9 @@ pub fn render_tile(ctx: &RenderContext, x0: u32, y0: u32, x1: u32, y1: u32) -> V
             let pixel_id = y as u64 * s.width as u64 + x as u64;
             let mut sampler = Sampler::new(s.pattern, s.seed, pixel_id, sample, s.spp);
             let offset = ctx.filter.sample(sampler.next_2d());
-            let ray = ctx.camera.generate_ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset);
+            let ray = ctx
+                .camera
+                .generate_ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset);
             paths.push(PathState {
                 pixel: i,
                 ray,
@@ -80,7 +82,9 @@ pub fn render_tile(ctx: &RenderContext, x0: u32, y0: u32, x1: u32, y1: u32) -> V
                 sampler,
             });
         }
-        ctx.counters.camera_rays.fetch_add(paths.len() as u64, Ordering::Relaxed);
+        ctx.counters
+            .camera_rays
+            .fetch_add(paths.len() as u64, Ordering::Relaxed);
 
         while !paths.is_empty() {
             rays.clear();
@@ -97,7 +101,9 @@ pub fn render_tile(ctx: &RenderContext, x0: u32, y0: u32, x1: u32, y1: u32) -> V
             }
             trace_shadows(ctx, &shadows, &mut shadow_rays, &mut occluded, &mut acc);
             if !next.is_empty() {
-                ctx.counters.secondary_rays.fetch_add(next.len() as u64, Ordering::Relaxed);
+                ctx.counters
+                    .secondary_rays
+                    .fetch_add(next.len() as u64, Ordering::Relaxed);
             }
             std::mem::swap(&mut paths, &mut next);
         }
@@ -153,14 +159,17 @@ fn shade(
     let frame = Frame::from_normal(ns);
     let wo = frame.to_local(wo_world);
     let ls = ctx.settings.light_samples.max(1);
-    path.sampler.set_dimension(CAMERA_DIMS + path.depth * dims_per_vertex(ls));
+    path.sampler
+        .set_dimension(CAMERA_DIMS + path.depth * dims_per_vertex(ls));
 
     // Direct light by shadow rays.
     if !bsdf.is_specular() && !ctx.lights.is_empty() {
         for _ in 0..ls {
             let u_sel = path.sampler.next_1d();
             let u = path.sampler.next_2d();
-            let Some(s) = ctx.lights.sample(scene, p, u_sel, u) else { continue };
+            let Some(s) = ctx.lights.sample(scene, p, u_sel, u) else {
+                continue;
+            };
             let wi = frame.to_local(s.wi);
             let f = bsdf.f(wo, wi, TransportMode::Radiance) * wi.z.abs();
             if f.max_element() <= 0.0 {
@@ -179,7 +188,12 @@ fn shade(
                 offset_ray_origin(s.p, if s.n.dot(o - s.p) >= 0.0 { s.n } else { -s.n })
             };
             let ray = Ray::segment(o, target - o, 1.0 - 1e-4);
-            shadows.push(Shadow { pixel: path.pixel, ray, contrib, direct: path.depth == 0 });
+            shadows.push(Shadow {
+                pixel: path.pixel,
+                ray,
+                contrib,
+                direct: path.depth == 0,
+            });
         }
     } else {
         for _ in 0..ls {
@@ -194,7 +208,9 @@ fn shade(
     }
     let uc = path.sampler.next_1d();
     let u = path.sampler.next_2d();
-    let Some(bs) = bsdf.sample(wo, uc, u, TransportMode::Radiance) else { return };
+    let Some(bs) = bsdf.sample(wo, uc, u, TransportMode::Radiance) else {
+        return;
+    };
     if bs.pdf <= 0.0 {
         return;
     }
@@ -231,7 +247,9 @@ fn trace_shadows(
     occluded.clear();
     occluded.resize(rays.len(), false);
     ctx.accel.occluded_batch(rays, occluded);
-    ctx.counters.shadow_rays.fetch_add(rays.len() as u64, Ordering::Relaxed);
+    ctx.counters
+        .shadow_rays
+        .fetch_add(rays.len() as u64, Ordering::Relaxed);
     for (s, &blocked) in shadows.iter().zip(occluded.iter()) {
         if !blocked {
             add(acc, s.pixel, s.direct, s.contrib);

@@ -54,7 +54,10 @@ impl RenderSettings {
         let max_depth = params.get_int("maxdepth", 5)?;
         if max_depth < 0 {
             let loc = scene.integrator.loc.clone();
-            return Err(SceneError { loc, msg: format!("maxdepth must be >= 0, got {max_depth}") });
+            return Err(SceneError {
+                loc,
+                msg: format!("maxdepth must be >= 0, got {max_depth}"),
+            });
         }
         params.check_unused()?;
         Ok(RenderSettings {
@@ -125,8 +128,9 @@ pub fn render(
         counters: Counters::default(),
     };
     let (w, h) = (settings.width, settings.height);
-    let tiles: Vec<(u32, u32)> =
-        (0..h.div_ceil(TILE)).flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE))).collect();
+    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
+        .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
+        .collect();
     let total = tiles.len() as u64;
     let done = AtomicU64::new(0);
     let rendered: Vec<((u32, u32), Vec<Radiance>)> = tiles
@@ -151,7 +155,10 @@ pub fn render(
         for (i, r) in px.iter().enumerate() {
             let (x, y) = (x0 as usize + i % tw, y0 as usize + i / tw);
             let k = y * wu + x;
-            for (part, v) in parts.iter_mut().zip([r.direct, r.specular, r.caustic, r.indirect]) {
+            for (part, v) in parts
+                .iter_mut()
+                .zip([r.direct, r.specular, r.caustic, r.indirect])
+            {
                 part.pixels[k] = v.to_array();
             }
             image.pixels[k] = r.total().to_array();
