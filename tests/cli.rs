@@ -1,0 +1,154 @@
+//! The `photon` binary: outputs, exit codes, one-line errors, and that a failed render never
+//! replaces a good image.
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn photon() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_photon"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join("cli")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn render_writes_exr_and_png_with_layers() {
+    let dir = tmp("render");
+    let exr = dir.join("out.exr");
+    let out = photon()
+        .args([
+            "render",
+            "scenes/cornell-glass.pbrt",
+            "--res",
+            "32x24",
+            "--spp",
+            "2",
+            "-o",
+        ])
+        .arg(&exr)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    println!("{stdout}");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("triangles") && stdout.contains("Mrays/s"));
+    let img = photon::imageio::read_exr(&exr).unwrap();
+    assert_eq!((img.width, img.height), (32, 24));
+    for layer in ["direct", "specular", "caustic", "indirect"] {
+        let l = photon::imageio::read_exr_layer(&exr, layer).unwrap();
+        assert_eq!(l.width, 32);
+    }
+    assert!(dir.join("out.png").exists());
+    // No temporary files are left behind.
+    let names: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names.len(), 2, "{names:?}");
+}
+
+/// The EXR's RGB is the sum of its four component layers.
+#[test]
+fn components_sum_to_the_image() {
+    let dir = tmp("components");
+    let exr = dir.join("c.exr");
+    let st = photon()
+        .args([
+            "render",
+            "../shared/scenes/cornell-spheres/scene.pbrt",
+            "--res",
+            "32x32",
+            "--spp",
+            "4",
+            "--no-png",
+            "-o",
+        ])
+        .arg(&exr)
+        .status()
+        .unwrap();
+    assert!(st.success());
+    let img = photon::imageio::read_exr(&exr).unwrap();
+    let layers: Vec<_> = ["direct", "specular", "caustic", "indirect"]
+        .iter()
+        .map(|l| photon::imageio::read_exr_layer(&exr, l).unwrap())
+        .collect();
+    let mut specular_sum = 0.0;
+    for i in 0..img.pixels.len() {
+        for c in 0..3 {
+            let sum: f32 = layers.iter().map(|l| l.pixels[i][c]).sum();
+            let want = img.pixels[i][c];
+            assert!(
+                (sum - want).abs() <= 1e-5 * want.abs().max(1.0),
+                "pixel {i}: {sum} vs {want}"
+            );
+        }
+        specular_sum += layers[1].pixels[i][0];
+    }
+    assert!(
+        specular_sum > 0.0,
+        "the mirror and glass spheres show specular light"
+    );
+}
+
+fn expect_error(args: &[&str], needle: &str) -> String {
+    let out = photon().args(args).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+    assert_eq!(out.status.code(), Some(2), "args {args:?}: {stderr}");
+    assert_eq!(stderr.trim().lines().count(), 1, "one line: {stderr}");
+    assert!(
+        stderr.contains(needle),
+        "{stderr:?} should mention {needle:?}"
+    );
+    stderr
+}
+
+#[test]
+fn bad_input_is_one_line_and_exit_2() {
+    let dir = tmp("errors");
+    let bad = dir.join("bad.pbrt");
+    std::fs::write(
+        &bad,
+        "WorldBegin\nShape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ]\n  Frobnicate 3\n",
+    )
+    .unwrap();
+    expect_error(&["render", bad.to_str().unwrap()], "bad.pbrt:3:3");
+    expect_error(&["render", "no/such/scene.pbrt"], "no/such/scene.pbrt");
+    let bad_param = dir.join("param.pbrt");
+    std::fs::write(
+        &bad_param,
+        "Camera \"perspective\" \"float fov\" [ 45 ] \"float fnord\" [ 1 ]\nWorldBegin\n",
+    )
+    .unwrap();
+    expect_error(&["render", bad_param.to_str().unwrap()], "fnord");
+}
+
+/// A render that fails leaves an existing image untouched.
+#[test]
+fn failed_render_keeps_the_good_image() {
+    let dir = tmp("keep");
+    let exr = dir.join("good.exr");
+    std::fs::write(&exr, b"precious").unwrap();
+    let bad = dir.join("bad.pbrt");
+    std::fs::write(
+        &bad,
+        "WorldBegin\nShape \"sphere\" \"float radius\" [ oops ]\n",
+    )
+    .unwrap();
+    let st = photon()
+        .args(["render", bad.to_str().unwrap(), "-o"])
+        .arg(&exr)
+        .status()
+        .unwrap();
+    assert_eq!(st.code(), Some(2));
+    assert_eq!(std::fs::read(&exr).unwrap(), b"precious");
+    assert!(Path::new(&exr).exists());
+}
