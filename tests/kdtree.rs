@@ -84,6 +84,10 @@ fn check_set(points: &[Vec3], queries: &[Vec3], max_r2: f32) {
                 .map(|nb| (order[nb.idx as usize], nb.d2))
                 .collect();
             check_knn(points, q, k, max_r2, &got, out.r2());
+            let r2 = out.r2();
+            out.sort();
+            assert!(out.neighbors().windows(2).all(|w| w[0].d2 <= w[1].d2));
+            assert_eq!(out.r2(), r2);
         }
         // Radius query: the exact set of indices within r2.
         let r2 = if max_r2.is_finite() { max_r2 } else { 1e30 };

