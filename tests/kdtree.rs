@@ -3,7 +3,8 @@
 //! k-nearest and radius queries must return the same photons as an exhaustive scan (up to
 //! ties at the k-th distance) on random sets and on degenerate ones: empty, k = 0, k > n,
 //! coplanar, heavy duplicates, points on split planes, tiny and huge coordinates. The ignored
-//! test `bench_against_kiddo` prints build time and queries/s for both trees.
+//! test `bench_against_kiddo` prints build time and queries/s for both trees, on a uniform cube
+//! and on a plane (where photons live).
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use photon::math::Vec3;
 use photon::photon::{KdTree, KnnResult, Photon, PhotonMap};
@@ -315,14 +316,25 @@ fn bench_against_kiddo() {
     let nq = 100_000;
     let pts = random_points(n, 1.0, 21);
     let qs = random_points(nq, 1.0, 22);
+    bench_set("uniform cube", &pts, &qs);
+    // Photons live on surfaces: the same on the plane z = 0.
+    let flat = |v: Vec<Vec3>| -> Vec<Vec3> { v.iter().map(|p| Vec3::new(p.x, p.y, 0.0)).collect() };
+    bench_set("plane z = 0", &flat(pts), &flat(qs));
+}
 
+/// Build times and best-of-3 k-nearest throughput of our tree and kiddo on one point set.
+fn bench_set(name: &str, pts: &[Vec3], qs: &[Vec3]) {
+    let nq = qs.len();
     let t = Instant::now();
-    let (tree, _) = KdTree::build(&pts).unwrap();
+    let (tree, _) = KdTree::build(pts).unwrap();
     let ours_build = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let kd = kiddo_tree(&pts);
+    let kd = kiddo_tree(pts);
     let kiddo_build = t.elapsed().as_secs_f64();
-    println!("build 1M: ours {ours_build:.3} s, kiddo {kiddo_build:.3} s");
+    println!(
+        "[{name}] build {} points: ours {ours_build:.3} s, kiddo {kiddo_build:.3} s",
+        pts.len()
+    );
     let photons: Vec<Photon> = pts
         .iter()
         .map(|p| Photon::new(*p, Vec3::ONE, -Vec3::Z, 0))
@@ -330,7 +342,7 @@ fn bench_against_kiddo() {
     let t = Instant::now();
     let map = PhotonMap::new(&photons).unwrap();
     println!(
-        "PhotonMap::new 1M photons: {:.3} s ({} photons)",
+        "[{name}] PhotonMap::new: {:.3} s ({} photons)",
         t.elapsed().as_secs_f64(),
         map.len()
     );
@@ -344,14 +356,14 @@ fn bench_against_kiddo() {
             // Unbounded radius, like kiddo's plain nearest_n.
             let t = Instant::now();
             let mut check = 0f64;
-            for &q in &qs {
+            for &q in qs {
                 tree.knn(q, k, f32::INFINITY, &mut out);
                 check += out.r2() as f64;
             }
             ours = ours.max(nq as f64 / t.elapsed().as_secs_f64());
             let t = Instant::now();
             let mut check_k = 0f64;
-            for q in &qs {
+            for q in qs {
                 let res = kd
                     .query(&q.to_array())
                     .nearest_n::<SquaredEuclidean<f32>>(kk)
@@ -365,7 +377,7 @@ fn bench_against_kiddo() {
             );
             let t = Instant::now();
             let mut count = 0usize;
-            for q in &qs {
+            for q in qs {
                 let res = kd
                     .query(&q.to_array())
                     .nearest_n::<SquaredEuclidean<f32>>(kk)
@@ -378,7 +390,7 @@ fn bench_against_kiddo() {
             assert_eq!(count, k * nq);
         }
         println!(
-            "k={k}: ours {ours:.0} q/s, kiddo sorted {sorted:.0} q/s, kiddo unsorted {unsorted:.0} q/s, ours/best kiddo {:.2}",
+            "[{name}] k={k}: ours {ours:.0} q/s, kiddo sorted {sorted:.0} q/s, kiddo unsorted {unsorted:.0} q/s, ours/best kiddo {:.2}",
             ours / sorted.max(unsorted)
         );
     }
