@@ -19,9 +19,9 @@
 //! (log k sifts per candidate) by 10% at k = 50 and 1.7-2x at k = 200.
 //!
 //! Measured (1M uniform points, 100k queries, one thread): this layout answers k = 50 and
-//! k = 200 queries 2-3x faster than Jensen's left-balanced heap layout with one point per
-//! node (kept as the ignored test `heap_layout::heap_layout_vs_implicit_layout`); leaves of
-//! 32 beat 8 and 16 by 5-30% and 64 by a little.
+//! k = 200 queries 2-5x faster (across runs) than Jensen's left-balanced heap layout with one
+//! point per node (kept as the ignored test `heap_layout::heap_layout_vs_implicit_layout`);
+//! leaves of 32 beat 8 and 16 by 5-30% and 64 by a little.
 use crate::math::Vec3;
 use std::fmt;
 use std::sync::atomic::{AtomicU64, Ordering};
