@@ -9,11 +9,13 @@
 //!
 //! Components: light reaching the camera after at most one non-delta scattering event is
 //! `direct`; light arriving through further specular/glossy bounces is `specular`.
+use super::photonmap::{self, Gather};
 use super::{power_heuristic, tile_pixels, RenderContext};
 use crate::accel::{Hit, RayQuery};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::film::Radiance;
 use crate::math::{offset_ray_origin, Frame, Ray, Vec2, Vec3};
+use crate::photon::KnnResult;
 use crate::sampling::Sampler;
 use std::sync::atomic::Ordering;
 
@@ -61,6 +63,7 @@ pub fn render_tile(ctx: &RenderContext, x0: u32, y0: u32, x1: u32, y1: u32) -> V
     let mut shadows: Vec<Shadow> = Vec::new();
     let mut shadow_rays: Vec<Ray> = Vec::new();
     let mut occluded: Vec<bool> = Vec::new();
+    let mut gathers = Gathers::default();
 
     for sample in 0..s.spp {
         // Camera rays of the whole tile for this sample index.
@@ -96,10 +99,19 @@ pub fn render_tile(ctx: &RenderContext, x0: u32, y0: u32, x1: u32, y1: u32) -> V
             next.clear();
             for (path, hit) in paths.drain(..).zip(hits.iter()) {
                 if let Some(hit) = hit {
-                    shade(ctx, path, hit, &mut acc, &mut shadows, &mut next);
+                    shade(
+                        ctx,
+                        path,
+                        hit,
+                        &mut acc,
+                        &mut shadows,
+                        &mut next,
+                        &mut gathers,
+                    );
                 }
             }
             trace_shadows(ctx, &shadows, &mut shadow_rays, &mut occluded, &mut acc);
+            trace_gathers(ctx, &mut gathers, &mut acc);
             if !next.is_empty() {
                 ctx.counters
                     .secondary_rays
@@ -121,7 +133,16 @@ fn add(acc: &mut [Radiance], pixel: usize, direct: bool, value: Vec3) {
     }
 }
 
-/// Shades one hit: emission, shadow rays, continuation.
+/// The final-gather rays of a tile pass, and reusable buffers.
+#[derive(Default)]
+struct Gathers {
+    pending: Vec<Gather>,
+    rays: Vec<Ray>,
+    hits: Vec<Option<Hit>>,
+    buf: KnnResult,
+}
+
+/// Shades one hit: emission, shadow rays, photon-map components, continuation.
 fn shade(
     ctx: &RenderContext,
     mut path: PathState,
@@ -129,6 +150,7 @@ fn shade(
     acc: &mut [Radiance],
     shadows: &mut Vec<Shadow>,
     next: &mut Vec<PathState>,
+    gathers: &mut Gathers,
 ) {
     let scene = ctx.scene;
     let mesh = &scene.meshes[hit.mesh as usize];
@@ -202,6 +224,38 @@ fn shade(
         }
     }
 
+    // Caustics and indirect diffuse light from the photon maps (pass 2).
+    if let (Some(pass), true) = (&ctx.photons, bsdf.is_diffuse()) {
+        let n = if wo.z >= 0.0 { ns } else { -ns };
+        let f_d = bsdf.f(
+            wo,
+            Vec3::new(0.0, 0.0, wo.z.signum()),
+            TransportMode::Radiance,
+        );
+        let primary = path.depth == 0;
+        path.sampler
+            .set_dimension(CAMERA_DIMS + path.depth * dims_per_vertex(ls) + 3 * ls);
+        let got = photonmap::at_diffuse(
+            pass,
+            p,
+            n,
+            f_d,
+            path.beta,
+            path.pixel,
+            primary,
+            &mut path.sampler,
+            &mut gathers.buf,
+            &mut gathers.pending,
+        );
+        let px = &mut acc[path.pixel];
+        if primary {
+            px.caustic += got.caustic;
+            px.indirect += got.indirect;
+        } else {
+            px.specular += got.caustic + got.indirect;
+        }
+    }
+
     // Continue through specular and glossy surfaces.
     if !(bsdf.is_specular() || bsdf.is_glossy()) {
         return;
@@ -255,4 +309,29 @@ fn trace_shadows(
             add(acc, s.pixel, s.direct, s.contrib);
         }
     }
+}
+
+/// Traces the pending gather rays as one batch and adds their radiance.
+fn trace_gathers(ctx: &RenderContext, g: &mut Gathers, acc: &mut [Radiance]) {
+    let Some(pass) = &ctx.photons else { return };
+    if g.pending.is_empty() {
+        return;
+    }
+    g.rays.clear();
+    g.rays.extend(g.pending.iter().map(|x| x.ray));
+    g.hits.clear();
+    g.hits.resize(g.rays.len(), None);
+    ctx.accel.intersect_batch(&g.rays, &mut g.hits);
+    ctx.counters
+        .secondary_rays
+        .fetch_add(g.rays.len() as u64, Ordering::Relaxed);
+    for (gather, hit) in g.pending.iter_mut().zip(g.hits.iter()) {
+        let l = gather.weight * photonmap::gather_radiance(ctx, pass, gather, *hit, &mut g.buf);
+        if gather.primary {
+            acc[gather.pixel].indirect += l;
+        } else {
+            acc[gather.pixel].specular += l;
+        }
+    }
+    g.pending.clear();
 }

@@ -8,6 +8,7 @@
 //! (default: the direct-lighting + specular ray tracer until the photon mapper lands); the
 //! statistics say which. Parameters the chosen integrator does not read are errors.
 pub mod direct;
+pub mod photonmap;
 
 use crate::accel::Accel;
 use crate::camera::Camera;
@@ -26,9 +27,12 @@ pub const TILE: u32 = 16;
 /// The integrators `photon render --integrator` can run.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum IntegratorKind {
+    /// Jensen's two-pass photon mapping: direct, specular/glossy, caustic and indirect
+    /// (final gathering) components.
+    #[default]
+    Photonmap,
     /// Direct light by shadow rays (MIS for glossy surfaces) plus recursive specular and
     /// glossy reflection/refraction; no diffuse interreflection.
-    #[default]
     Direct,
 }
 
@@ -44,6 +48,8 @@ pub struct RenderSettings {
     pub max_depth: u32,
     /// Shadow rays per shading point.
     pub light_samples: u32,
+    /// The photon mapper's settings (read from the file's `Integrator` parameters).
+    pub photon: photonmap::PhotonSettings,
 }
 
 impl RenderSettings {
@@ -59,6 +65,7 @@ impl RenderSettings {
                 msg: format!("maxdepth must be >= 0, got {max_depth}"),
             });
         }
+        let photon = photonmap::PhotonSettings::from_params(&mut params)?;
         params.check_unused()?;
         Ok(RenderSettings {
             width: scene.film.xres,
@@ -68,6 +75,7 @@ impl RenderSettings {
             pattern: Pattern::Stratified,
             max_depth: max_depth as u32,
             light_samples: 1,
+            photon,
         })
     }
 }
@@ -95,6 +103,8 @@ pub struct RenderOutput {
     pub components: Vec<(&'static str, RgbImage)>,
     pub seconds: f64,
     pub counters: Counters,
+    /// Statistics lines of the integrator (photon counts, timings, skipped components).
+    pub notes: Vec<String>,
 }
 
 /// The shared, read-only state every tile renders from.
@@ -106,6 +116,8 @@ pub struct RenderContext<'a> {
     pub filter: Filter,
     pub settings: RenderSettings,
     pub counters: Counters,
+    /// Pass 1's maps when rendering with the photon mapper.
+    pub photons: Option<photonmap::PhotonPass>,
 }
 
 /// Renders `scene` with `kind`, calling `progress(tiles_done, tiles_total)` as tiles finish.
@@ -118,14 +130,26 @@ pub fn render(
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> RenderOutput {
     let start = Instant::now();
+    let lights = Lights::new(scene);
+    let photons = (kind == IntegratorKind::Photonmap).then(|| {
+        let mut ps = settings.photon.clone();
+        ps.trace.seed = settings.seed;
+        ps.trace.pattern = settings.pattern;
+        photonmap::prepare(scene, accel, &lights, &ps)
+    });
+    let notes = photons
+        .as_ref()
+        .map(photonmap::describe)
+        .unwrap_or_default();
     let ctx = RenderContext {
         scene,
         accel,
-        lights: Lights::new(scene),
+        lights,
         camera: Camera::new(&scene.camera, settings.width, settings.height),
         filter: Filter::new(&scene.filter),
         settings: settings.clone(),
         counters: Counters::default(),
+        photons,
     };
     let (w, h) = (settings.width, settings.height);
     let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
@@ -139,7 +163,9 @@ pub fn render(
             let x1 = (x0 + TILE).min(w);
             let y1 = (y0 + TILE).min(h);
             let px = match kind {
-                IntegratorKind::Direct => direct::render_tile(&ctx, x0, y0, x1, y1),
+                IntegratorKind::Direct | IntegratorKind::Photonmap => {
+                    direct::render_tile(&ctx, x0, y0, x1, y1)
+                }
             };
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
             ((x0, y0), px)
@@ -175,6 +201,7 @@ pub fn render(
         ],
         seconds: start.elapsed().as_secs_f64(),
         counters: ctx.counters,
+        notes,
     }
 }
 

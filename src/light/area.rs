@@ -2,9 +2,10 @@
 //!
 //! Points are sampled uniformly by area (a triangle in proportion to its area, then a uniform
 //! point on it), so the solid-angle density seen from `p` is `d^2 / (|cos theta_l| A)`.
+use super::Emission;
 use super::{scalar_power, LightSample};
-use crate::math::{Vec2, Vec3};
-use crate::sampling::warp::{square_to_triangle, Distribution1D};
+use crate::math::{Frame, Vec2, Vec3};
+use crate::sampling::warp::{square_to_cosine_hemisphere, square_to_triangle, Distribution1D};
 use crate::scene::Mesh;
 use std::f32::consts::PI;
 
@@ -15,6 +16,8 @@ pub struct AreaLight {
     pub two_sided: bool,
     triangles: Distribution1D,
     area: f32,
+    /// The common unit normal when the emitter is planar (all triangles face one way).
+    plane_normal: Option<Vec3>,
 }
 
 impl AreaLight {
@@ -23,13 +26,57 @@ impl AreaLight {
             .map(|t| mesh.area(t))
             .collect();
         let triangles = Distribution1D::new(&areas);
+        let normals: Vec<Vec3> = (0..mesh.indices.len() as u32)
+            .filter(|&t| mesh.area(t) > 0.0)
+            .map(|t| mesh.geometric_normal(t, 1.0 / 3.0, 1.0 / 3.0))
+            .collect();
+        let plane_normal = normals
+            .first()
+            .copied()
+            .filter(|n0| normals.iter().all(|n| n.dot(*n0) > 1.0 - 1e-5));
         AreaLight {
             mesh: index,
             l,
             two_sided,
             area: triangles.total(),
             triangles,
+            plane_normal,
         }
+    }
+
+    /// The emitter's normal if it is planar.
+    pub fn plane_normal(&self) -> Option<Vec3> {
+        self.plane_normal
+    }
+
+    /// A photon: a uniform point by area (`u_pos`) and a cosine-weighted direction about the
+    /// normal (`u_dir`; for two-sided lights `u_dir.x` first picks the side).
+    pub fn emit(&self, meshes: &[Mesh], u_pos: Vec2, u_dir: Vec2) -> Option<Emission> {
+        let mesh = &meshes[self.mesh as usize];
+        let (p, n) =
+            self.sample_point(mesh, u_pos.x, Vec2::new(self.restretch(u_pos.x), u_pos.y))?;
+        let (n, u) = if self.two_sided {
+            if u_dir.x < 0.5 {
+                (n, Vec2::new(u_dir.x * 2.0, u_dir.y))
+            } else {
+                (-n, Vec2::new(u_dir.x * 2.0 - 1.0, u_dir.y))
+            }
+        } else {
+            (n, u_dir)
+        };
+        let dir = Frame::from_normal(n).to_world(square_to_cosine_hemisphere(u));
+        let sides = if self.two_sided { 2.0 } else { 1.0 };
+        Some(Emission {
+            p,
+            n,
+            dir,
+            flux: self.l * (PI * self.area * sides),
+        })
+    }
+
+    /// The remainder of `u` after the triangle choice, back in [0, 1).
+    fn restretch(&self, u: f32) -> f32 {
+        self.triangles.sample(u).map_or(u, |(_, _, rem)| rem)
     }
 
     pub fn area(&self) -> f32 {

@@ -169,3 +169,99 @@ impl Lights {
 pub(crate) fn scalar_power(c: Vec3) -> f32 {
     luminance(c).max(c.max_element() * 1e-3)
 }
+
+/// A photon leaving a light: origin, surface normal there (zero for point-like lights),
+/// direction, and the flux it carries per sample (divide by the number of photons emitted).
+#[derive(Clone, Copy, Debug)]
+pub struct Emission {
+    pub p: Vec3,
+    pub n: Vec3,
+    pub dir: Vec3,
+    pub flux: Vec3,
+}
+
+/// Which 2D sample of an emission a projection map restricts: the direction (area, point and
+/// spot lights) or the position (distant lights: every photon travels the same way).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EmissionDomain {
+    Direction,
+    Position,
+}
+
+impl Lights {
+    /// Emits a photon from light `i`: `u_pos` picks the origin, `u_dir` the direction (each in
+    /// [0,1)^2, so both can be stratified over the light's photons). The flux is
+    /// `Le cos / (pdf_pos pdf_dir)`: the light's power for uniform cosine-weighted sampling.
+    pub fn emit(&self, scene: &Scene, i: usize, u_pos: Vec2, u_dir: Vec2) -> Option<Emission> {
+        match &scene.lights[i] {
+            Light::Area { .. } => self.areas[i].as_ref()?.emit(&scene.meshes, u_pos, u_dir),
+            Light::Point { pos, intensity } => Some(point::emit(*pos, *intensity, u_dir)),
+            Light::Spot {
+                pos,
+                dir,
+                intensity,
+                cos_falloff_start,
+                cos_falloff_end,
+            } => spot::emit(
+                *pos,
+                *dir,
+                *intensity,
+                *cos_falloff_start,
+                *cos_falloff_end,
+                u_dir,
+            ),
+            Light::Distant { dir, l } => {
+                Some(distant::emit(*dir, *l, self.center, self.radius, u_pos))
+            }
+        }
+    }
+
+    /// The sample domain a projection map of light `i` restricts.
+    pub fn emission_domain(&self, scene: &Scene, i: usize) -> EmissionDomain {
+        match scene.lights[i] {
+            Light::Distant { .. } => EmissionDomain::Position,
+            _ => EmissionDomain::Direction,
+        }
+    }
+
+    /// Whether every photon of light `i` leaves with the same direction warp (so a cell of the
+    /// direction domain maps to one cone of world directions): false for curved area lights.
+    pub fn fixed_direction_frame(&self, scene: &Scene, i: usize) -> bool {
+        match &scene.lights[i] {
+            Light::Area { .. } => self.areas[i]
+                .as_ref()
+                .is_some_and(|a| a.plane_normal().is_some()),
+            _ => true,
+        }
+    }
+
+    /// Bounding sphere of the points light `i` emits from (radius 0 for point and spot).
+    pub fn origin_bounds(&self, scene: &Scene, i: usize) -> (Vec3, f32) {
+        match &scene.lights[i] {
+            Light::Area { mesh, .. } => bounding_sphere(&scene.meshes[*mesh as usize].positions),
+            Light::Point { pos, .. } | Light::Spot { pos, .. } => (*pos, 0.0),
+            Light::Distant { .. } => (self.center, self.radius),
+        }
+    }
+
+    /// Photon-count weights: emitted power of each light (0 for lights that emit nothing).
+    pub fn powers(&self, scene: &Scene) -> Vec<f32> {
+        (0..scene.lights.len())
+            .map(|i| self.power(scene, i).max(0.0))
+            .collect()
+    }
+}
+
+/// A (not minimal) bounding sphere of points: the centre of their box, and the farthest point.
+pub fn bounding_sphere(points: &[Vec3]) -> (Vec3, f32) {
+    if points.is_empty() {
+        return (Vec3::ZERO, 0.0);
+    }
+    let (lo, hi) = points.iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(l, h), p| (l.min(*p), h.max(*p)),
+    );
+    let c = (lo + hi) * 0.5;
+    let r = points.iter().map(|p| (*p - c).length()).fold(0.0, f32::max);
+    (c, r)
+}

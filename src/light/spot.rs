@@ -1,7 +1,8 @@
 //! Spot light: `LightSource "spot"`; pbrt-v4's smoothstep falloff between the cone angle
 //! (`cos_falloff_end`, zero) and `coneangle - conedelta` (`cos_falloff_start`, full).
-use super::{scalar_power, LightSample};
-use crate::math::Vec3;
+use super::{scalar_power, Emission, LightSample};
+use crate::math::{Frame, Vec2, Vec3};
+use crate::sampling::warp::square_to_uniform_cone;
 use std::f32::consts::PI;
 
 pub fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
@@ -44,5 +45,25 @@ pub fn sample(
         n: Vec3::ZERO,
         pdf: 1.0,
         delta: true,
+    })
+}
+
+/// A photon uniform in the cone of half-angle `acos(cos_end)`, weighted by the falloff; flux
+/// `I falloff 2 pi (1 - cos_end)`.
+pub fn emit(
+    pos: Vec3,
+    dir: Vec3,
+    intensity: Vec3,
+    cos_start: f32,
+    cos_end: f32,
+    u_dir: Vec2,
+) -> Option<Emission> {
+    let w = Frame::from_normal(dir).to_world(square_to_uniform_cone(u_dir, cos_end));
+    let flux = intensity * (falloff(dir, w, cos_start, cos_end) * 2.0 * PI * (1.0 - cos_end));
+    (flux.max_element() > 0.0).then_some(Emission {
+        p: pos,
+        n: Vec3::ZERO,
+        dir: w,
+        flux,
     })
 }

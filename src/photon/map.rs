@@ -8,6 +8,8 @@ use crate::math::Vec3;
 pub struct PhotonMap {
     tree: KdTree,
     photons: Vec<Photon>,
+    /// For each tree-order slot, the index of the photon in the input slice.
+    order: Vec<u32>,
 }
 
 impl PhotonMap {
@@ -16,7 +18,17 @@ impl PhotonMap {
         let points: Vec<Vec3> = photons.iter().map(Photon::pos).collect();
         let (tree, order) = KdTree::build(&points)?;
         let photons = order.iter().map(|&i| photons[i as usize]).collect();
-        Ok(PhotonMap { tree, photons })
+        Ok(PhotonMap {
+            tree,
+            photons,
+            order,
+        })
+    }
+
+    /// For each tree-order slot, the index of its photon in the slice given to [`Self::new`]
+    /// (to carry per-photon data along).
+    pub fn order(&self) -> &[u32] {
+        &self.order
     }
 
     /// Number of stored photons.

@@ -28,7 +28,9 @@
 pub mod estimate;
 pub mod kdtree;
 pub mod map;
+pub mod projection;
 pub mod record;
+pub mod trace;
 
 pub use estimate::{EstimateParams, Kernel};
 pub use kdtree::{KdTree, KnnResult, Neighbor};

@@ -47,7 +47,7 @@ pub struct RenderOptions {
     #[arg(long, value_enum, default_value_t = Pattern::Stratified)]
     pub pattern: Pattern,
     /// The integrator (whatever the file asks for).
-    #[arg(long, value_enum, default_value_t = IntegratorKind::Direct)]
+    #[arg(long, value_enum, default_value_t = IntegratorKind::Photonmap)]
     pub integrator: IntegratorKind,
     /// Maximum bounces (default: the Integrator's maxdepth, else 5).
     #[arg(long)]
@@ -152,6 +152,9 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
         pool.install(|| integrator::render(&scene, &accel, &settings, opts.integrator, &progress));
     if let Some(b) = bar {
         b.finish_and_clear();
+    }
+    for note in &out.notes {
+        println!("{note}");
     }
     let rays = out.counters.total();
     println!(

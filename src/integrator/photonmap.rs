@@ -1,0 +1,455 @@
+//! Jensen's two-pass photon mapping, pass 2: reflected radiance at a visible diffuse point is
+//! split into
+//! - **direct** light by shadow rays (as the direct integrator),
+//! - **specular/glossy** light by tracing rays through specular and glossy bounces,
+//! - **caustics** by a radiance estimate in the caustic map at the point,
+//! - **indirect diffuse** by final gathering: stratified cosine-weighted gather rays whose
+//!   first diffuse hits read the global map (through a precomputed irradiance cache at a
+//!   subset of the photons, Christensen 1999, unless disabled); or, with `finalgather false`,
+//!   a direct look at the global map's indirect photons (for inspection).
+//!
+//! ```text
+//! Integrator "photonmap"
+//!     "integer globalphotons" [ 200000 ]   "integer causticphotons" [ 200000 ]
+//!     "integer globallookup" [ 100 ]       "integer causticlookup" [ 60 ]
+//!     "float globalradius" [ 0.1 ]         "float causticradius" [ 0.02 ]  # x scene radius
+//!     "string kernel" [ "epanechnikov" ]   # box | cone | biweight | epanechnikov
+//!     "integer gathersamples" [ 32 ]       "bool finalgather" [ true ]
+//!     "bool irradiancecache" [ true ]      "bool projectionmaps" [ true ]
+//!     "integer maxdepth" [ 5 ]             "integer maxphotonbounces" [ 32 ]
+//! ```
+//! Radii are fractions of the scene's bounding-sphere radius. Only what the scene needs is
+//! built: no caustic map without specular surfaces, no global map without diffuse ones.
+use super::RenderContext;
+use crate::accel::{Accel, Hit, RayQuery};
+use crate::bsdf::{Bsdf, TransportMode};
+use crate::light::Lights;
+use crate::math::{offset_ray_origin, Frame, Ray, Vec2, Vec3};
+use crate::photon::estimate::{irradiance_with, EstimateParams};
+use crate::photon::trace::{self, PhotonMaps, TraceSettings};
+use crate::photon::{Kernel, KnnResult, Photon, PhotonMap};
+use crate::sampling::{strata, Pattern, Sampler};
+use crate::scene::{ParamSet, Scene, SceneError};
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// Pass-2 settings of the photon mapper (pass-1 settings are in `trace`).
+#[derive(Clone, Debug)]
+pub struct PhotonSettings {
+    pub trace: TraceSettings,
+    pub global_lookup: usize,
+    /// Fraction of the scene radius.
+    pub global_radius: f32,
+    pub caustic_lookup: usize,
+    pub caustic_radius: f32,
+    pub kernel: Kernel,
+    pub gather_samples: u32,
+    pub final_gather: bool,
+    pub irradiance_cache: bool,
+}
+
+impl Default for PhotonSettings {
+    fn default() -> Self {
+        PhotonSettings {
+            trace: TraceSettings {
+                global_photons: 200_000,
+                caustic_photons: 200_000,
+                max_bounces: 32,
+                projection_maps: true,
+                projection_resolution: crate::photon::projection::DEFAULT_RESOLUTION,
+                seed: 0,
+                pattern: Pattern::Stratified,
+            },
+            global_lookup: 100,
+            global_radius: 0.1,
+            caustic_lookup: 60,
+            caustic_radius: 0.02,
+            kernel: Kernel::Epanechnikov,
+            gather_samples: 32,
+            final_gather: true,
+            irradiance_cache: true,
+        }
+    }
+}
+
+impl PhotonSettings {
+    /// Reads the `photonmap` parameters (each marked used); others stay for the caller.
+    pub fn from_params(params: &mut ParamSet) -> Result<PhotonSettings, SceneError> {
+        let mut s = PhotonSettings::default();
+        let count = |params: &mut ParamSet, name: &str, default: u64| -> Result<u64, SceneError> {
+            let v = params.get_int(name, default.min(i32::MAX as u64) as i32)?;
+            if v < 0 {
+                let loc = params.loc(name).cloned();
+                return Err(SceneError {
+                    loc,
+                    msg: format!("\"{name}\" must be >= 0, got {v}"),
+                });
+            }
+            Ok(v as u64)
+        };
+        s.trace.global_photons = count(params, "globalphotons", s.trace.global_photons)?;
+        s.trace.caustic_photons = count(params, "causticphotons", s.trace.caustic_photons)?;
+        s.trace.max_bounces = count(params, "maxphotonbounces", s.trace.max_bounces as u64)? as u32;
+        s.global_lookup = count(params, "globallookup", s.global_lookup as u64)? as usize;
+        s.caustic_lookup = count(params, "causticlookup", s.caustic_lookup as u64)? as usize;
+        s.gather_samples = count(params, "gathersamples", s.gather_samples as u64)? as u32;
+        s.global_radius = params.get_float("globalradius", s.global_radius)?;
+        s.caustic_radius = params.get_float("causticradius", s.caustic_radius)?;
+        s.final_gather = params.get_bool("finalgather", s.final_gather)?;
+        s.irradiance_cache = params.get_bool("irradiancecache", s.irradiance_cache)?;
+        s.trace.projection_maps = params.get_bool("projectionmaps", s.trace.projection_maps)?;
+        if let Some(k) = params.get_string_opt("kernel")? {
+            s.kernel = parse_kernel(&k).ok_or_else(|| SceneError {
+                loc: params.loc("kernel").cloned(),
+                msg: format!("unknown kernel \"{k}\" (box, cone, biweight, epanechnikov)"),
+            })?;
+        }
+        Ok(s)
+    }
+}
+
+/// Parses a kernel name (`cone` uses Jensen's k = 1.1).
+pub fn parse_kernel(name: &str) -> Option<Kernel> {
+    Some(match name {
+        "box" => Kernel::Box,
+        "cone" => Kernel::Cone { k: 1.1 },
+        "biweight" | "simpson" => Kernel::Biweight,
+        "epanechnikov" => Kernel::Epanechnikov,
+        _ => return None,
+    })
+}
+
+/// Pass 1's products, as pass 2 reads them.
+pub struct PhotonPass {
+    pub maps: PhotonMaps,
+    /// Precomputed irradiance at a subset of the global photons: `power` holds the
+    /// irradiance, `dir` the surface normal.
+    pub cache: Option<PhotonMap>,
+    pub settings: PhotonSettings,
+    global_params: EstimateParams,
+    caustic_params: EstimateParams,
+    pub cache_seconds: f64,
+    /// Components skipped because the scene cannot produce them, for the statistics.
+    pub skipped: Vec<&'static str>,
+}
+
+/// Which maps the scene needs: (global, caustic).
+pub fn needed_maps(scene: &Scene) -> (bool, bool) {
+    let bsdfs: Vec<Bsdf> = scene
+        .meshes
+        .iter()
+        .map(|m| Bsdf::from_material(&scene.materials[m.material as usize]))
+        .collect();
+    let any_diffuse = bsdfs
+        .iter()
+        .any(|b| b.is_diffuse() && b.reflectance_estimate().max_element() > 0.0);
+    let any_specular = bsdfs.iter().any(|b| b.is_specular());
+    let lights = !scene.lights.is_empty();
+    (lights && any_diffuse, lights && any_diffuse && any_specular)
+}
+
+/// Runs pass 1 (and the irradiance precomputation) for `scene`.
+pub fn prepare(
+    scene: &Scene,
+    accel: &Accel,
+    lights: &Lights,
+    settings: &PhotonSettings,
+) -> PhotonPass {
+    let mut s = settings.clone();
+    let (need_global, need_caustic) = needed_maps(scene);
+    let mut skipped = Vec::new();
+    if !need_global {
+        s.trace.global_photons = 0;
+        skipped.push("global map (no lit diffuse surface)");
+    }
+    if !need_caustic {
+        s.trace.caustic_photons = 0;
+        skipped.push("caustic map and projection maps (no specular surface)");
+    }
+    let maps = trace::trace(scene, accel, lights, &s.trace);
+    let (_, radius) = lights.scene_sphere();
+    let mut global_params =
+        EstimateParams::new(s.global_lookup.max(1), (s.global_radius * radius).powi(2));
+    global_params.kernel = s.kernel;
+    let mut caustic_params =
+        EstimateParams::new(s.caustic_lookup.max(1), (s.caustic_radius * radius).powi(2));
+    caustic_params.kernel = s.kernel;
+    let t = Instant::now();
+    let cache = if s.irradiance_cache && s.final_gather {
+        build_cache(&maps, &global_params)
+    } else {
+        None
+    };
+    PhotonPass {
+        maps,
+        cache,
+        settings: s,
+        global_params,
+        caustic_params,
+        cache_seconds: t.elapsed().as_secs_f64(),
+        skipped,
+    }
+}
+
+/// Every `CACHE_SPACING`-th global photon gets a precomputed irradiance.
+const CACHE_SPACING: usize = 4;
+
+/// Christensen's precomputation: irradiance (all photons) at a subset of photon positions.
+fn build_cache(maps: &PhotonMaps, params: &EstimateParams) -> Option<PhotonMap> {
+    let global = maps.global.as_ref()?;
+    let photons = global.photons();
+    let points: Vec<Photon> = (0..photons.len())
+        .into_par_iter()
+        .step_by(CACHE_SPACING)
+        .map_init(KnnResult::new, |buf, i| {
+            let p = photons[i].pos();
+            let n = maps.global_normals[i];
+            let (e, _, _) = irradiance_with(global, p, n, params, buf);
+            Photon::new(p, e, n, 0)
+        })
+        .collect();
+    PhotonMap::new(&points).ok()
+}
+
+/// A gather ray in flight and what its radiance is worth to its pixel.
+pub struct Gather {
+    pub pixel: usize,
+    pub ray: Ray,
+    pub weight: Vec3,
+    /// Counts towards the `indirect` component (else `specular`: seen through a bounce).
+    pub primary: bool,
+    pub sampler: Sampler,
+}
+
+/// What a visible diffuse point gets from the photon maps now (caustic, and indirect when not
+/// gathering), plus the gather rays it asks for.
+pub struct DiffusePhotons {
+    pub caustic: Vec3,
+    pub indirect: Vec3,
+}
+
+/// Dimensions of the sampler used per gather ray.
+pub const GATHER_DIMS: u32 = 2;
+
+/// Photon-map radiance at a diffuse point `p` (unit normal `n` facing the viewer, diffuse
+/// BRDF value `f_d`), and its gather rays pushed to `gathers` with throughput `beta`.
+#[allow(clippy::too_many_arguments)]
+pub fn at_diffuse(
+    pass: &PhotonPass,
+    p: Vec3,
+    n: Vec3,
+    f_d: Vec3,
+    beta: Vec3,
+    pixel: usize,
+    primary: bool,
+    sampler: &mut Sampler,
+    buf: &mut KnnResult,
+    gathers: &mut Vec<Gather>,
+) -> DiffusePhotons {
+    let mut out = DiffusePhotons {
+        caustic: Vec3::ZERO,
+        indirect: Vec3::ZERO,
+    };
+    if let Some(caustic) = &pass.maps.caustic {
+        let (e, _, _) = irradiance_with(caustic, p, n, &pass.caustic_params, buf);
+        out.caustic = beta * f_d * e;
+    }
+    let Some(global) = &pass.maps.global else {
+        return out;
+    };
+    if !pass.settings.final_gather {
+        let (e, _, _) = indirect_only(global, p, n, &pass.global_params, buf);
+        out.indirect = beta * f_d * e;
+        return out;
+    }
+    // Final gathering: stratified cosine-weighted directions; f cos / pdf = f_d pi.
+    let g = pass.settings.gather_samples.max(1);
+    let (nx, ny) = strata(g);
+    let frame = Frame::from_normal(n);
+    let weight = beta * f_d * (std::f32::consts::PI / g as f32);
+    let o = offset_ray_origin(p, n);
+    for k in 0..g {
+        let j = sampler.next_2d();
+        let u = Vec2::new(
+            ((k % nx) as f32 + j.x) / nx as f32,
+            ((k / nx) as f32 + j.y) / ny as f32,
+        );
+        let d = frame.to_world(crate::sampling::warp::square_to_cosine_hemisphere(u));
+        let gs = Sampler::new(
+            Pattern::Independent,
+            sampler_key(sampler),
+            pixel as u64,
+            k,
+            g,
+        );
+        gathers.push(Gather {
+            pixel,
+            ray: Ray::new(o, d),
+            weight,
+            primary,
+            sampler: gs,
+        });
+    }
+    out
+}
+
+fn sampler_key(s: &mut Sampler) -> u64 {
+    (s.next_1d().to_bits() as u64) << 32 | s.next_1d().to_bits() as u64
+}
+
+/// Irradiance from the global map's photons that took at least one diffuse bounce (no direct,
+/// no caustic photons): what the direct look at the global map adds to shadow rays and the
+/// caustic map.
+fn indirect_only(
+    map: &PhotonMap,
+    p: Vec3,
+    n: Vec3,
+    params: &EstimateParams,
+    buf: &mut KnnResult,
+) -> (Vec3, usize, f32) {
+    // The estimate filters by side and disc; the flags are filtered by scaling: photons with
+    // flags contribute zero power.
+    let f = params.disc_fraction;
+    let stretch = if f > 0.0 && f < 1.0 {
+        1.0 / (f * f) - 1.0
+    } else {
+        0.0
+    };
+    map.knn_by(p, params.k, params.max_r2, buf, |ph, off, d2| {
+        if ph.flags() != 0 || !ph.arrives_against(n) {
+            return None;
+        }
+        let h = off.dot(n);
+        Some(d2 + stretch * h * h)
+    });
+    let r2 = buf.r2();
+    let skip = usize::from(buf.is_full());
+    let used = buf.len().saturating_sub(skip);
+    if used < params.min_photons {
+        return (Vec3::ZERO, used, r2);
+    }
+    let mut e = Vec3::ZERO;
+    for nb in &buf.neighbors()[skip..] {
+        e += map.photon(nb.idx).power() * params.kernel.weight(nb.d2, r2);
+    }
+    (e, used, r2)
+}
+
+/// Most specular bounces a gather ray follows to reach a diffuse surface.
+const GATHER_SPECULAR_BOUNCES: u32 = 4;
+
+/// Radiance arriving along a gather ray that hit `hit`: the reflected radiance of the first
+/// diffuse surface it reaches (through at most a few specular/glossy bounces), from the
+/// irradiance cache or the global map. Emitters count zero: direct light and caustics are
+/// already accounted for.
+pub fn gather_radiance(
+    ctx: &RenderContext,
+    pass: &PhotonPass,
+    g: &mut Gather,
+    hit: Option<Hit>,
+    buf: &mut KnnResult,
+) -> Vec3 {
+    let scene = ctx.scene;
+    let Some(global) = &pass.maps.global else {
+        return Vec3::ZERO;
+    };
+    let mut hit = hit;
+    let mut ray = g.ray;
+    let mut throughput = Vec3::ONE;
+    for _ in 0..=GATHER_SPECULAR_BOUNCES {
+        let Some(h) = hit else { return Vec3::ZERO };
+        let mesh = &scene.meshes[h.mesh as usize];
+        let bsdf = Bsdf::from_material(&scene.materials[mesh.material as usize]);
+        let p = ray.at(h.t);
+        let ng = mesh.geometric_normal(h.prim, h.u, h.v);
+        let ns = mesh.shading_normal(h.prim, h.u, h.v).unwrap_or(ng);
+        let frame = Frame::from_normal(ns);
+        let wo = frame.to_local(-ray.d.normalize());
+        if bsdf.is_diffuse() {
+            let n = if wo.z >= 0.0 { ns } else { -ns };
+            let f_d = bsdf.f(
+                wo,
+                Vec3::new(0.0, 0.0, wo.z.signum()),
+                TransportMode::Radiance,
+            );
+            let e = cached_irradiance(pass, global, p, n, buf);
+            return throughput * f_d * e;
+        }
+        // Specular or glossy: follow one sampled direction.
+        let Some(bs) = bsdf.sample(
+            wo,
+            g.sampler.next_1d(),
+            g.sampler.next_2d(),
+            TransportMode::Radiance,
+        ) else {
+            return Vec3::ZERO;
+        };
+        throughput *= bs.f * (bs.wi.z.abs() / bs.pdf);
+        let wi = frame.to_world(bs.wi);
+        ray = Ray::new(
+            offset_ray_origin(p, if ng.dot(wi) >= 0.0 { ng } else { -ng }),
+            wi,
+        );
+        hit = ctx.accel.intersect(&ray);
+        ctx.counters
+            .secondary_rays
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    }
+    Vec3::ZERO
+}
+
+/// Irradiance at `p` (normal `n`): the nearest cached value whose normal agrees, else a
+/// full global-map estimate.
+fn cached_irradiance(
+    pass: &PhotonPass,
+    global: &PhotonMap,
+    p: Vec3,
+    n: Vec3,
+    buf: &mut KnnResult,
+) -> Vec3 {
+    if let Some(cache) = &pass.cache {
+        cache.knn_by(p, 1, pass.global_params.max_r2, buf, |ph, _, d2| {
+            (ph.dir().dot(n) > 0.9).then_some(d2)
+        });
+        if let Some(nb) = buf.neighbors().first() {
+            return cache.photon(nb.idx).power();
+        }
+    }
+    irradiance_with(global, p, n, &pass.global_params, buf).0
+}
+
+/// The pass-1 statistics as printed lines.
+pub fn describe(pass: &PhotonPass) -> Vec<String> {
+    let st = &pass.maps.stats;
+    let bytes = std::mem::size_of::<Photon>();
+    let mut lines = vec![format!(
+        "photons: global {} emitted -> {} stored; caustic {} emitted -> {} stored; {} bytes/photon; traced in {:.3} s ({:.2} Mphotons/s), kd-trees built in {:.3} s",
+        st.global_emitted,
+        st.global_stored,
+        st.caustic_emitted,
+        st.caustic_stored,
+        bytes,
+        st.trace_seconds,
+        (st.global_emitted + st.caustic_emitted) as f64 / st.trace_seconds.max(1e-9) / 1e6,
+        st.build_seconds
+    )];
+    if st.caustic_emitted > 0 {
+        lines.push(format!(
+            "caustic efficiency: {:.1}% of caustic photons reach a specular surface ({:.1}% without projection maps); marked fraction per light {:?}",
+            100.0 * st.caustic_efficiency,
+            100.0 * st.caustic_efficiency_unrestricted,
+            st.marked_fraction.iter().map(|f| (f * 1000.0).round() / 1000.0).collect::<Vec<_>>()
+        ));
+    }
+    if let Some(c) = &pass.cache {
+        lines.push(format!(
+            "irradiance cache: {} points in {:.3} s",
+            c.len(),
+            pass.cache_seconds
+        ));
+    }
+    for s in &pass.skipped {
+        lines.push(format!("skipped: {s}"));
+    }
+    lines
+}

@@ -1,0 +1,419 @@
+//! Pass 1: shooting photons from the lights and storing them in the global and caustic maps.
+//!
+//! - **Emission**: photons are divided among lights in proportion to power; each photon's
+//!   origin and direction come from a stratified (or N-rooks) 2D pattern over that light's
+//!   photons, and every random number is keyed by (seed, map, light, photon index), so the maps
+//!   do not depend on thread count.
+//! - **Scattering with RGB roulette**: at each hit the BSDF is sampled in importance mode and
+//!   gives the per-channel weight `w = f |cos| / pdf` (the reflectance: `rho` for diffuse,
+//!   Fresnel `F` for conductors, 1 for glass, whose reflect-or-refract choice is made by the
+//!   exact Fresnel term). The photon survives with probability `q = min(1, mean(w))` and its
+//!   power becomes `power * w / q`: Jensen's Russian roulette (fewer photons of unchanged
+//!   power) and, per channel, RGB roulette (`rho_c / rho_avg`). The power already carries the
+//!   cosine; it is never multiplied in again.
+//! - **Storage**, only at diffuse surfaces: the global map keeps every diffuse hit, flagged
+//!   `DIRECT` when it came straight from the light and `CAUSTIC` after specular bounces only,
+//!   so that estimates can leave out what shadow rays and the caustic map already give; the
+//!   caustic map keeps light -> specular+ -> diffuse paths, shot with projection maps.
+//! - Photons trapped by total internal reflection end at `max_bounces`.
+use super::projection::ProjectionMap;
+use super::{Photon, PhotonMap};
+use crate::accel::{Accel, RayQuery};
+use crate::bsdf::{Bsdf, TransportMode};
+use crate::light::{bounding_sphere, Lights};
+use crate::math::{offset_ray_origin, Frame, Ray, Vec3};
+use crate::sampling::{hash, Pattern, Sampler};
+use crate::scene::Scene;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// Photons traced per parallel work item.
+const CHUNK: u64 = 4096;
+
+/// Settings of pass 1.
+#[derive(Clone, Debug)]
+pub struct TraceSettings {
+    /// Photons emitted for the global map (0: no global map).
+    pub global_photons: u64,
+    /// Photons emitted for the caustic map (0: no caustic map).
+    pub caustic_photons: u64,
+    pub max_bounces: u32,
+    pub projection_maps: bool,
+    pub projection_resolution: u32,
+    pub seed: u64,
+    pub pattern: Pattern,
+}
+
+/// Which map a photon is shot for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MapKind {
+    Global,
+    Caustic,
+}
+
+/// What pass 1 measured.
+#[derive(Clone, Debug, Default)]
+pub struct TraceStats {
+    pub global_emitted: u64,
+    pub global_stored: usize,
+    pub caustic_emitted: u64,
+    pub caustic_stored: usize,
+    /// Caustic photons whose first hit was specular / caustic photons emitted.
+    pub caustic_efficiency: f64,
+    /// The same for photons emitted over the whole domain (as without projection maps).
+    pub caustic_efficiency_unrestricted: f64,
+    /// Per light: fraction of the emission domain marked by its projection map.
+    pub marked_fraction: Vec<f32>,
+    pub rays: u64,
+    pub trace_seconds: f64,
+    pub build_seconds: f64,
+}
+
+/// The maps of pass 1 (absent when the scene does not need them or no photon was stored).
+pub struct PhotonMaps {
+    pub global: Option<PhotonMap>,
+    /// Surface normals (facing the side the photon arrived from) of the global map's photons,
+    /// in `global`'s tree order; used to precompute irradiance.
+    pub global_normals: Vec<Vec3>,
+    pub caustic: Option<PhotonMap>,
+    pub stats: TraceStats,
+}
+
+/// A stored photon and the normal of the surface it landed on.
+struct Landing {
+    photon: Photon,
+    normal: Vec3,
+}
+
+/// The bounding spheres of all specular objects: the targets of the caustic projection maps.
+pub fn specular_targets(scene: &Scene) -> Vec<(Vec3, f32)> {
+    scene
+        .meshes
+        .iter()
+        .filter(|m| Bsdf::from_material(&scene.materials[m.material as usize]).is_specular())
+        .map(|m| m.sphere.unwrap_or_else(|| bounding_sphere(&m.positions)))
+        .collect()
+}
+
+/// Splits `total` photons among lights in proportion to `powers` (largest remainders get the
+/// leftovers, deterministic).
+pub fn allocate(total: u64, powers: &[f32]) -> Vec<u64> {
+    let sum: f64 = powers.iter().map(|&p| p.max(0.0) as f64).sum();
+    if sum <= 0.0 {
+        return vec![0; powers.len()];
+    }
+    let exact: Vec<f64> = powers
+        .iter()
+        .map(|&p| total as f64 * p.max(0.0) as f64 / sum)
+        .collect();
+    let mut counts: Vec<u64> = exact.iter().map(|e| e.floor() as u64).collect();
+    let mut order: Vec<usize> = (0..powers.len()).collect();
+    order.sort_by(|&a, &b| (exact[b] - exact[b].floor()).total_cmp(&(exact[a] - exact[a].floor())));
+    let left = total - counts.iter().sum::<u64>();
+    for &i in order.iter().take(left as usize) {
+        counts[i] += 1;
+    }
+    counts
+}
+
+/// Shoots both maps' photons and builds their kd-trees.
+pub fn trace(scene: &Scene, accel: &Accel, lights: &Lights, s: &TraceSettings) -> PhotonMaps {
+    let start = Instant::now();
+    let mut stats = TraceStats::default();
+    let powers = lights.powers(scene);
+    let targets = specular_targets(scene);
+    let global = if s.global_photons > 0 {
+        let counts = allocate(s.global_photons, &powers);
+        stats.global_emitted = counts.iter().sum();
+        let full: Vec<ProjectionMap> = (0..powers.len())
+            .map(|i| ProjectionMap::full(lights.emission_domain(scene, i)))
+            .collect();
+        let (l, _, rays) = shoot(
+            scene,
+            accel,
+            lights,
+            s,
+            MapKind::Global,
+            &counts,
+            &full,
+            &targets,
+        );
+        stats.rays += rays;
+        l
+    } else {
+        Vec::new()
+    };
+    let caustic = if s.caustic_photons > 0 && !targets.is_empty() {
+        let counts = allocate(s.caustic_photons, &powers);
+        stats.caustic_emitted = counts.iter().sum();
+        let maps: Vec<ProjectionMap> = (0..powers.len())
+            .map(|i| {
+                if s.projection_maps {
+                    ProjectionMap::build(scene, lights, i, &targets, s.projection_resolution)
+                } else {
+                    ProjectionMap::full(lights.emission_domain(scene, i))
+                }
+            })
+            .collect();
+        stats.marked_fraction = maps.iter().map(|m| m.fraction()).collect();
+        let (l, first_specular, rays) = shoot(
+            scene,
+            accel,
+            lights,
+            s,
+            MapKind::Caustic,
+            &counts,
+            &maps,
+            &targets,
+        );
+        stats.rays += rays;
+        stats.caustic_efficiency = first_specular as f64 / stats.caustic_emitted.max(1) as f64;
+        stats.caustic_efficiency_unrestricted =
+            unrestricted_efficiency(scene, accel, lights, s, &powers);
+        l
+    } else {
+        Vec::new()
+    };
+    stats.trace_seconds = start.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    stats.global_stored = global.len();
+    stats.caustic_stored = caustic.len();
+    let (global_map, global_normals) = build_map(global);
+    let (caustic_map, _) = build_map(caustic);
+    stats.build_seconds = t.elapsed().as_secs_f64();
+    PhotonMaps {
+        global: global_map,
+        global_normals,
+        caustic: caustic_map,
+        stats,
+    }
+}
+
+/// Builds a map (and the normals in its order) from landed photons; `None` when empty.
+fn build_map(landings: Vec<Landing>) -> (Option<PhotonMap>, Vec<Vec3>) {
+    if landings.is_empty() {
+        return (None, Vec::new());
+    }
+    let photons: Vec<Photon> = landings.iter().map(|l| l.photon).collect();
+    match PhotonMap::new(&photons) {
+        Ok(map) => {
+            let normals = map
+                .order()
+                .iter()
+                .map(|&i| landings[i as usize].normal)
+                .collect();
+            (Some(map), normals)
+        }
+        Err(_) => (None, Vec::new()),
+    }
+}
+
+/// Traces `counts[i]` photons from each light `i` in parallel chunks, concatenated in a fixed
+/// order. Returns the landings, how many photons hit a specular surface first, and rays cast.
+#[allow(clippy::too_many_arguments)]
+fn shoot(
+    scene: &Scene,
+    accel: &Accel,
+    lights: &Lights,
+    s: &TraceSettings,
+    kind: MapKind,
+    counts: &[u64],
+    maps: &[ProjectionMap],
+    targets: &[(Vec3, f32)],
+) -> (Vec<Landing>, u64, u64) {
+    let work: Vec<(usize, u64, u64)> = counts
+        .iter()
+        .enumerate()
+        .flat_map(|(i, &n)| {
+            (0..n.div_ceil(CHUNK)).map(move |c| (i, c * CHUNK, ((c + 1) * CHUNK).min(n)))
+        })
+        .collect();
+    let bsdfs: Vec<Bsdf> = scene.materials.iter().map(Bsdf::from_material).collect();
+    let parts: Vec<(Vec<Landing>, u64, u64)> = work
+        .par_iter()
+        .map(|&(light, lo, hi)| {
+            let mut out = Vec::new();
+            let (mut first_specular, mut rays) = (0u64, 0u64);
+            let map = &maps[light];
+            let n = counts[light];
+            for j in lo..hi {
+                let domain = hash(&[kind as u64, light as u64]);
+                let mut sampler = Sampler::new(s.pattern, s.seed, domain, j as u32, n as u32);
+                let t = trace_one(
+                    scene,
+                    accel,
+                    lights,
+                    &bsdfs,
+                    s,
+                    kind,
+                    light,
+                    n,
+                    map,
+                    targets,
+                    &mut sampler,
+                    &mut out,
+                );
+                first_specular += t.0 as u64;
+                rays += t.1;
+            }
+            (out, first_specular, rays)
+        })
+        .collect();
+    let mut all = Vec::with_capacity(parts.iter().map(|p| p.0.len()).sum());
+    let (mut fs, mut rays) = (0, 0);
+    for (p, f, r) in parts {
+        all.extend(p);
+        fs += f;
+        rays += r;
+    }
+    (all, fs, rays)
+}
+
+/// Traces one photon; returns (first hit was specular, rays cast).
+#[allow(clippy::too_many_arguments)]
+fn trace_one(
+    scene: &Scene,
+    accel: &Accel,
+    lights: &Lights,
+    bsdfs: &[Bsdf],
+    s: &TraceSettings,
+    kind: MapKind,
+    light: usize,
+    count: u64,
+    map: &ProjectionMap,
+    targets: &[(Vec3, f32)],
+    sampler: &mut Sampler,
+    out: &mut Vec<Landing>,
+) -> (bool, u64) {
+    // Emission: the projection map restricts one of the two 2D samples.
+    let (mut u_pos, mut u_dir) = (sampler.next_2d(), sampler.next_2d());
+    let restricted = match map.domain {
+        crate::light::EmissionDomain::Direction => &mut u_dir,
+        crate::light::EmissionDomain::Position => &mut u_pos,
+    };
+    let Some(u) = map.sample(*restricted) else {
+        return (false, 0);
+    };
+    *restricted = u;
+    let Some(e) = lights.emit(scene, light, u_pos, u_dir) else {
+        return (false, 0);
+    };
+    let mut power = e.flux * (map.fraction() / count as f32);
+    if kind == MapKind::Caustic
+        && !targets
+            .iter()
+            .any(|&(c, r)| ray_meets_sphere(e.p, e.dir, c, r))
+    {
+        return (false, 0); // rejected: cannot reach a specular object
+    }
+    let o = if e.n == Vec3::ZERO {
+        e.p
+    } else {
+        offset_ray_origin(e.p, e.n)
+    };
+    let mut ray = Ray::new(o, e.dir);
+    let mut rays = 0;
+    let mut specular_only = true;
+    let mut first_specular = false;
+    for bounce in 0..s.max_bounces {
+        rays += 1;
+        let Some(hit) = accel.intersect(&ray) else {
+            break;
+        };
+        let mesh = &scene.meshes[hit.mesh as usize];
+        let bsdf = &bsdfs[mesh.material as usize];
+        if bounce == 0 {
+            first_specular = bsdf.is_specular();
+        }
+        let p = ray.at(hit.t);
+        let ng = mesh.geometric_normal(hit.prim, hit.u, hit.v);
+        let dir = ray.d.normalize();
+        let facing = if ng.dot(dir) < 0.0 { ng } else { -ng };
+        if bsdf.is_diffuse() {
+            let store = match kind {
+                MapKind::Global => true,
+                MapKind::Caustic => specular_only && bounce > 0,
+            };
+            if store && power.max_element() > 0.0 {
+                let flags = match (bounce, specular_only) {
+                    (0, _) => Photon::DIRECT,
+                    (_, true) => Photon::CAUSTIC,
+                    _ => 0,
+                };
+                out.push(Landing {
+                    photon: Photon::new(p, power, dir, flags),
+                    normal: facing,
+                });
+            }
+        }
+        if kind == MapKind::Caustic && !bsdf.is_specular() {
+            break; // a caustic path ends at its first non-specular surface
+        }
+        // Scatter: sample the BSDF, then Russian + RGB roulette on its weight.
+        let ns = mesh.shading_normal(hit.prim, hit.u, hit.v).unwrap_or(ng);
+        let frame = Frame::from_normal(ns);
+        let wo = frame.to_local(-dir);
+        let uc = sampler.next_1d();
+        let u2 = sampler.next_2d();
+        let u_rr = sampler.next_1d();
+        let Some(bs) = bsdf.sample(wo, uc, u2, TransportMode::Importance) else {
+            break;
+        };
+        let w = bs.f * (bs.wi.z.abs() / bs.pdf);
+        let q = ((w.x + w.y + w.z) / 3.0).min(1.0);
+        if !(q > 0.0) || u_rr >= q {
+            break;
+        }
+        power *= w / q;
+        specular_only &= bs.specular;
+        let wi = frame.to_world(bs.wi);
+        let off = if ng.dot(wi) >= 0.0 { ng } else { -ng };
+        ray = Ray::new(offset_ray_origin(p, off), wi);
+    }
+    (first_specular, rays)
+}
+
+/// Whether the ray from `o` along unit `d` meets the sphere `(c, r)`.
+fn ray_meets_sphere(o: Vec3, d: Vec3, c: Vec3, r: f32) -> bool {
+    let v = c - o;
+    if v.length_squared() <= r * r {
+        return true;
+    }
+    let along = v.dot(d);
+    along > 0.0 && (v - d * along).length_squared() <= r * r
+}
+
+/// Fraction of photons emitted over the whole domain whose first hit is specular (what the
+/// caustic pass would achieve without projection maps), from up to 20k photons.
+fn unrestricted_efficiency(
+    scene: &Scene,
+    accel: &Accel,
+    lights: &Lights,
+    s: &TraceSettings,
+    powers: &[f32],
+) -> f64 {
+    let counts = allocate(s.caustic_photons.min(20_000), powers);
+    let bsdfs: Vec<Bsdf> = scene.materials.iter().map(Bsdf::from_material).collect();
+    let (mut hits, mut total) = (0u64, 0u64);
+    for (i, &n) in counts.iter().enumerate() {
+        for j in 0..n {
+            total += 1;
+            let mut sampler =
+                Sampler::new(s.pattern, s.seed ^ 0x5eed, i as u64, j as u32, n as u32);
+            let (u_pos, u_dir) = (sampler.next_2d(), sampler.next_2d());
+            let Some(e) = lights.emit(scene, i, u_pos, u_dir) else {
+                continue;
+            };
+            let o = if e.n == Vec3::ZERO {
+                e.p
+            } else {
+                offset_ray_origin(e.p, e.n)
+            };
+            if let Some(h) = accel.intersect(&Ray::new(o, e.dir)) {
+                hits += bsdfs[scene.meshes[h.mesh as usize].material as usize].is_specular() as u64;
+            }
+        }
+    }
+    hits as f64 / total.max(1) as f64
+}
