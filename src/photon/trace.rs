@@ -362,7 +362,7 @@ fn trace_one(
         };
         let w = bs.f * (bs.wi.z.abs() / bs.pdf);
         let q = ((w.x + w.y + w.z) / 3.0).min(1.0);
-        if !(q > 0.0) || u_rr >= q {
+        if q.is_nan() || q <= 0.0 || u_rr >= q {
             break;
         }
         power *= w / q;
