@@ -184,6 +184,12 @@ fn shade(
     path.sampler
         .set_dimension(CAMERA_DIMS + path.depth * dims_per_vertex(ls));
 
+    // Gather rays double as BSDF samples for direct light at diffuse points.
+    let gather_n = match &ctx.photons {
+        Some(pass) if bsdf.is_diffuse() => photonmap::gather_count(pass),
+        _ => 0,
+    };
+
     // Direct light by shadow rays.
     if !bsdf.is_specular() && !ctx.lights.is_empty() {
         for _ in 0..ls {
@@ -197,10 +203,16 @@ fn shade(
             if f.max_element() <= 0.0 {
                 continue;
             }
-            let w = if s.delta || !bsdf.is_glossy() {
+            // MIS against BSDF sampling: one continuation ray on glossy surfaces, the final
+            // gather's cosine-distributed rays on diffuse ones (multi-sample power heuristic).
+            let w = if s.delta {
                 1.0
-            } else {
+            } else if bsdf.is_glossy() {
                 power_heuristic(s.pdf, bsdf.pdf(wo, wi))
+            } else if gather_n > 0 {
+                power_heuristic(ls as f32 * s.pdf, gather_n as f32 * bsdf.pdf(wo, wi))
+            } else {
+                1.0
             };
             let contrib = path.beta * f * s.li * (w / (s.pdf * ls as f32));
             let o = offset_ray_origin(p, if ng.dot(s.wi) >= 0.0 { ng } else { -ng });
@@ -237,6 +249,7 @@ fn shade(
             .set_dimension(CAMERA_DIMS + path.depth * dims_per_vertex(ls) + 3 * ls);
         let got = photonmap::at_diffuse(
             pass,
+            ls,
             p,
             n,
             f_d,
@@ -326,11 +339,13 @@ fn trace_gathers(ctx: &RenderContext, g: &mut Gathers, acc: &mut [Radiance]) {
         .secondary_rays
         .fetch_add(g.rays.len() as u64, Ordering::Relaxed);
     for (gather, hit) in g.pending.iter_mut().zip(g.hits.iter()) {
-        let l = gather.weight * photonmap::gather_radiance(ctx, pass, gather, *hit, &mut g.buf);
+        let (direct, indirect) = photonmap::gather_radiance(ctx, pass, gather, *hit, &mut g.buf);
+        let (direct, indirect) = (gather.weight * direct, gather.weight * indirect);
         if gather.primary {
-            acc[gather.pixel].indirect += l;
+            acc[gather.pixel].direct += direct;
+            acc[gather.pixel].indirect += indirect;
         } else {
-            acc[gather.pixel].specular += l;
+            acc[gather.pixel].specular += direct + indirect;
         }
     }
     g.pending.clear();

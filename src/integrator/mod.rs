@@ -8,6 +8,7 @@
 //! (default: the direct-lighting + specular ray tracer until the photon mapper lands); the
 //! statistics say which. Parameters the chosen integrator does not read are errors.
 pub mod direct;
+pub mod path;
 pub mod photonmap;
 
 use crate::accel::Accel;
@@ -34,6 +35,9 @@ pub enum IntegratorKind {
     /// Direct light by shadow rays (MIS for glossy surfaces) plus recursive specular and
     /// glossy reflection/refraction; no diffuse interreflection.
     Direct,
+    /// Reference path tracer: unbiased, next-event estimation with power-heuristic MIS,
+    /// Russian roulette after 3 bounces (`direct` and `indirect` components).
+    Path,
 }
 
 /// Everything a render needs besides the scene.
@@ -166,6 +170,7 @@ pub fn render(
                 IntegratorKind::Direct | IntegratorKind::Photonmap => {
                     direct::render_tile(&ctx, x0, y0, x1, y1)
                 }
+                IntegratorKind::Path => path::render_tile(&ctx, x0, y0, x1, y1),
             };
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
             ((x0, y0), px)

@@ -211,11 +211,25 @@ fn build_cache(maps: &PhotonMaps, params: &EstimateParams) -> Option<PhotonMap> 
     PhotonMap::new(&points).ok()
 }
 
+/// Gather rays per diffuse point (0 when not gathering): they also serve as the BSDF-sampling
+/// strategy of direct lighting there.
+pub fn gather_count(pass: &PhotonPass) -> u32 {
+    if pass.settings.final_gather && pass.maps.global.is_some() {
+        pass.settings.gather_samples.max(1)
+    } else {
+        0
+    }
+}
+
 /// A gather ray in flight and what its radiance is worth to its pixel.
 pub struct Gather {
     pub pixel: usize,
     pub ray: Ray,
     pub weight: Vec3,
+    /// Cosine-hemisphere density of the ray's direction (for MIS with shadow rays).
+    pub pdf: f32,
+    /// Shadow rays taken at the gather's origin (for MIS).
+    pub light_samples: u32,
     /// Counts towards the `indirect` component (else `specular`: seen through a bounce).
     pub primary: bool,
     pub sampler: Sampler,
@@ -236,6 +250,7 @@ pub const GATHER_DIMS: u32 = 2;
 #[allow(clippy::too_many_arguments)]
 pub fn at_diffuse(
     pass: &PhotonPass,
+    light_samples: u32,
     p: Vec3,
     n: Vec3,
     f_d: Vec3,
@@ -274,7 +289,9 @@ pub fn at_diffuse(
             ((k % nx) as f32 + j.x) / nx as f32,
             ((k / nx) as f32 + j.y) / ny as f32,
         );
-        let d = frame.to_world(crate::sampling::warp::square_to_cosine_hemisphere(u));
+        let local = crate::sampling::warp::square_to_cosine_hemisphere(u);
+        let d = frame.to_world(local);
+        let pdf = local.z / std::f32::consts::PI;
         let gs = Sampler::new(
             Pattern::Independent,
             sampler_key(sampler),
@@ -286,6 +303,8 @@ pub fn at_diffuse(
             pixel,
             ray: Ray::new(o, d),
             weight,
+            pdf,
+            light_samples,
             primary,
             sampler: gs,
         });
@@ -338,21 +357,49 @@ fn indirect_only(
 /// Most specular bounces a gather ray follows to reach a diffuse surface.
 const GATHER_SPECULAR_BOUNCES: u32 = 4;
 
-/// Radiance arriving along a gather ray that hit `hit`: the reflected radiance of the first
-/// diffuse surface it reaches (through at most a few specular/glossy bounces), from the
-/// irradiance cache or the global map. Emitters count zero: direct light and caustics are
-/// already accounted for.
+/// Radiance arriving along a gather ray that hit `hit`, split as (direct, indirect): an
+/// emitter hit straight away is the BSDF-sampling half of direct lighting (MIS-weighted
+/// against the shadow rays); otherwise the reflected radiance of the first diffuse surface the
+/// ray reaches (through at most a few specular/glossy bounces), from the irradiance cache or
+/// the global map. Emitters reached through specular bounces count zero: the caustic map has
+/// that light.
 pub fn gather_radiance(
     ctx: &RenderContext,
     pass: &PhotonPass,
     g: &mut Gather,
     hit: Option<Hit>,
     buf: &mut KnnResult,
+) -> (Vec3, Vec3) {
+    let Some(global) = &pass.maps.global else {
+        return (Vec3::ZERO, Vec3::ZERO);
+    };
+    let mut direct = Vec3::ZERO;
+    if let Some(h) = hit {
+        let mesh = &ctx.scene.meshes[h.mesh as usize];
+        if let Some(li) = mesh.area_light {
+            let p = g.ray.at(h.t);
+            let ng = mesh.geometric_normal(h.prim, h.u, h.v);
+            let le = ctx.lights.le(li as usize, ng, -g.ray.d);
+            let light_pdf = ctx.lights.pdf_area(li as usize, g.ray.o, p, ng);
+            let n_g = pass.settings.gather_samples.max(1) as f32;
+            // The gather's weight holds 1/n_g; the heuristic's sample counts do the rest.
+            direct = le * super::power_heuristic(n_g * g.pdf, g.light_samples as f32 * light_pdf);
+        }
+    }
+    (direct, reflected(ctx, pass, global, g, hit, buf))
+}
+
+/// The reflected part of [`gather_radiance`]: what the first diffuse surface along the gather
+/// ray reflects towards its origin.
+fn reflected(
+    ctx: &RenderContext,
+    pass: &PhotonPass,
+    global: &PhotonMap,
+    g: &mut Gather,
+    hit: Option<Hit>,
+    buf: &mut KnnResult,
 ) -> Vec3 {
     let scene = ctx.scene;
-    let Some(global) = &pass.maps.global else {
-        return Vec3::ZERO;
-    };
     let mut hit = hit;
     let mut ray = g.ray;
     let mut throughput = Vec3::ONE;
