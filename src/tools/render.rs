@@ -61,6 +61,93 @@ pub struct RenderOptions {
     /// PNG exposure in stops.
     #[arg(long, default_value_t = 0.0)]
     pub exposure: f32,
+    #[command(flatten)]
+    pub photon: PhotonOverrides,
+}
+
+/// Command-line overrides of the photon mapper's `Integrator "photonmap"` parameters.
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct PhotonOverrides {
+    /// Photons emitted for the global map.
+    #[arg(long)]
+    pub global_photons: Option<u64>,
+    /// Photons emitted for the caustic map.
+    #[arg(long)]
+    pub caustic_photons: Option<u64>,
+    /// Photons per global-map lookup.
+    #[arg(long)]
+    pub global_lookup: Option<usize>,
+    /// Photons per caustic-map lookup.
+    #[arg(long)]
+    pub caustic_lookup: Option<usize>,
+    /// Largest global lookup radius, as a fraction of the scene's bounding radius.
+    #[arg(long)]
+    pub global_radius: Option<f32>,
+    /// Largest caustic lookup radius, as a fraction of the scene's bounding radius.
+    #[arg(long)]
+    pub caustic_radius: Option<f32>,
+    /// Radiance-estimate kernel: box, cone, biweight, epanechnikov.
+    #[arg(long)]
+    pub kernel: Option<String>,
+    /// Final-gather rays per visible diffuse point.
+    #[arg(long)]
+    pub gather_samples: Option<u32>,
+    /// Final gathering on or off (off shows the global map directly).
+    #[arg(long)]
+    pub final_gather: Option<bool>,
+    /// Christensen's precomputed irradiance for the gather lookups.
+    #[arg(long)]
+    pub irradiance_cache: Option<bool>,
+    /// Caustic projection maps on or off.
+    #[arg(long)]
+    pub projection_maps: Option<bool>,
+}
+
+impl PhotonOverrides {
+    /// Applies the overrides that were given.
+    pub fn apply(
+        &self,
+        s: &mut crate::integrator::photonmap::PhotonSettings,
+    ) -> Result<(), ToolError> {
+        if let Some(v) = self.global_photons {
+            s.trace.global_photons = v;
+        }
+        if let Some(v) = self.caustic_photons {
+            s.trace.caustic_photons = v;
+        }
+        if let Some(v) = self.global_lookup {
+            s.global_lookup = v;
+        }
+        if let Some(v) = self.caustic_lookup {
+            s.caustic_lookup = v;
+        }
+        if let Some(v) = self.global_radius {
+            s.global_radius = v;
+        }
+        if let Some(v) = self.caustic_radius {
+            s.caustic_radius = v;
+        }
+        if let Some(k) = &self.kernel {
+            s.kernel = crate::integrator::photonmap::parse_kernel(k).ok_or_else(|| {
+                ToolError(format!(
+                    "unknown kernel {k:?} (box, cone, biweight, epanechnikov)"
+                ))
+            })?;
+        }
+        if let Some(v) = self.gather_samples {
+            s.gather_samples = v;
+        }
+        if let Some(v) = self.final_gather {
+            s.final_gather = v;
+        }
+        if let Some(v) = self.irradiance_cache {
+            s.irradiance_cache = v;
+        }
+        if let Some(v) = self.projection_maps {
+            s.trace.projection_maps = v;
+        }
+        Ok(())
+    }
 }
 
 /// Where the EXR goes when `-o` is not given.
@@ -91,6 +178,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     settings.seed = opts.seed;
     settings.pattern = opts.pattern;
     settings.light_samples = opts.light_samples.max(1);
+    opts.photon.apply(&mut settings.photon)?;
     let exr = opts
         .output
         .clone()
