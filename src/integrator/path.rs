@@ -251,7 +251,7 @@ fn emitted(ctx: &RenderContext, path: &PathState, li: usize, p: Vec3, ng: Vec3) 
     }
     let w = if path.prev_pdf > 0.0 {
         let light_pdf = ctx.lights.pdf_area(li, path.prev_p, p, ng);
-        power_heuristic(path.prev_pdf, light_pdf).max(1.0)
+        power_heuristic(path.prev_pdf, light_pdf)
     } else {
         1.0
     };
@@ -274,7 +274,7 @@ fn light_sample(ctx: &RenderContext, path: &PathState, bsdf: &Bsdf, v: &Vertex) 
     let w = if s.delta {
         1.0
     } else {
-        power_heuristic(s.pdf, bsdf.pdf(v.wo, wi)).max(1.0)
+        power_heuristic(s.pdf, bsdf.pdf(v.wo, wi))
     };
     let contrib = path.beta * f * s.li * (w / s.pdf);
     if !contrib.is_finite() || contrib.max_element() <= 0.0 {
