@@ -10,7 +10,7 @@
 //! Components: light reaching the camera after at most one non-delta scattering event is
 //! `direct`; light arriving through further specular/glossy bounces is `specular`.
 use super::photonmap::{self, Gather};
-use super::{power_heuristic, tile_pixels, RenderContext};
+use super::{charge, power_heuristic, tile_pixels, RenderContext};
 use crate::accel::{Hit, RayQuery};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::film::Radiance;
@@ -18,6 +18,7 @@ use crate::math::{offset_ray_origin, Frame, Ray, Vec2, Vec3};
 use crate::photon::KnnResult;
 use crate::sampling::Sampler;
 use std::sync::atomic::Ordering;
+use std::time::Instant;
 
 /// Dimensions used by the camera sample (pixel filter offset).
 const CAMERA_DIMS: u32 = 2;
@@ -94,7 +95,9 @@ pub fn render_tile(ctx: &RenderContext, x0: u32, y0: u32, x1: u32, y1: u32) -> V
             rays.extend(paths.iter().map(|p| p.ray));
             hits.clear();
             hits.resize(rays.len(), None);
+            let t = Instant::now();
             ctx.accel.intersect_batch(&rays, &mut hits);
+            charge(&ctx.counters.ray_ns, t);
             shadows.clear();
             next.clear();
             for (path, hit) in paths.drain(..).zip(hits.iter()) {
@@ -249,6 +252,7 @@ fn shade(
             .set_dimension(CAMERA_DIMS + path.depth * dims_per_vertex(ls) + 3 * ls);
         let got = photonmap::at_diffuse(
             pass,
+            &ctx.counters.lookup_ns,
             ls,
             p,
             n,
@@ -313,7 +317,9 @@ fn trace_shadows(
     rays.extend(shadows.iter().map(|s| s.ray));
     occluded.clear();
     occluded.resize(rays.len(), false);
+    let t = Instant::now();
     ctx.accel.occluded_batch(rays, occluded);
+    charge(&ctx.counters.ray_ns, t);
     ctx.counters
         .shadow_rays
         .fetch_add(rays.len() as u64, Ordering::Relaxed);
@@ -334,7 +340,9 @@ fn trace_gathers(ctx: &RenderContext, g: &mut Gathers, acc: &mut [Radiance]) {
     g.rays.extend(g.pending.iter().map(|x| x.ray));
     g.hits.clear();
     g.hits.resize(g.rays.len(), None);
+    let t = Instant::now();
     ctx.accel.intersect_batch(&g.rays, &mut g.hits);
+    charge(&ctx.counters.ray_ns, t);
     ctx.counters
         .secondary_rays
         .fetch_add(g.rays.len() as u64, Ordering::Relaxed);

@@ -90,6 +90,16 @@ pub struct Counters {
     pub camera_rays: AtomicU64,
     pub secondary_rays: AtomicU64,
     pub shadow_rays: AtomicU64,
+    /// Thread-nanoseconds spent inside batched ray queries of the render loop.
+    pub ray_ns: AtomicU64,
+    /// Thread-nanoseconds spent in photon-map lookups (caustic estimates, gather lookups).
+    pub lookup_ns: AtomicU64,
+}
+
+/// Adds the time since `start` to `counter` (thread-nanoseconds).
+#[inline]
+pub fn charge(counter: &AtomicU64, start: Instant) {
+    counter.fetch_add(start.elapsed().as_nanos() as u64, Ordering::Relaxed);
 }
 
 impl Counters {
@@ -106,6 +116,9 @@ pub struct RenderOutput {
     /// `(name, image)` per component; they sum to `image`.
     pub components: Vec<(&'static str, RgbImage)>,
     pub seconds: f64,
+    /// Seconds of pass 1: photon tracing, and building the maps and the irradiance cache.
+    pub photon_seconds: f64,
+    pub map_build_seconds: f64,
     pub counters: Counters,
     /// Statistics lines of the integrator (photon counts, timings, skipped components).
     pub notes: Vec<String>,
@@ -145,6 +158,10 @@ pub fn render(
         .as_ref()
         .map(photonmap::describe)
         .unwrap_or_default();
+    let (photon_seconds, map_build_seconds) = photons.as_ref().map_or((0.0, 0.0), |p| {
+        let st = &p.maps.stats;
+        (st.trace_seconds, st.build_seconds + p.cache_seconds)
+    });
     let ctx = RenderContext {
         scene,
         accel,
@@ -205,6 +222,8 @@ pub fn render(
             ("indirect", indirect),
         ],
         seconds: start.elapsed().as_secs_f64(),
+        photon_seconds,
+        map_build_seconds,
         counters: ctx.counters,
         notes,
     }

@@ -58,6 +58,10 @@ pub struct RenderOptions {
     /// Write half floats instead of 32-bit floats.
     #[arg(long)]
     pub half: bool,
+    /// Split the wall time into ray queries, photon lookups, shading, photon tracing and map
+    /// building.
+    #[arg(long)]
+    pub stats: bool,
     /// PNG exposure in stops.
     #[arg(long, default_value_t = 0.0)]
     pub exposure: f32,
@@ -260,6 +264,9 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
             .shadow_rays
             .load(std::sync::atomic::Ordering::Relaxed),
     );
+    if opts.stats {
+        print_stats(&out, pool.current_num_threads());
+    }
     let bad = out.image.count_nonfinite();
     if bad > 0 {
         eprintln!("photon: warning: {bad} non-finite pixel values");
@@ -294,4 +301,38 @@ fn progress_bar() -> Option<ProgressBar> {
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     Some(bar)
+}
+
+/// The render-loop accounting of `--stats`. Ray-query and lookup times are summed over worker
+/// threads, so they are converted to wall-time shares of the render loop with the thread count.
+fn print_stats(out: &crate::integrator::RenderOutput, threads: usize) {
+    use std::sync::atomic::Ordering::Relaxed;
+    let c = &out.counters;
+    let loop_s = (out.seconds - out.photon_seconds - out.map_build_seconds).max(1e-9);
+    let thread_s = loop_s * threads.max(1) as f64;
+    let ray_s = c.ray_ns.load(Relaxed) as f64 * 1e-9;
+    let lookup_s = c.lookup_ns.load(Relaxed) as f64 * 1e-9;
+    let shading_s = (thread_s - ray_s - lookup_s).max(0.0);
+    let pct = |x: f64| 100.0 * x / thread_s;
+    println!(
+        "time split: photon tracing {:.3} s, map building {:.3} s, render loop {:.3} s x {} threads = ray queries {:.3} s ({:.1}%), photon lookups {:.3} s ({:.1}%), shading and sampling {:.3} s ({:.1}%)",
+        out.photon_seconds,
+        out.map_build_seconds,
+        loop_s,
+        threads,
+        ray_s,
+        pct(ray_s),
+        lookup_s,
+        pct(lookup_s),
+        shading_s,
+        pct(shading_s)
+    );
+    let rays = (c.camera_rays.load(Relaxed)
+        + c.secondary_rays.load(Relaxed)
+        + c.shadow_rays.load(Relaxed)) as f64;
+    println!(
+        "ray rate inside the render: {:.2} Mrays/s per thread while querying, {:.2} Mrays/s of render-loop wall time",
+        rays / ray_s.max(1e-9) / 1e6,
+        rays / loop_s / 1e6
+    );
 }
