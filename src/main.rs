@@ -2,6 +2,7 @@
 //! is one function in `photon::tools`.
 use clap::{Parser, Subcommand};
 use photon::tools::compare::{self, CompareOptions};
+use photon::tools::converge::{self, ConvergeOptions};
 use photon::tools::render::{self, RenderOptions};
 use std::process::ExitCode;
 
@@ -23,6 +24,9 @@ enum Command {
     /// Compare an EXR with a reference: relMSE, RMSE, MAE, max error, PSNR (exit 1 above
     /// --max-relmse).
     Compare(CompareOptions),
+    /// Error against time: each integrator and a few photon-map settings at a series of time
+    /// budgets; writes a CSV and a log-log plot.
+    Converge(ConvergeOptions),
 }
 
 fn main() -> ExitCode {
@@ -30,6 +34,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(opts) => render::run(&opts).map(|()| true),
         Command::Compare(opts) => compare::run(&opts),
+        Command::Converge(opts) => converge::run(&opts),
     };
     match result {
         Ok(true) => ExitCode::SUCCESS,

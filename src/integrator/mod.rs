@@ -134,7 +134,22 @@ pub struct RenderContext<'a> {
     pub settings: RenderSettings,
     pub counters: Counters,
     /// Pass 1's maps when rendering with the photon mapper.
-    pub photons: Option<photonmap::PhotonPass>,
+    pub photons: Option<&'a photonmap::PhotonPass>,
+}
+
+/// Pass 1 for `kind` (photon maps for the photon mapper, nothing otherwise).
+pub fn prepare(
+    scene: &Scene,
+    accel: &Accel,
+    settings: &RenderSettings,
+    kind: IntegratorKind,
+) -> Option<photonmap::PhotonPass> {
+    (kind == IntegratorKind::Photonmap).then(|| {
+        let mut ps = settings.photon.clone();
+        ps.trace.seed = settings.seed;
+        ps.trace.pattern = settings.pattern;
+        photonmap::prepare(scene, accel, &Lights::new(scene), &ps)
+    })
 }
 
 /// Renders `scene` with `kind`, calling `progress(tiles_done, tiles_total)` as tiles finish.
@@ -147,18 +162,26 @@ pub fn render(
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> RenderOutput {
     let start = Instant::now();
+    let photons = prepare(scene, accel, settings, kind);
+    let mut out = render_prepared(scene, accel, settings, kind, photons.as_ref(), progress);
+    out.seconds = start.elapsed().as_secs_f64();
+    out
+}
+
+/// Pass 2 (the whole render for integrators without a pass 1) over an already prepared pass 1;
+/// `seconds` counts pass 1's time too.
+pub fn render_prepared(
+    scene: &Scene,
+    accel: &Accel,
+    settings: &RenderSettings,
+    kind: IntegratorKind,
+    photons: Option<&photonmap::PhotonPass>,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> RenderOutput {
+    let start = Instant::now();
     let lights = Lights::new(scene);
-    let photons = (kind == IntegratorKind::Photonmap).then(|| {
-        let mut ps = settings.photon.clone();
-        ps.trace.seed = settings.seed;
-        ps.trace.pattern = settings.pattern;
-        photonmap::prepare(scene, accel, &lights, &ps)
-    });
-    let notes = photons
-        .as_ref()
-        .map(photonmap::describe)
-        .unwrap_or_default();
-    let (photon_seconds, map_build_seconds) = photons.as_ref().map_or((0.0, 0.0), |p| {
+    let notes = photons.map(photonmap::describe).unwrap_or_default();
+    let (photon_seconds, map_build_seconds) = photons.map_or((0.0, 0.0), |p| {
         let st = &p.maps.stats;
         (st.trace_seconds, st.build_seconds + p.cache_seconds)
     });
@@ -221,7 +244,7 @@ pub fn render(
             ("caustic", caustic),
             ("indirect", indirect),
         ],
-        seconds: start.elapsed().as_secs_f64(),
+        seconds: start.elapsed().as_secs_f64() + photon_seconds + map_build_seconds,
         photon_seconds,
         map_build_seconds,
         counters: ctx.counters,
@@ -244,5 +267,88 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
         a2 / (a2 + b2)
     } else {
         0.0
+    }
+}
+
+/// Renders passes of increasing sample counts over one pass 1 until `budget_s` seconds (pass 1
+/// included) are spent, averaging them by sample count. Pass `k` uses seed `seed + k`, so the
+/// result is deterministic for a given sequence of pass sizes (which depends on timing).
+/// Returns the image and the total samples per pixel.
+pub fn render_for_time(
+    scene: &Scene,
+    accel: &Accel,
+    settings: &RenderSettings,
+    kind: IntegratorKind,
+    budget_s: f64,
+) -> (RenderOutput, u32) {
+    let start = Instant::now();
+    let photons = prepare(scene, accel, settings, kind);
+    let mut s = settings.clone();
+    s.spp = 1;
+    let mut total: Option<RenderOutput> = None;
+    let mut spp_done = 0u32;
+    let mut pass = 0u64;
+    let mut per_spp = f64::INFINITY;
+    loop {
+        let t = Instant::now();
+        s.seed = settings.seed.wrapping_add(pass);
+        let out = render_prepared(scene, accel, &s, kind, photons.as_ref(), &|_, _| {});
+        per_spp = per_spp.min(t.elapsed().as_secs_f64() / s.spp as f64);
+        total = Some(match total {
+            None => out,
+            Some(acc) => merge(acc, spp_done, out, s.spp),
+        });
+        spp_done += s.spp;
+        pass += 1;
+        let left = budget_s - start.elapsed().as_secs_f64();
+        if left < per_spp {
+            break;
+        }
+        // Fill most of the remaining time, growing at most 4x per pass.
+        s.spp = ((left * 0.95 / per_spp) as u32).clamp(1, 4 * spp_done);
+    }
+    let mut out = total.expect("at least one pass");
+    out.seconds = start.elapsed().as_secs_f64();
+    (out, spp_done)
+}
+
+/// Averages two renders by their sample counts.
+fn merge(a: RenderOutput, na: u32, b: RenderOutput, nb: u32) -> RenderOutput {
+    let (wa, wb) = (na as f32 / (na + nb) as f32, nb as f32 / (na + nb) as f32);
+    let mix = |x: &RgbImage, y: &RgbImage| RgbImage {
+        width: x.width,
+        height: x.height,
+        pixels: x
+            .pixels
+            .iter()
+            .zip(&y.pixels)
+            .map(|(p, q)| std::array::from_fn(|c| p[c] * wa + q[c] * wb))
+            .collect(),
+    };
+    let add = |x: &AtomicU64, y: &AtomicU64| {
+        x.fetch_add(y.load(Ordering::Relaxed), Ordering::Relaxed);
+    };
+    for (x, y) in [
+        (&a.counters.camera_rays, &b.counters.camera_rays),
+        (&a.counters.secondary_rays, &b.counters.secondary_rays),
+        (&a.counters.shadow_rays, &b.counters.shadow_rays),
+        (&a.counters.ray_ns, &b.counters.ray_ns),
+        (&a.counters.lookup_ns, &b.counters.lookup_ns),
+    ] {
+        add(x, y);
+    }
+    RenderOutput {
+        image: mix(&a.image, &b.image),
+        components: a
+            .components
+            .iter()
+            .zip(&b.components)
+            .map(|((n, x), (_, y))| (*n, mix(x, y)))
+            .collect(),
+        seconds: a.seconds + b.seconds,
+        photon_seconds: a.photon_seconds,
+        map_build_seconds: a.map_build_seconds,
+        counters: a.counters,
+        notes: a.notes,
     }
 }

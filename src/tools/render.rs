@@ -25,6 +25,10 @@ pub struct RenderOptions {
     /// Skip the PNG preview.
     #[arg(long)]
     pub no_png: bool,
+    /// Render for this wall-clock budget instead of a fixed sample count (e.g. `10s`, `2.5`,
+    /// `1m`): samples per pixel and photon counts are chosen to fit it.
+    #[arg(long, value_parser = parse_duration)]
+    pub time: Option<f64>,
     /// Samples per pixel (default: the Sampler's pixelsamples).
     #[arg(long)]
     pub spp: Option<u32>,
@@ -240,8 +244,23 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
             b.set_position(done);
         }
     };
-    let out =
-        pool.install(|| integrator::render(&scene, &accel, &settings, opts.integrator, &progress));
+    let out = match opts.time {
+        Some(budget) => {
+            if opts.photon.global_photons.is_none() && opts.photon.caustic_photons.is_none() {
+                super::converge::scale_photons(&mut settings, budget, 200_000);
+            }
+            let (out, spp) = pool.install(|| {
+                integrator::render_for_time(&scene, &accel, &settings, opts.integrator, budget)
+            });
+            println!(
+                "time budget {budget:.2} s: {spp} spp, {} + {} photons",
+                settings.photon.trace.global_photons, settings.photon.trace.caustic_photons
+            );
+            out
+        }
+        None => pool
+            .install(|| integrator::render(&scene, &accel, &settings, opts.integrator, &progress)),
+    };
     if let Some(b) = bar {
         b.finish_and_clear();
     }
@@ -335,4 +354,24 @@ fn print_stats(out: &crate::integrator::RenderOutput, threads: usize) {
         rays / ray_s.max(1e-9) / 1e6,
         rays / loop_s / 1e6
     );
+}
+
+/// Parses a duration: seconds as a number, or with a suffix `s`, `m` or `ms`.
+pub fn parse_duration(s: &str) -> Result<f64, String> {
+    let t = s.trim();
+    let (num, scale) = if let Some(v) = t.strip_suffix("ms") {
+        (v, 1e-3)
+    } else if let Some(v) = t.strip_suffix('s') {
+        (v, 1.0)
+    } else if let Some(v) = t.strip_suffix('m') {
+        (v, 60.0)
+    } else {
+        (t, 1.0)
+    };
+    match num.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v * scale),
+        _ => Err(format!(
+            "expected a positive duration such as 10s, 2.5 or 1m, got {s:?}"
+        )),
+    }
 }

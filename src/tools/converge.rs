@@ -1,0 +1,308 @@
+//! `photon converge SCENE --reference REF.exr`: error against time for each integrator and a
+//! few photon-map settings. Every method renders at a series of wall-clock budgets (pass 1
+//! included, see `integrator::render_for_time`); the result is a CSV (integrator, settings,
+//! budget, seconds, spp, rays, photons, relMSE, RMSE) and a log-log PNG plot of relMSE against
+//! seconds, one curve per method.
+use super::{parse_resolution, thread_pool, ToolError};
+use crate::accel::{Accel, AccelOptions, BackendKind};
+use crate::imageio::metrics::{compare, match_sizes, MaskOptions};
+use crate::imageio::{read_exr, write_exr, ExrPixel};
+use crate::integrator::{render_for_time, IntegratorKind, RenderSettings};
+use crate::scene::{loader, Scene};
+use plotters::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// Options of `photon converge`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct ConvergeOptions {
+    /// The pbrt-v4 scene.
+    pub scene: PathBuf,
+    /// Reference EXR (box-filtered down to the render's size when an integer factor relates
+    /// them).
+    #[arg(long)]
+    pub reference: PathBuf,
+    /// Time budgets in seconds, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "1,2,4,8,16,32")]
+    pub budgets: Vec<f64>,
+    /// Render resolution WxH (default: the Film's).
+    #[arg(long, value_parser = parse_resolution)]
+    pub res: Option<(u32, u32)>,
+    /// Output folder for converge.csv, converge.png and the last image of each method.
+    #[arg(long, default_value = "converge")]
+    pub out: PathBuf,
+    /// Only these methods (names as in the CSV), comma-separated; default all.
+    #[arg(long, value_delimiter = ',')]
+    pub methods: Vec<String>,
+    /// Also leave out pixels next to reference pixels brighter than this.
+    #[arg(long)]
+    pub mask_above: Option<f32>,
+    #[arg(long, value_enum, default_value_t = BackendKind::Embree)]
+    pub backend: BackendKind,
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+}
+
+/// One curve: an integrator with some settings.
+pub struct Method {
+    pub name: &'static str,
+    pub kind: IntegratorKind,
+    /// Changes to the scene's settings.
+    pub adjust: fn(&mut RenderSettings, f64),
+}
+
+/// Photon counts grow with the budget (pass 1 should stay a modest share of it).
+pub fn scale_photons(s: &mut RenderSettings, budget: f64, base: u64) {
+    let n = (base as f64 * (budget / 4.0).clamp(0.25, 8.0)) as u64;
+    s.photon.trace.global_photons = n;
+    s.photon.trace.caustic_photons = n;
+}
+
+/// The methods compared by default.
+pub fn methods() -> Vec<Method> {
+    vec![
+        Method {
+            name: "photonmap",
+            kind: IntegratorKind::Photonmap,
+            adjust: |s, b| scale_photons(s, b, 200_000),
+        },
+        Method {
+            name: "photonmap-gather16",
+            kind: IntegratorKind::Photonmap,
+            adjust: |s, b| {
+                scale_photons(s, b, 200_000);
+                s.photon.gather_samples = 16;
+            },
+        },
+        Method {
+            name: "photonmap-lookup30",
+            kind: IntegratorKind::Photonmap,
+            adjust: |s, b| {
+                scale_photons(s, b, 200_000);
+                s.photon.global_lookup = 30;
+                s.photon.caustic_lookup = 30;
+            },
+        },
+        Method {
+            name: "photonmap-photons4x",
+            kind: IntegratorKind::Photonmap,
+            adjust: |s, b| scale_photons(s, b, 800_000),
+        },
+        Method {
+            name: "path",
+            kind: IntegratorKind::Path,
+            adjust: |_, _| {},
+        },
+    ]
+}
+
+/// One measured point.
+#[derive(Clone, Debug)]
+pub struct Row {
+    pub method: String,
+    pub settings: String,
+    pub budget: f64,
+    pub seconds: f64,
+    pub spp: u32,
+    pub rays: u64,
+    pub photons: u64,
+    pub relmse: f64,
+    pub rmse: f64,
+}
+
+/// Runs every method at every budget; writes the CSV, the plot and the images.
+pub fn run(opts: &ConvergeOptions) -> Result<bool, ToolError> {
+    let scene = loader::load(&opts.scene)?;
+    let reference = read_exr(&opts.reference)?;
+    let mut base = RenderSettings::from_scene(&scene)?;
+    if let Some((w, h)) = opts.res {
+        (base.width, base.height) = (w, h);
+    }
+    base.seed = opts.seed;
+    std::fs::create_dir_all(&opts.out)
+        .map_err(|e| ToolError(format!("{}: {e}", opts.out.display())))?;
+    let pool = thread_pool(opts.threads)?;
+    let accel = pool.install(|| Accel::build(&scene, opts.backend, AccelOptions::default()))?;
+    let chosen: Vec<Method> = methods()
+        .into_iter()
+        .filter(|m| opts.methods.is_empty() || opts.methods.iter().any(|n| n == m.name))
+        .collect();
+    if chosen.is_empty() {
+        let names: Vec<&str> = methods().iter().map(|m| m.name).collect();
+        return Err(ToolError(format!(
+            "no such method; known: {}",
+            names.join(", ")
+        )));
+    }
+    let mask = MaskOptions {
+        mask_above: opts.mask_above,
+    };
+    let mut rows = Vec::new();
+    for m in &chosen {
+        for &budget in &opts.budgets {
+            let row = measure(
+                &scene, &accel, &base, m, budget, &reference, mask, &opts.out, &pool,
+            )?;
+            println!(
+                "{:<22} budget {:>6.2} s: {:>7.2} s, {:>5} spp, relMSE {:.5}, RMSE {:.5}",
+                row.method, row.budget, row.seconds, row.spp, row.relmse, row.rmse
+            );
+            rows.push(row);
+        }
+    }
+    let csv = opts.out.join("converge.csv");
+    crate::imageio::write_atomically(&csv, |tmp| {
+        std::fs::write(tmp, to_csv(&rows)).map_err(|e| crate::imageio::ImageError::io(tmp, e))
+    })?;
+    let png = opts.out.join("converge.png");
+    plot(&rows, &png, &scene_title(&opts.scene))?;
+    println!("wrote {} and {}", csv.display(), png.display());
+    Ok(true)
+}
+
+/// Renders one method at one budget and measures its error.
+#[allow(clippy::too_many_arguments)]
+fn measure(
+    scene: &Scene,
+    accel: &Accel,
+    base: &RenderSettings,
+    m: &Method,
+    budget: f64,
+    reference: &crate::imageio::RgbImage,
+    mask: MaskOptions,
+    out: &Path,
+    pool: &rayon::ThreadPool,
+) -> Result<Row, ToolError> {
+    let mut s = base.clone();
+    (m.adjust)(&mut s, budget);
+    let (img, spp) = pool.install(|| render_for_time(scene, accel, &s, m.kind, budget));
+    let (a, r) = match_sizes(img.image.clone(), reference.clone()).map_err(ToolError)?;
+    let metrics = compare(&a, &r, mask).map_err(ToolError)?;
+    write_exr(
+        &out.join(format!("{}.exr", m.name)),
+        &img.image,
+        &[],
+        ExrPixel::Half,
+    )?;
+    let photons = if m.kind == IntegratorKind::Photonmap {
+        s.photon.trace.global_photons + s.photon.trace.caustic_photons
+    } else {
+        0
+    };
+    let settings = match m.kind {
+        IntegratorKind::Photonmap => format!(
+            "global {} caustic {} lookup {}/{} gather {}",
+            s.photon.trace.global_photons,
+            s.photon.trace.caustic_photons,
+            s.photon.global_lookup,
+            s.photon.caustic_lookup,
+            s.photon.gather_samples
+        ),
+        _ => format!("maxdepth {}", s.max_depth),
+    };
+    Ok(Row {
+        method: m.name.to_string(),
+        settings,
+        budget,
+        seconds: img.seconds,
+        spp,
+        rays: img.counters.total(),
+        photons,
+        relmse: metrics.overall.relmse,
+        rmse: metrics.overall.rmse,
+    })
+}
+
+/// The rows as CSV with a header line.
+pub fn to_csv(rows: &[Row]) -> String {
+    let mut s = String::from("integrator,settings,budget_s,seconds,spp,rays,photons,relmse,rmse\n");
+    for r in rows {
+        s += &format!(
+            "{},{},{},{:.3},{},{},{},{:.6e},{:.6e}\n",
+            r.method, r.settings, r.budget, r.seconds, r.spp, r.rays, r.photons, r.relmse, r.rmse
+        );
+    }
+    s
+}
+
+fn scene_title(path: &Path) -> String {
+    path.parent()
+        .and_then(|p| p.file_name())
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| path.display().to_string())
+}
+
+/// A log-log plot of relMSE against seconds, one curve per method.
+pub fn plot(rows: &[Row], path: &Path, title: &str) -> Result<(), ToolError> {
+    let err = |e: &dyn std::fmt::Display| ToolError(format!("{}: plot: {e}", path.display()));
+    let pos = |v: f64| v.is_finite() && v > 0.0;
+    let pts: Vec<&Row> = rows
+        .iter()
+        .filter(|r| pos(r.seconds) && pos(r.relmse))
+        .collect();
+    if pts.is_empty() {
+        return Err(ToolError(format!("{}: nothing to plot", path.display())));
+    }
+    let (x0, x1) = pts.iter().fold((f64::MAX, f64::MIN), |(a, b), r| {
+        (a.min(r.seconds), b.max(r.seconds))
+    });
+    let (y0, y1) = pts.iter().fold((f64::MAX, f64::MIN), |(a, b), r| {
+        (a.min(r.relmse), b.max(r.relmse))
+    });
+    let tmp = path.with_extension("tmp.png");
+    {
+        let root = BitMapBackend::new(&tmp, (900, 600)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| err(&e))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(format!("{title}: relMSE against time"), ("sans-serif", 22))
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(70)
+            .build_cartesian_2d(
+                (x0 / 1.5..x1 * 1.5).log_scale(),
+                (y0 / 2.0..y1 * 2.0).log_scale(),
+            )
+            .map_err(|e| err(&e))?;
+        chart
+            .configure_mesh()
+            .x_desc("seconds (wall clock, pass 1 included)")
+            .y_desc("relMSE")
+            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .draw()
+            .map_err(|e| err(&e))?;
+        let mut names: Vec<&str> = Vec::new();
+        for r in &pts {
+            if !names.contains(&r.method.as_str()) {
+                names.push(&r.method);
+            }
+        }
+        for (i, name) in names.iter().enumerate() {
+            let color = Palette99::pick(i).to_rgba();
+            let mut series: Vec<(f64, f64)> = pts
+                .iter()
+                .filter(|r| r.method == *name)
+                .map(|r| (r.seconds, r.relmse))
+                .collect();
+            series.sort_by(|a, b| a.0.total_cmp(&b.0));
+            chart
+                .draw_series(LineSeries::new(series.clone(), color.stroke_width(2)))
+                .map_err(|e| err(&e))?
+                .label(*name)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                });
+            chart
+                .draw_series(series.iter().map(|&p| Circle::new(p, 3, color.filled())))
+                .map_err(|e| err(&e))?;
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()
+            .map_err(|e| err(&e))?;
+        root.present().map_err(|e| err(&e))?;
+    }
+    std::fs::rename(&tmp, path).map_err(|e| ToolError(format!("{}: {e}", path.display())))
+}
