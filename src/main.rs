@@ -1,8 +1,10 @@
 //! The `photon` command line. Only argument parsing and exit codes live here; each subcommand
 //! is one function in `photon::tools`.
 use clap::{Parser, Subcommand};
+use photon::tools::bench::{self, BenchOptions};
 use photon::tools::compare::{self, CompareOptions};
 use photon::tools::converge::{self, ConvergeOptions};
+use photon::tools::crosscheck::{self, CrosscheckOptions};
 use photon::tools::render::{self, RenderOptions};
 use std::process::ExitCode;
 
@@ -27,6 +29,12 @@ enum Command {
     /// Error against time: each integrator and a few photon-map settings at a series of time
     /// budgets; writes a CSV and a log-log plot.
     Converge(ConvergeOptions),
+    /// Cross-check Embree against obvhs on the rays of a real render, by ray kind, and compare
+    /// renders made with each (exit 1 above the thresholds).
+    Crosscheck(CrosscheckOptions),
+    /// Benchmark both backends (build, camera/secondary/shadow rays, packets, threads) and the
+    /// photon side (tracing, kd-tree, k-nearest, radiance estimates); table, CSV, JSON.
+    Bench(BenchOptions),
 }
 
 fn main() -> ExitCode {
@@ -35,6 +43,8 @@ fn main() -> ExitCode {
         Command::Render(opts) => render::run(&opts).map(|()| true),
         Command::Compare(opts) => compare::run(&opts),
         Command::Converge(opts) => converge::run(&opts),
+        Command::Crosscheck(opts) => crosscheck::run(&opts),
+        Command::Bench(opts) => bench::run(&opts).map(|()| true),
     };
     match result {
         Ok(true) => ExitCode::SUCCESS,

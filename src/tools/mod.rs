@@ -1,6 +1,10 @@
 //! The subcommands of the `photon` binary, one module each, callable from tests too.
+pub mod bench;
 pub mod compare;
 pub mod converge;
+pub mod crosscheck;
+pub mod meshgen;
+pub mod rays;
 pub mod render;
 
 use std::fmt;
