@@ -57,16 +57,16 @@ pub struct BenchOptions {
     /// (--quick: 100000); 0 for none.
     #[arg(long, value_delimiter = ',')]
     pub generated: Option<Vec<usize>>,
-    /// Rays of each kind (default 400000; --quick 100000).
+    /// Rays of each kind (default 400000; --quick 250000).
     #[arg(long)]
     pub rays: Option<usize>,
     /// Timed runs per number; the median is reported (default 5; --quick 3).
     #[arg(long)]
     pub runs: Option<usize>,
-    /// Global photons per tracing run (default 200000; --quick 50000).
+    /// Global photons per tracing run (default 200000; --quick 100000).
     #[arg(long)]
     pub photons: Option<u64>,
-    /// k-nearest queries and radiance estimates per run (default 100000; --quick 20000).
+    /// k-nearest queries and radiance estimates per run (default 100000; --quick 40000).
     #[arg(long)]
     pub queries: Option<usize>,
     /// Thread counts for the ray and photon-tracing rates (comma-separated).
@@ -124,16 +124,16 @@ impl BenchOptions {
             generated,
             rays: self
                 .rays
-                .unwrap_or(if q { 100_000 } else { 400_000 })
+                .unwrap_or(if q { 250_000 } else { 400_000 })
                 .max(1),
             runs: self.runs.unwrap_or(if q { 3 } else { 5 }).max(1),
             photons: self
                 .photons
-                .unwrap_or(if q { 50_000 } else { 200_000 })
+                .unwrap_or(if q { 100_000 } else { 200_000 })
                 .max(1),
             queries: self
                 .queries
-                .unwrap_or(if q { 20_000 } else { 100_000 })
+                .unwrap_or(if q { 40_000 } else { 100_000 })
                 .max(1),
             threads,
         }
