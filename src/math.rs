@@ -103,6 +103,33 @@ pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
     )
 }
 
+/// `gamma(n) = n eps / (1 - n eps)` with `eps = 2^-24`: the relative error bound of `n`
+/// floating-point operations (pbrt's notation).
+pub fn gamma(n: i32) -> f32 {
+    let e = n as f32 * f32::EPSILON * 0.5;
+    e / (1.0 - e)
+}
+
+/// Spawns a ray origin from a surface point `p` whose components are known to within `err`
+/// (e.g. [`crate::scene::Mesh::point_error`]): moves it along `n` (the side the new ray leaves
+/// towards) past the error box, with a margin for the intersector's own arithmetic, then one
+/// more ulp away in each component (pbrt-v4's `OffsetRayOrigin`). The offset scales with the
+/// geometry's own magnitude, so it is right at any scene scale, large or tiny.
+pub fn spawn_origin(p: Vec3, err: Vec3, n: Vec3) -> Vec3 {
+    const MARGIN: f32 = 4.0;
+    let d = MARGIN * n.abs().dot(err);
+    let offset = n * d;
+    let mut o = p + offset;
+    for c in 0..3 {
+        if offset[c] > 0.0 {
+            o[c] = o[c].next_up();
+        } else if offset[c] < 0.0 {
+            o[c] = o[c].next_down();
+        }
+    }
+    o
+}
+
 /// Largest component of a colour triple.
 pub fn max_component(c: Vec3) -> f32 {
     c.x.max(c.y).max(c.z)

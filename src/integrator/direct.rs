@@ -14,7 +14,7 @@ use super::{charge, power_heuristic, tile_pixels, RenderContext};
 use crate::accel::{Hit, RayQuery};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::film::Radiance;
-use crate::math::{offset_ray_origin, Frame, Ray, Vec2, Vec3};
+use crate::math::{spawn_origin, Frame, Ray, Vec2, Vec3};
 use crate::photon::KnnResult;
 use crate::sampling::Sampler;
 use std::sync::atomic::Ordering;
@@ -157,7 +157,7 @@ fn shade(
 ) {
     let scene = ctx.scene;
     let mesh = &scene.meshes[hit.mesh as usize];
-    let p = path.ray.at(hit.t);
+    let p = mesh.point(hit.prim, hit.u, hit.v);
     let wo_world = -path.ray.d.normalize();
     let ng = mesh.geometric_normal(hit.prim, hit.u, hit.v);
 
@@ -218,11 +218,16 @@ fn shade(
                 1.0
             };
             let contrib = path.beta * f * s.li * (w / (s.pdf * ls as f32));
-            let o = offset_ray_origin(p, if ng.dot(s.wi) >= 0.0 { ng } else { -ng });
+            let o = mesh.spawn(
+                hit.prim,
+                hit.u,
+                hit.v,
+                if ng.dot(s.wi) >= 0.0 { ng } else { -ng },
+            );
             let target = if s.n == Vec3::ZERO {
                 s.p
             } else {
-                offset_ray_origin(s.p, if s.n.dot(o - s.p) >= 0.0 { s.n } else { -s.n })
+                spawn_origin(s.p, s.err, if s.n.dot(o - s.p) >= 0.0 { s.n } else { -s.n })
             };
             let ray = Ray::segment(o, target - o, 1.0 - 1e-4);
             shadows.push(Shadow {
@@ -255,6 +260,7 @@ fn shade(
             &ctx.counters.lookup_ns,
             ls,
             p,
+            mesh.point_error(hit.prim, hit.u, hit.v),
             n,
             f_d,
             path.beta,
@@ -290,7 +296,12 @@ fn shade(
         return;
     }
     let wi_world = frame.to_world(bs.wi);
-    let o = offset_ray_origin(p, if ng.dot(wi_world) >= 0.0 { ng } else { -ng });
+    let o = mesh.spawn(
+        hit.prim,
+        hit.u,
+        hit.v,
+        if ng.dot(wi_world) >= 0.0 { ng } else { -ng },
+    );
     next.push(PathState {
         pixel: path.pixel,
         ray: Ray::new(o, wi_world),

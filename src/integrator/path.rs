@@ -42,7 +42,7 @@ use super::{power_heuristic, tile_pixels, RenderContext};
 use crate::accel::{Hit, RayQuery};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::film::Radiance;
-use crate::math::{max_component, offset_ray_origin, Frame, Ray, Vec2, Vec3};
+use crate::math::{max_component, spawn_origin, Frame, Ray, Vec2, Vec3};
 use crate::sampling::Sampler;
 use std::sync::atomic::Ordering;
 
@@ -188,6 +188,8 @@ fn add(acc: &mut [Radiance], pixel: usize, direct: bool, value: Vec3) {
 /// The local geometry of a path vertex.
 struct Vertex {
     p: Vec3,
+    /// Rounding-error bound of `p`, for spawning rays.
+    err: Vec3,
     /// Geometric normal (pbrt's orientation, see `Mesh::geometric_normal`).
     ng: Vec3,
     /// Shading frame (z = shading normal).
@@ -210,7 +212,7 @@ fn shade(
     next: &mut Vec<PathState>,
 ) {
     let mesh = &ctx.scene.meshes[hit.mesh as usize];
-    let p = path.ray.at(hit.t);
+    let p = mesh.point(hit.prim, hit.u, hit.v);
     let ng = mesh.geometric_normal(hit.prim, hit.u, hit.v);
     if let Some(li) = mesh.area_light {
         let le = emitted(ctx, &path, li as usize, p, ng);
@@ -224,6 +226,7 @@ fn shade(
     let frame = Frame::from_normal(ns);
     let v = Vertex {
         p,
+        err: mesh.point_error(hit.prim, hit.u, hit.v),
         ng,
         frame,
         wo: frame.to_local(-path.ray.d.normalize()),
@@ -280,11 +283,11 @@ fn light_sample(ctx: &RenderContext, path: &PathState, bsdf: &Bsdf, v: &Vertex) 
     if !contrib.is_finite() || contrib.max_element() <= 0.0 {
         return None;
     }
-    let o = offset_ray_origin(v.p, if v.ng.dot(s.wi) >= 0.0 { v.ng } else { -v.ng });
+    let o = spawn_origin(v.p, v.err, if v.ng.dot(s.wi) >= 0.0 { v.ng } else { -v.ng });
     let target = if s.n == Vec3::ZERO {
         s.p
     } else {
-        offset_ray_origin(s.p, if s.n.dot(o - s.p) >= 0.0 { s.n } else { -s.n })
+        spawn_origin(s.p, s.err, if s.n.dot(o - s.p) >= 0.0 { s.n } else { -s.n })
     };
     Some(Shadow {
         pixel: path.pixel,
@@ -320,7 +323,7 @@ fn continue_path(mut path: PathState, bsdf: &Bsdf, v: &Vertex) -> Option<PathSta
         return None;
     }
     let wi = v.frame.to_world(bs.wi);
-    let o = offset_ray_origin(v.p, if v.ng.dot(wi) >= 0.0 { v.ng } else { -v.ng });
+    let o = spawn_origin(v.p, v.err, if v.ng.dot(wi) >= 0.0 { v.ng } else { -v.ng });
     path.ray = Ray::new(o, wi);
     path.beta = beta;
     path.depth = depth;

@@ -27,7 +27,7 @@ use super::{charge, RenderContext};
 use crate::accel::{Accel, Hit, RayQuery};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::light::Lights;
-use crate::math::{offset_ray_origin, Frame, Ray, Vec2, Vec3};
+use crate::math::{spawn_origin, Frame, Ray, Vec2, Vec3};
 use crate::photon::estimate::{irradiance_with, EstimateParams};
 use crate::photon::trace::{self, PhotonMaps, TraceSettings};
 use crate::photon::{Kernel, KnnResult, Photon, PhotonMap};
@@ -249,7 +249,8 @@ pub struct DiffusePhotons {
 /// Dimensions of the sampler used per gather ray.
 pub const GATHER_DIMS: u32 = 2;
 
-/// Photon-map radiance at a diffuse point `p` (unit normal `n` facing the viewer, diffuse
+/// Photon-map radiance at a diffuse point `p` (rounding-error bound `p_err`, unit normal `n`
+/// facing the viewer, diffuse
 /// BRDF value `f_d`), and its gather rays pushed to `gathers` with throughput `beta`.
 #[allow(clippy::too_many_arguments)]
 pub fn at_diffuse(
@@ -257,6 +258,7 @@ pub fn at_diffuse(
     counters: &AtomicU64,
     light_samples: u32,
     p: Vec3,
+    p_err: Vec3,
     n: Vec3,
     f_d: Vec3,
     beta: Vec3,
@@ -291,7 +293,7 @@ pub fn at_diffuse(
     let (nx, ny) = strata(g);
     let frame = Frame::from_normal(n);
     let weight = beta * f_d * (std::f32::consts::PI / g as f32);
-    let o = offset_ray_origin(p, n);
+    let o = spawn_origin(p, p_err, n);
     for k in 0..g {
         let j = sampler.next_2d();
         let u = Vec2::new(
@@ -386,7 +388,7 @@ pub fn gather_radiance(
     if let Some(h) = hit {
         let mesh = &ctx.scene.meshes[h.mesh as usize];
         if let Some(li) = mesh.area_light {
-            let p = g.ray.at(h.t);
+            let p = mesh.point(h.prim, h.u, h.v);
             let ng = mesh.geometric_normal(h.prim, h.u, h.v);
             let le = ctx.lights.le(li as usize, ng, -g.ray.d);
             let light_pdf = ctx.lights.pdf_area(li as usize, g.ray.o, p, ng);
@@ -416,7 +418,7 @@ fn reflected(
         let Some(h) = hit else { return Vec3::ZERO };
         let mesh = &scene.meshes[h.mesh as usize];
         let bsdf = Bsdf::from_material(&scene.materials[mesh.material as usize]);
-        let p = ray.at(h.t);
+        let p = mesh.point(h.prim, h.u, h.v);
         let ng = mesh.geometric_normal(h.prim, h.u, h.v);
         let ns = mesh.shading_normal(h.prim, h.u, h.v).unwrap_or(ng);
         let frame = Frame::from_normal(ns);
@@ -445,7 +447,7 @@ fn reflected(
         throughput *= bs.f * (bs.wi.z.abs() / bs.pdf);
         let wi = frame.to_world(bs.wi);
         ray = Ray::new(
-            offset_ray_origin(p, if ng.dot(wi) >= 0.0 { ng } else { -ng }),
+            mesh.spawn(h.prim, h.u, h.v, if ng.dot(wi) >= 0.0 { ng } else { -ng }),
             wi,
         );
         hit = ctx.accel.intersect(&ray);

@@ -53,7 +53,7 @@ impl AreaLight {
     /// normal (`u_dir`; for two-sided lights `u_dir.x` first picks the side).
     pub fn emit(&self, meshes: &[Mesh], u_pos: Vec2, u_dir: Vec2) -> Option<Emission> {
         let mesh = &meshes[self.mesh as usize];
-        let (p, n) =
+        let (p, n, err) =
             self.sample_point(mesh, u_pos.x, Vec2::new(self.restretch(u_pos.x), u_pos.y))?;
         let (n, u) = if self.two_sided {
             if u_dir.x < 0.5 {
@@ -69,6 +69,7 @@ impl AreaLight {
         Some(Emission {
             p,
             n,
+            err,
             dir,
             flux: self.l * (PI * self.area * sides),
         })
@@ -98,12 +99,16 @@ impl AreaLight {
     }
 
     /// Uniform point on the mesh, and the unit normal there.
-    pub fn sample_point(&self, mesh: &Mesh, u_tri: f32, u: Vec2) -> Option<(Vec3, Vec3)> {
+    /// Uniform point on the mesh: (point, unit normal, rounding-error bound of the point).
+    pub fn sample_point(&self, mesh: &Mesh, u_tri: f32, u: Vec2) -> Option<(Vec3, Vec3, Vec3)> {
         let (t, _, _) = self.triangles.sample(u_tri)?;
         let b = square_to_triangle(u);
-        let [p0, p1, p2] = mesh.triangle(t as u32);
-        let p = p0 * (1.0 - b.x - b.y) + p1 * b.x + p2 * b.y;
-        Some((p, mesh.geometric_normal(t as u32, b.x, b.y)))
+        let t = t as u32;
+        Some((
+            mesh.point(t, b.x, b.y),
+            mesh.geometric_normal(t, b.x, b.y),
+            mesh.point_error(t, b.x, b.y),
+        ))
     }
 
     pub fn sample(&self, meshes: &[Mesh], p_ref: Vec3, u: Vec2) -> Option<LightSample> {
@@ -111,8 +116,8 @@ impl AreaLight {
         let (t, _, rem) = self.triangles.sample(u.x)?;
         let mesh = &meshes[self.mesh as usize];
         let b = square_to_triangle(Vec2::new(rem, u.y));
-        let [p0, p1, p2] = mesh.triangle(t as u32);
-        let p = p0 * (1.0 - b.x - b.y) + p1 * b.x + p2 * b.y;
+        let p = mesh.point(t as u32, b.x, b.y);
+        let err = mesh.point_error(t as u32, b.x, b.y);
         let n = mesh.geometric_normal(t as u32, b.x, b.y);
         let to = p - p_ref;
         let d2 = to.length_squared();
@@ -127,6 +132,7 @@ impl AreaLight {
             wi,
             p,
             n,
+            err,
             pdf,
             delta: false,
         })

@@ -18,6 +18,7 @@ pub fn sample(dir: Vec3, l: Vec3, p_ref: Vec3, center: Vec3, radius: f32) -> Lig
         wi,
         p: p_ref + wi * far,
         n: Vec3::ZERO,
+        err: Vec3::ZERO,
         pdf: 1.0,
         delta: true,
     }
@@ -32,6 +33,7 @@ pub fn emit(dir: Vec3, l: Vec3, center: Vec3, radius: f32, u_pos: Vec2) -> Emiss
     Emission {
         p,
         n: Vec3::ZERO,
+        err: Vec3::ZERO,
         dir,
         flux: l * (PI * radius * radius),
     }

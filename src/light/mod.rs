@@ -34,6 +34,8 @@ pub struct LightSample {
     pub p: Vec3,
     /// Geometric normal at `p` (area lights; zero otherwise).
     pub n: Vec3,
+    /// Rounding-error bound of `p` (for spawning rays from it; zero off surfaces).
+    pub err: Vec3,
     /// Density of choosing this sample: solid-angle density times the light's selection
     /// probability; for delta lights just the selection probability.
     pub pdf: f32,
@@ -176,6 +178,8 @@ pub(crate) fn scalar_power(c: Vec3) -> f32 {
 pub struct Emission {
     pub p: Vec3,
     pub n: Vec3,
+    /// Rounding-error bound of `p` (zero for point-like lights).
+    pub err: Vec3,
     pub dir: Vec3,
     pub flux: Vec3,
 }

@@ -20,6 +20,7 @@ pub fn sample(pos: Vec3, intensity: Vec3, p_ref: Vec3) -> Option<LightSample> {
         wi,
         p: pos,
         n: Vec3::ZERO,
+        err: Vec3::ZERO,
         pdf: 1.0,
         delta: true,
     })
@@ -30,6 +31,7 @@ pub fn emit(pos: Vec3, intensity: Vec3, u_dir: Vec2) -> Emission {
     Emission {
         p: pos,
         n: Vec3::ZERO,
+        err: Vec3::ZERO,
         dir: square_to_uniform_sphere(u_dir),
         flux: intensity * (4.0 * PI),
     }

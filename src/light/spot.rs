@@ -43,6 +43,7 @@ pub fn sample(
         wi,
         p: pos,
         n: Vec3::ZERO,
+        err: Vec3::ZERO,
         pdf: 1.0,
         delta: true,
     })
@@ -63,6 +64,7 @@ pub fn emit(
     (flux.max_element() > 0.0).then_some(Emission {
         p: pos,
         n: Vec3::ZERO,
+        err: Vec3::ZERO,
         dir: w,
         flux,
     })

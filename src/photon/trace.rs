@@ -21,7 +21,7 @@ use super::{Photon, PhotonMap};
 use crate::accel::{Accel, RayQuery};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::light::{bounding_sphere, Lights};
-use crate::math::{offset_ray_origin, Frame, Ray, Vec3};
+use crate::math::{spawn_origin, Frame, Ray, Vec3};
 use crate::sampling::{hash, Pattern, Sampler};
 use crate::scene::Scene;
 use rayon::prelude::*;
@@ -310,7 +310,7 @@ fn trace_one(
     let o = if e.n == Vec3::ZERO {
         e.p
     } else {
-        offset_ray_origin(e.p, e.n)
+        spawn_origin(e.p, e.err, e.n)
     };
     let mut ray = Ray::new(o, e.dir);
     let mut rays = 0;
@@ -326,7 +326,7 @@ fn trace_one(
         if bounce == 0 {
             first_specular = bsdf.is_specular();
         }
-        let p = ray.at(hit.t);
+        let p = mesh.point(hit.prim, hit.u, hit.v);
         let ng = mesh.geometric_normal(hit.prim, hit.u, hit.v);
         let dir = ray.d.normalize();
         let facing = if ng.dot(dir) < 0.0 { ng } else { -ng };
@@ -369,7 +369,7 @@ fn trace_one(
         specular_only &= bs.specular;
         let wi = frame.to_world(bs.wi);
         let off = if ng.dot(wi) >= 0.0 { ng } else { -ng };
-        ray = Ray::new(offset_ray_origin(p, off), wi);
+        ray = Ray::new(mesh.spawn(hit.prim, hit.u, hit.v, off), wi);
     }
     (first_specular, rays)
 }
@@ -408,7 +408,7 @@ fn unrestricted_efficiency(
             let o = if e.n == Vec3::ZERO {
                 e.p
             } else {
-                offset_ray_origin(e.p, e.n)
+                spawn_origin(e.p, e.err, e.n)
             };
             if let Some(h) = accel.intersect(&Ray::new(o, e.dir)) {
                 hits += bsdfs[scene.meshes[h.mesh as usize].material as usize].is_specular() as u64;

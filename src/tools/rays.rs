@@ -5,7 +5,7 @@
 //! - **camera**: `Camera::generate_ray` over the image, the pixel filter sampled from each
 //!   pixel's stream, tile by tile and sample pass by sample pass (as `integrator::direct`);
 //! - **shadow**: at the camera hits, `Lights::sample` and the segment built exactly as
-//!   `integrator::direct::shade` builds it (origin offset with `offset_ray_origin`, target
+//!   `integrator::direct::shade` builds it (origin spawned past the point's error bound, target
 //!   offset off the light, `tmax = 1 - 1e-4`);
 //! - **gather**: at diffuse camera hits, the stratified cosine-weighted final-gather
 //!   directions of `integrator::photonmap::at_diffuse` (one of the point's gather rays, chosen
@@ -25,7 +25,7 @@ use crate::film::Filter;
 use crate::integrator::photonmap::needed_maps;
 use crate::integrator::{tile_pixels, RenderSettings, TILE};
 use crate::light::Lights;
-use crate::math::{offset_ray_origin, Frame, Ray, Vec2, Vec3};
+use crate::math::{spawn_origin, Frame, Ray, Vec2, Vec3};
 use crate::photon::projection::ProjectionMap;
 use crate::photon::trace::{allocate, specular_targets, MapKind, TraceSettings};
 use crate::sampling::warp::square_to_cosine_hemisphere;
@@ -216,7 +216,7 @@ fn shade(
         return;
     }
     let mesh = &c.scene.meshes[hit.mesh as usize];
-    let p = ray.at(hit.t);
+    let p = mesh.point(hit.prim, hit.u, hit.v);
     let ng = mesh.geometric_normal(hit.prim, hit.u, hit.v);
     let bsdf = Bsdf::from_material(&c.scene.materials[mesh.material as usize]);
     let ns = mesh.shading_normal(hit.prim, hit.u, hit.v).unwrap_or(ng);
@@ -236,12 +236,18 @@ fn shade(
             if f.max_element() <= 0.0 {
                 continue;
             }
-            let o = offset_ray_origin(p, if ng.dot(ls.wi) >= 0.0 { ng } else { -ng });
+            let o = mesh.spawn(
+                hit.prim,
+                hit.u,
+                hit.v,
+                if ng.dot(ls.wi) >= 0.0 { ng } else { -ng },
+            );
             let target = if ls.n == Vec3::ZERO {
                 ls.p
             } else {
-                offset_ray_origin(
+                spawn_origin(
                     ls.p,
+                    ls.err,
                     if ls.n.dot(o - ls.p) >= 0.0 {
                         ls.n
                     } else {
@@ -259,8 +265,15 @@ fn shade(
     out.diffuse_points.push(DiffusePoint { p, n });
     if c.gathers {
         sampler.set_dimension(CAMERA_DIMS + 3 * ls);
-        out.gather
-            .push(gather_ray(c, p, n, pixel, sample, &mut sampler));
+        out.gather.push(gather_ray(
+            c,
+            p,
+            mesh.point_error(hit.prim, hit.u, hit.v),
+            n,
+            pixel,
+            sample,
+            &mut sampler,
+        ));
     }
 }
 
@@ -269,6 +282,7 @@ fn shade(
 fn gather_ray(
     c: &Shading,
     p: Vec3,
+    p_err: Vec3,
     n: Vec3,
     pixel: u64,
     sample: u32,
@@ -278,7 +292,7 @@ fn gather_ray(
     let keep = (hash(&[c.select_seed, pixel, sample as u64, 0x6a7]) % g as u64) as u32;
     let (nx, ny) = strata(g);
     let frame = Frame::from_normal(n);
-    let o = offset_ray_origin(p, n);
+    let o = spawn_origin(p, p_err, n);
     let mut d = n;
     for k in 0..=keep {
         let j = sampler.next_2d();
@@ -426,7 +440,7 @@ impl PhotonPath<'_> {
         let o = if e.n == Vec3::ZERO {
             e.p
         } else {
-            offset_ray_origin(e.p, e.n)
+            spawn_origin(e.p, e.err, e.n)
         };
         let mut ray = Ray::new(o, e.dir);
         for _ in 0..self.max_bounces {
@@ -439,7 +453,6 @@ impl PhotonPath<'_> {
             if self.kind == MapKind::Caustic && !bsdf.is_specular() {
                 break;
             }
-            let p = ray.at(hit.t);
             let ng = mesh.geometric_normal(hit.prim, hit.u, hit.v);
             let ns = mesh.shading_normal(hit.prim, hit.u, hit.v).unwrap_or(ng);
             let frame = Frame::from_normal(ns);
@@ -457,7 +470,7 @@ impl PhotonPath<'_> {
             }
             let wi = frame.to_world(bs.wi);
             let off = if ng.dot(wi) >= 0.0 { ng } else { -ng };
-            ray = Ray::new(offset_ray_origin(p, off), wi);
+            ray = Ray::new(mesh.spawn(hit.prim, hit.u, hit.v, off), wi);
         }
     }
 }
