@@ -117,7 +117,11 @@ pub fn gamma(n: i32) -> f32 {
 /// geometry's own magnitude, so it is right at any scene scale, large or tiny.
 pub fn spawn_origin(p: Vec3, err: Vec3, n: Vec3) -> Vec3 {
     const MARGIN: f32 = 4.0;
-    let d = MARGIN * n.abs().dot(err);
+    // A floor keeps the offset a normal float when the point is exact (a surface lying in a
+    // coordinate plane through 0 has err = 0 there): one ulp of 0 is a subnormal, which
+    // flush-to-zero reads as 0, leaving the origin on the surface.
+    const MIN_OFFSET: f32 = 1e-30;
+    let d = (MARGIN * n.abs().dot(err)).max(MIN_OFFSET);
     let offset = n * d;
     let mut o = p + offset;
     for c in 0..3 {
