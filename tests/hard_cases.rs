@@ -686,9 +686,10 @@ fn total_internal_reflection_in_a_sphere() {
 
 /// The same in the sphere's equatorial plane, where the ray runs exactly along the ring of
 /// edges shared by two rows of triangles. Embree's robust mode keeps it inside, and that is
-/// asserted. Embree's default mode and obvhs (whose triangle test is watertight, Woop et al.
-/// 2013, but whose box tests are not conservative to the last ulp) let it slip out after a
-/// few bounces: measured and printed here as a known limitation of the fast modes, so scenes
+/// asserted. Embree's default mode and obvhs (neither watertight: a Woop et al. 2013 triangle
+/// test alone did not stop it, the box tests are not conservative to the last ulp either, and
+/// it self-hit near t = 0 without pbrt's t error bound) let it slip out after a few bounces:
+/// measured and printed here as a known limitation of the fast modes, so scenes
 /// where such rays matter should render with `--robust`. (Rays exactly along a shared edge are
 /// rare in renders.)
 #[test]

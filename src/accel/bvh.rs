@@ -49,10 +49,13 @@ use std::time::Duration;
 /// back, ten times obvhs's node-test epsilon of `1e-4`.
 pub const ORIGIN_SHIFT: f32 = 1e-3;
 
-/// A triangle's three vertices, for the watertight intersection test.
+/// A triangle as the intersection test wants it: `v0` and the edges `a = v1 - v0`,
+/// `b = v2 - v0`.
 #[derive(Clone, Copy, Debug)]
 struct Tri {
-    v: [Vec3A; 3],
+    v0: Vec3A,
+    a: Vec3A,
+    b: Vec3A,
 }
 
 /// Which scene triangle a BVH slot holds, and its unit geometric normal.
@@ -74,69 +77,31 @@ struct TriHit {
 impl Tri {
     fn new(p0: Vec3, p1: Vec3, p2: Vec3) -> Tri {
         Tri {
-            v: [p0.into(), p1.into(), p2.into()],
+            v0: p0.into(),
+            a: (p1 - p0).into(),
+            b: (p2 - p0).into(),
         }
     }
 
-    /// Watertight ray-triangle intersection (Woop, Benthin & Wald, JCGT 2013): the vertices
-    /// are translated to the ray origin and sheared so the ray runs along +z; the 2D edge
-    /// functions then decide inside/outside consistently for the two triangles sharing an
-    /// edge (recomputed in f64 when one is exactly zero), so no ray slips between them.
-    /// Accepts `t` in `(tmin, tmax]`; `u, v` are the barycentrics of `v1`, `v2`. Zero-area
-    /// triangles (`det == 0`) never hit.
+    /// Solves `o + t d = v0 + u a + v b` by Cramer's rule. Accepts `u, v >= 0`, `u + v <= 1`
+    /// and `t` in `(tmin, tmax]`. With `n = a x b`: `den = -d.n`, `t = s.n / den`,
+    /// `u = b.q / den`, `v = -a.q / den` where `s = o - v0`, `q = s x d`. A zero `n` (zero
+    /// area) gives `den == 0`: no hit.
     #[inline(always)]
     fn intersect(&self, o: Vec3A, d: Vec3A, tmin: f32, tmax: f32) -> Option<TriHit> {
-        // Permute so that z is the largest direction component; keep the winding.
-        let ad = d.abs();
-        let kz = if ad.x > ad.y {
-            if ad.x > ad.z {
-                0
-            } else {
-                2
-            }
-        } else if ad.y > ad.z {
-            1
-        } else {
-            2
-        };
-        let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
-        if d[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
-        let sz = 1.0 / d[kz];
-        let (sx, sy) = (d[kx] * sz, d[ky] * sz);
-        let rel = [self.v[0] - o, self.v[1] - o, self.v[2] - o];
-        let xy = |p: Vec3A| (p[kx] - sx * p[kz], p[ky] - sy * p[kz]);
-        let (a, b, c) = (xy(rel[0]), xy(rel[1]), xy(rel[2]));
-        let mut e0 = c.0 * b.1 - c.1 * b.0;
-        let mut e1 = a.0 * c.1 - a.1 * c.0;
-        let mut e2 = b.0 * a.1 - b.1 * a.0;
-        if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
-            let f = |p: (f32, f32), q: (f32, f32)| {
-                (p.0 as f64 * q.1 as f64 - p.1 as f64 * q.0 as f64) as f32
-            };
-            e0 = f(c, b);
-            e1 = f(a, c);
-            e2 = f(b, a);
-        }
-        if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+        let n = self.a.cross(self.b);
+        let den = -d.dot(n);
+        if den == 0.0 {
             return None;
         }
-        let det = e0 + e1 + e2;
-        if det == 0.0 {
-            return None;
-        }
-        let t_scaled = sz * (e0 * rel[0][kz] + e1 * rel[1][kz] + e2 * rel[2][kz]);
-        let inv = 1.0 / det;
-        let t = t_scaled * inv;
-        if !(t > tmin && t <= tmax) {
-            return None;
-        }
-        Some(TriHit {
-            t,
-            u: e1 * inv,
-            v: e2 * inv,
-        })
+        let inv = 1.0 / den;
+        let s = o - self.v0;
+        let q = s.cross(d);
+        let u = self.b.dot(q) * inv;
+        let v = -self.a.dot(q) * inv;
+        let t = s.dot(n) * inv;
+        let inside = u >= 0.0 && v >= 0.0 && u + v <= 1.0;
+        (inside && t > tmin && t <= tmax).then_some(TriHit { t, u, v })
     }
 }
 
@@ -172,9 +137,9 @@ impl BvhAccel {
         let obvhs_tris: Vec<Triangle> = flat
             .iter()
             .map(|t| Triangle {
-                v0: t.v[0],
-                v1: t.v[1],
-                v2: t.v[2],
+                v0: t.v0,
+                v1: t.v0 + t.a,
+                v2: t.v0 + t.b,
             })
             .collect();
         let mut core_time = Duration::ZERO;
@@ -225,7 +190,7 @@ fn flatten(scene: &Scene) -> Result<(Vec<Tri>, Vec<Prim>), AccelError> {
         for (p, ng) in normals.into_iter().enumerate() {
             let [p0, p1, p2] = mesh.triangle(p as u32);
             let tri = Tri::new(p0, p1, p2);
-            if (tri.v[1] - tri.v[0]).cross(tri.v[2] - tri.v[0]) == Vec3A::ZERO {
+            if tri.a.cross(tri.b) == Vec3A::ZERO {
                 continue;
             }
             let (Ok(mesh), Ok(prim)) = (u32::try_from(m), u32::try_from(p)) else {
