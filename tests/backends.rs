@@ -11,6 +11,7 @@ use photon::math::{Mat4, Ray, Vec2, Vec3};
 use photon::scene::{
     CameraDesc, FilmDesc, FilterDesc, IntegratorDesc, Mesh, ParamSet, SamplerDesc, Scene,
 };
+use photon::tools::meshgen::bumpy_sphere;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -80,54 +81,6 @@ fn mesh_of(positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> Mesh {
         indices,
         ..Default::default()
     }
-}
-
-/// A bumpy UV sphere of `2 * nlat * nlon` triangles (the pole rows are zero-area: their two
-/// top or bottom corners coincide), plus a few explicit zero-area triangles (collinear and
-/// coincident corners) through the middle.
-fn bumpy_sphere(nlat: u32, nlon: u32) -> Mesh {
-    let mut positions = Vec::new();
-    for i in 0..=nlat {
-        let theta = std::f32::consts::PI * i as f32 / nlat as f32;
-        for j in 0..=nlon {
-            let phi = std::f32::consts::TAU * j as f32 / nlon as f32;
-            let r = 1.0 + 0.05 * (7.0 * theta).sin() * (11.0 * phi).cos();
-            positions.push(
-                r * Vec3::new(
-                    theta.sin() * phi.cos(),
-                    theta.sin() * phi.sin(),
-                    theta.cos(),
-                ),
-            );
-        }
-    }
-    let w = nlon + 1;
-    let mut indices = Vec::new();
-    for i in 0..nlat {
-        for j in 0..nlon {
-            let (a, b, c, d) = (
-                i * w + j,
-                i * w + j + 1,
-                (i + 1) * w + j,
-                (i + 1) * w + j + 1,
-            );
-            indices.push([a, c, b]);
-            indices.push([b, c, d]);
-        }
-    }
-    let base = positions.len() as u32;
-    positions.extend([
-        Vec3::new(-2.0, 0.0, 0.0),
-        Vec3::new(0.0, 0.0, 0.0),
-        Vec3::new(2.0, 0.0, 0.0),
-        Vec3::new(0.0, 0.0, 0.3),
-    ]);
-    indices.extend([
-        [base, base + 1, base + 2],
-        [base + 3, base + 3, base + 3],
-        [base + 1, base + 3, base + 3],
-    ]);
-    mesh_of(positions, indices)
 }
 
 /// Random rays around `scene`'s bounds: origins in the bounds grown by 20 % per side; half the

@@ -105,6 +105,16 @@ ReverseOrientation
         rho * rho * le / (1.0 - rho)
     );
     assert!((mean / want - 1.0).abs() < 0.02, "mean {mean} vs {want}");
+    // Without final gathering the indirect part is read off the global map directly (only its
+    // photons that took a diffuse bounce): rho^2 Le / (1 - rho) on average, noisier per pixel.
+    let mut direct_look = settings.clone();
+    direct_look.photon.final_gather = false;
+    let out = render(&scene, &direct_look);
+    let indirect = &out.components.iter().find(|(n, _)| *n == "indirect").unwrap().1;
+    let look = indirect.pixels.iter().map(|p| p[0]).sum::<f32>() / indirect.pixels.len() as f32;
+    let want_ind = rho * rho * le / (1.0 - rho);
+    println!("furnace, global map looked at directly: indirect mean {look:.4} (expected {want_ind})");
+    assert!((look / want_ind - 1.0).abs() < 0.05, "direct look at the global map: {look}");
     assert!(
         within > 0.99,
         "only {:.1}% of pixels within 5%",

@@ -1,8 +1,8 @@
 //! Lambertian reflection, two-sided: it reflects on whichever side `wo` is (pbrt-v4's
 //! `DiffuseBxDF` with `SameHemisphere`), sampled by cosine-weighted hemisphere sampling.
-use super::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
 use super::{same_hemisphere, BsdfSample};
 use crate::math::{Vec2, Vec3};
+use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
 use std::f32::consts::FRAC_1_PI;
 
 /// A Lambertian reflector.

@@ -283,7 +283,13 @@ pub fn at_diffuse(
     };
     if !pass.settings.final_gather {
         let t = Instant::now();
-        let (e, _, _) = indirect_only(global, p, n, &pass.global_params, buf);
+        // The direct look at the global map: only photons that took a diffuse bounce (shadow
+        // rays and the caustic map have the rest).
+        let params = EstimateParams {
+            exclude_flags: Photon::DIRECT | Photon::CAUSTIC,
+            ..pass.global_params
+        };
+        let (e, _, _) = irradiance_with(global, p, n, &params, buf);
         charge(counters, t);
         out.indirect = beta * f_d * e;
         return out;
@@ -325,44 +331,6 @@ pub fn at_diffuse(
 
 fn sampler_key(s: &mut Sampler) -> u64 {
     (s.next_1d().to_bits() as u64) << 32 | s.next_1d().to_bits() as u64
-}
-
-/// Irradiance from the global map's photons that took at least one diffuse bounce (no direct,
-/// no caustic photons): what the direct look at the global map adds to shadow rays and the
-/// caustic map.
-fn indirect_only(
-    map: &PhotonMap,
-    p: Vec3,
-    n: Vec3,
-    params: &EstimateParams,
-    buf: &mut KnnResult,
-) -> (Vec3, usize, f32) {
-    // The estimate filters by side and disc; the flags are filtered by scaling: photons with
-    // flags contribute zero power.
-    let f = params.disc_fraction;
-    let stretch = if f > 0.0 && f < 1.0 {
-        1.0 / (f * f) - 1.0
-    } else {
-        0.0
-    };
-    map.knn_by(p, params.k, params.max_r2, buf, |ph, off, d2| {
-        if ph.flags() != 0 || !ph.arrives_against(n) {
-            return None;
-        }
-        let h = off.dot(n);
-        Some(d2 + stretch * h * h)
-    });
-    let r2 = buf.r2();
-    let skip = usize::from(buf.is_full());
-    let used = buf.len().saturating_sub(skip);
-    if used < params.min_photons {
-        return (Vec3::ZERO, used, r2);
-    }
-    let mut e = Vec3::ZERO;
-    for nb in &buf.neighbors()[skip..] {
-        e += map.photon(nb.idx).power() * params.kernel.weight(nb.d2, r2);
-    }
-    (e, used, r2)
 }
 
 /// Most specular bounces a gather ray follows to reach a diffuse surface.

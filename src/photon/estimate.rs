@@ -75,6 +75,8 @@ pub struct EstimateParams {
     /// Flattening of the search: photons farther than `disc_fraction * r` from the tangent
     /// plane are never used. `1` (or more) disables it.
     pub disc_fraction: f32,
+    /// Photons carrying any of these flags (`Photon::DIRECT`, `Photon::CAUSTIC`) are left out.
+    pub exclude_flags: u8,
 }
 
 impl EstimateParams {
@@ -86,6 +88,7 @@ impl EstimateParams {
             kernel: Kernel::default(),
             min_photons: 8,
             disc_fraction: 0.25,
+            exclude_flags: 0,
         }
     }
 }
@@ -127,7 +130,7 @@ pub fn irradiance_with(
         f32::INFINITY // f <= 0 or NaN: only photons exactly on the plane
     };
     map.knn_by(p, params.k, params.max_r2, buf, |ph, off, d2| {
-        if !ph.arrives_against(n) {
+        if ph.flags() & params.exclude_flags != 0 || !ph.arrives_against(n) {
             return None;
         }
         let h = off.dot(n);
