@@ -110,11 +110,21 @@ ReverseOrientation
     let mut direct_look = settings.clone();
     direct_look.photon.final_gather = false;
     let out = render(&scene, &direct_look);
-    let indirect = &out.components.iter().find(|(n, _)| *n == "indirect").unwrap().1;
+    let indirect = &out
+        .components
+        .iter()
+        .find(|(n, _)| *n == "indirect")
+        .unwrap()
+        .1;
     let look = indirect.pixels.iter().map(|p| p[0]).sum::<f32>() / indirect.pixels.len() as f32;
     let want_ind = rho * rho * le / (1.0 - rho);
-    println!("furnace, global map looked at directly: indirect mean {look:.4} (expected {want_ind})");
-    assert!((look / want_ind - 1.0).abs() < 0.05, "direct look at the global map: {look}");
+    println!(
+        "furnace, global map looked at directly: indirect mean {look:.4} (expected {want_ind})"
+    );
+    assert!(
+        (look / want_ind - 1.0).abs() < 0.05,
+        "direct look at the global map: {look}"
+    );
     assert!(
         within > 0.99,
         "only {:.1}% of pixels within 5%",

@@ -469,6 +469,12 @@ pub fn describe(pass: &PhotonPass) -> Vec<String> {
             st.marked_fraction.iter().map(|f| (f * 1000.0).round() / 1000.0).collect::<Vec<_>>()
         ));
     }
+    if st.global_per_light.len() > 1 || st.caustic_per_light.len() > 1 {
+        lines.push(format!(
+            "photon budget by light power: global {:?}, caustic {:?}",
+            st.global_per_light, st.caustic_per_light
+        ));
+    }
     if let Some(c) = &pass.cache {
         lines.push(format!(
             "irradiance cache: {} points in {:.3} s",

@@ -62,6 +62,9 @@ pub struct TraceStats {
     pub caustic_efficiency: f64,
     /// The same for photons emitted over the whole domain (as without projection maps).
     pub caustic_efficiency_unrestricted: f64,
+    /// Photons emitted per light (in proportion to power) for each map.
+    pub global_per_light: Vec<u64>,
+    pub caustic_per_light: Vec<u64>,
     /// Per light: fraction of the emission domain marked by its projection map.
     pub marked_fraction: Vec<f32>,
     pub rays: u64,
@@ -125,6 +128,7 @@ pub fn trace(scene: &Scene, accel: &Accel, lights: &Lights, s: &TraceSettings) -
     let global = if s.global_photons > 0 {
         let counts = allocate(s.global_photons, &powers);
         stats.global_emitted = counts.iter().sum();
+        stats.global_per_light = counts.clone();
         let full: Vec<ProjectionMap> = (0..powers.len())
             .map(|i| ProjectionMap::full(lights.emission_domain(scene, i)))
             .collect();
@@ -146,6 +150,7 @@ pub fn trace(scene: &Scene, accel: &Accel, lights: &Lights, s: &TraceSettings) -
     let caustic = if s.caustic_photons > 0 && !targets.is_empty() {
         let counts = allocate(s.caustic_photons, &powers);
         stats.caustic_emitted = counts.iter().sum();
+        stats.caustic_per_light = counts.clone();
         let maps: Vec<ProjectionMap> = (0..powers.len())
             .map(|i| {
                 if s.projection_maps {
