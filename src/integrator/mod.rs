@@ -119,6 +119,8 @@ pub struct RenderOutput {
     /// Seconds of pass 1: photon tracing, and building the maps and the irradiance cache.
     pub photon_seconds: f64,
     pub map_build_seconds: f64,
+    /// Photons pass 1 emitted (both maps).
+    pub photons_emitted: u64,
     pub counters: Counters,
     /// Statistics lines of the integrator (photon counts, timings, skipped components).
     pub notes: Vec<String>,
@@ -247,6 +249,9 @@ pub fn render_prepared(
         seconds: start.elapsed().as_secs_f64() + photon_seconds + map_build_seconds,
         photon_seconds,
         map_build_seconds,
+        photons_emitted: photons.map_or(0, |p| {
+            p.maps.stats.global_emitted + p.maps.stats.caustic_emitted
+        }),
         counters: ctx.counters,
         notes,
     }
@@ -348,6 +353,7 @@ fn merge(a: RenderOutput, na: u32, b: RenderOutput, nb: u32) -> RenderOutput {
         seconds: a.seconds + b.seconds,
         photon_seconds: a.photon_seconds,
         map_build_seconds: a.map_build_seconds,
+        photons_emitted: a.photons_emitted,
         counters: a.counters,
         notes: a.notes,
     }

@@ -185,11 +185,7 @@ fn measure(
         &[],
         ExrPixel::Half,
     )?;
-    let photons = if m.kind == IntegratorKind::Photonmap {
-        s.photon.trace.global_photons + s.photon.trace.caustic_photons
-    } else {
-        0
-    };
+    let photons = img.photons_emitted;
     let settings = match m.kind {
         IntegratorKind::Photonmap => format!(
             "global {} caustic {} lookup {}/{} gather {}",
