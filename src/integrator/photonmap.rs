@@ -398,9 +398,7 @@ fn reflected(
                 Vec3::new(0.0, 0.0, wo.z.signum()),
                 TransportMode::Radiance,
             );
-            let t = Instant::now();
             let e = cached_irradiance(pass, global, p, n, buf);
-            charge(&ctx.counters.lookup_ns, t);
             return throughput * f_d * e;
         }
         // Specular or glossy: follow one sampled direction.
