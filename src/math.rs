@@ -1,5 +1,6 @@
 //! Small geometric helpers on top of `glam`: rays, orthonormal frames and the robust
-//! ray-origin offset that keeps secondary and shadow rays from re-hitting their own surface.
+//! ray-origin offset (pbrt-style error bounds) that keeps secondary and shadow rays from
+//! re-hitting their own surface at any scene scale.
 pub use glam::{Mat3, Mat4, Vec2, Vec3};
 
 /// A ray `o + t d` for `t` in `[tmin, tmax]`. `d` need not be normalised.
@@ -65,44 +66,6 @@ impl Frame {
     }
 }
 
-/// Offsets a ray origin off a surface along its geometric normal so that the new ray does not
-/// hit the surface it starts on, at any scene scale (Wächter & Binder, "A Fast and Robust
-/// Method for Avoiding Self-Intersection", Ray Tracing Gems ch. 6): a few ulps in integer
-/// space far from the origin, a fixed tiny epsilon near it. `n` must point to the side the new
-/// ray leaves towards (flip it for transmission).
-pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
-    const ORIGIN: f32 = 1.0 / 32.0;
-    const FLOAT_SCALE: f32 = 1.0 / 65536.0;
-    const INT_SCALE: f32 = 256.0;
-    let of_i = [
-        (INT_SCALE * n.x) as i32,
-        (INT_SCALE * n.y) as i32,
-        (INT_SCALE * n.z) as i32,
-    ];
-    let bump = |pc: f32, oi: i32| -> f32 {
-        let bits = pc.to_bits() as i32;
-        f32::from_bits((bits + if pc < 0.0 { -oi } else { oi }) as u32)
-    };
-    let p_i = Vec3::new(bump(p.x, of_i[0]), bump(p.y, of_i[1]), bump(p.z, of_i[2]));
-    Vec3::new(
-        if p.x.abs() < ORIGIN {
-            p.x + FLOAT_SCALE * n.x
-        } else {
-            p_i.x
-        },
-        if p.y.abs() < ORIGIN {
-            p.y + FLOAT_SCALE * n.y
-        } else {
-            p_i.y
-        },
-        if p.z.abs() < ORIGIN {
-            p.z + FLOAT_SCALE * n.z
-        } else {
-            p_i.z
-        },
-    )
-}
-
 /// `gamma(n) = n eps / (1 - n eps)` with `eps = 2^-24`: the relative error bound of `n`
 /// floating-point operations (pbrt's notation).
 pub fn gamma(n: i32) -> f32 {
@@ -165,13 +128,18 @@ mod tests {
     }
 
     #[test]
-    fn offset_moves_to_the_normal_side() {
+    fn spawned_origin_leaves_to_the_normal_side() {
         for scale in [1e-4f32, 1.0, 1e4] {
             let p = Vec3::new(0.3, -0.7, 0.5) * scale;
-            let n = Vec3::new(0.0, 0.0, 1.0);
-            let q = offset_ray_origin(p, n);
-            assert!(q.z > p.z, "scale {scale}: {q:?} not above {p:?}");
-            assert!((q - p).length() < 1e-3 * scale.max(1.0));
+            let err = p.abs() * gamma(7);
+            for n in [Vec3::Z, -Vec3::Z] {
+                let q = spawn_origin(p, err, n);
+                assert!((q.z - p.z) * n.z > 0.0, "scale {scale}: {q:?} not past {p:?}");
+                assert!((q - p).length() < 1e-5 * scale, "scale {scale}: moved {}", (q - p).length());
+            }
         }
+        // An exact point on a coordinate plane still leaves it by a normal float.
+        let q = spawn_origin(Vec3::new(1.0, 0.0, 2.0), Vec3::ZERO, Vec3::Y);
+        assert!(q.y >= 1e-30 && q.y.is_normal());
     }
 }

@@ -105,7 +105,7 @@ impl Mesh {
     /// The surface point at barycentrics `(u, v)` of triangle `prim`, interpolated from the
     /// vertices. Use this rather than `ray.o + t ray.d` for hit points: its error is relative to
     /// the vertices' own magnitude, which is what the robust ray-origin offset
-    /// (`math::offset_ray_origin`) assumes; `o + t d` is off by up to ~1e-7 of the ray's
+    /// ([`crate::math::spawn_origin`]) assumes; `o + t d` is off by up to ~1e-7 of the ray's
     /// coordinates, which defeats the offset in large scenes.
     pub fn point(&self, prim: u32, u: f32, v: f32) -> Vec3 {
         let [p0, p1, p2] = self.triangle(prim);
