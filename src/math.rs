@@ -134,8 +134,15 @@ mod tests {
             let err = p.abs() * gamma(7);
             for n in [Vec3::Z, -Vec3::Z] {
                 let q = spawn_origin(p, err, n);
-                assert!((q.z - p.z) * n.z > 0.0, "scale {scale}: {q:?} not past {p:?}");
-                assert!((q - p).length() < 1e-5 * scale, "scale {scale}: moved {}", (q - p).length());
+                assert!(
+                    (q.z - p.z) * n.z > 0.0,
+                    "scale {scale}: {q:?} not past {p:?}"
+                );
+                assert!(
+                    (q - p).length() < 1e-5 * scale,
+                    "scale {scale}: moved {}",
+                    (q - p).length()
+                );
             }
         }
         // An exact point on a coordinate plane still leaves it by a normal float.

@@ -14,7 +14,7 @@ use super::{charge, power_heuristic, tile_pixels, RenderContext};
 use crate::accel::{Hit, RayQuery};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::film::Radiance;
-use crate::math::{spawn_origin, Frame, Ray, Vec2, Vec3};
+use crate::math::{spawn_origin, Frame, Ray, Vec3};
 use crate::photon::KnnResult;
 use crate::sampling::Sampler;
 use std::sync::atomic::Ordering;
@@ -70,12 +70,7 @@ pub fn render_tile(ctx: &RenderContext, x0: u32, y0: u32, x1: u32, y1: u32) -> V
         // Camera rays of the whole tile for this sample index.
         paths.clear();
         for (i, (x, y)) in tile_pixels(x0, y0, x1, y1).enumerate() {
-            let pixel_id = y as u64 * s.width as u64 + x as u64;
-            let mut sampler = Sampler::new(s.pattern, s.seed, pixel_id, sample, s.spp);
-            let offset = ctx.filter.sample(sampler.next_2d());
-            let ray = ctx
-                .camera
-                .generate_ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset);
+            let (ray, sampler) = super::camera_sample(ctx, x, y, sample);
             paths.push(PathState {
                 pixel: i,
                 ray,

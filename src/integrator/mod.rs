@@ -16,7 +16,9 @@ use crate::camera::Camera;
 use crate::film::{Filter, Radiance};
 use crate::imageio::RgbImage;
 use crate::light::Lights;
+use crate::math::{Ray, Vec2};
 use crate::sampling::Pattern;
+use crate::sampling::Sampler;
 use crate::scene::{Scene, SceneError};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -255,6 +257,19 @@ pub fn render_prepared(
         counters: ctx.counters,
         notes,
     }
+}
+
+/// The camera ray through pixel `(x, y)` for sample index `sample`, and the pixel's sample
+/// stream positioned after the two dimensions the pixel filter used.
+pub fn camera_sample(ctx: &RenderContext, x: u32, y: u32, sample: u32) -> (Ray, Sampler) {
+    let s = &ctx.settings;
+    let pixel_id = y as u64 * s.width as u64 + x as u64;
+    let mut sampler = Sampler::new(s.pattern, s.seed, pixel_id, sample, s.spp);
+    let offset = ctx.filter.sample(sampler.next_2d());
+    let ray = ctx
+        .camera
+        .generate_ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset);
+    (ray, sampler)
 }
 
 /// Pixels of a tile in row-major order: `(x, y)` for `x0..x1`, `y0..y1`.

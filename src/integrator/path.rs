@@ -42,7 +42,7 @@ use super::{power_heuristic, tile_pixels, RenderContext};
 use crate::accel::{Hit, RayQuery};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::film::Radiance;
-use crate::math::{max_component, spawn_origin, Frame, Ray, Vec2, Vec3};
+use crate::math::{max_component, spawn_origin, Frame, Ray, Vec3};
 use crate::sampling::Sampler;
 use std::sync::atomic::Ordering;
 
@@ -123,15 +123,9 @@ fn camera_rays(
     sample: u32,
     paths: &mut Vec<PathState>,
 ) {
-    let s = &ctx.settings;
     paths.clear();
     for (i, (x, y)) in tile_pixels(x0, y0, x1, y1).enumerate() {
-        let pixel_id = y as u64 * s.width as u64 + x as u64;
-        let mut sampler = Sampler::new(s.pattern, s.seed, pixel_id, sample, s.spp);
-        let offset = ctx.filter.sample(sampler.next_2d());
-        let ray = ctx
-            .camera
-            .generate_ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset);
+        let (ray, sampler) = super::camera_sample(ctx, x, y, sample);
         paths.push(PathState {
             pixel: i,
             ray,
