@@ -7,12 +7,10 @@
 use photon::accel::bvh::BvhAccel;
 use photon::accel::embree::{self, Device, EmbreeAccel, Geometry, SceneBuilder, SceneConfig};
 use photon::accel::{AccelOptions, Hit, RayQuery};
-use photon::math::{Mat4, Ray, Vec2, Vec3};
-use photon::scene::{
-    CameraDesc, FilmDesc, FilterDesc, IntegratorDesc, Mesh, ParamSet, SamplerDesc, Scene,
-};
+use photon::math::{Ray, Vec3};
+use photon::scene::{FilmDesc, Mesh, Scene};
 use photon::tools::meshgen::bumpy_sphere;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 /// SplitMix64: a small seeded generator, enough for test rays.
@@ -45,33 +43,18 @@ impl Rng {
 /// A scene holding `meshes`, everything else simple.
 fn scene_of(meshes: Vec<Mesh>) -> Scene {
     Scene {
-        meshes,
-        materials: vec![photon::scene::Material::Diffuse {
-            reflectance: Vec3::splat(0.5),
-        }],
-        lights: Vec::new(),
-        camera: CameraDesc {
-            world_from_camera: Mat4::IDENTITY,
-            fov_deg: 45.0,
-        },
         film: FilmDesc {
             xres: 16,
             yres: 16,
             filename: None,
         },
-        filter: FilterDesc::Box {
-            radius: Vec2::splat(0.5),
-        },
-        sampler: SamplerDesc {
-            name: "independent".into(),
-            pixel_samples: 1,
-        },
-        integrator: IntegratorDesc {
-            name: "photonmap".into(),
-            params: ParamSet::default(),
-            loc: None,
-        },
-        path: PathBuf::from("generated.pbrt"),
+        ..Scene::with_geometry(
+            meshes,
+            vec![photon::scene::Material::Diffuse {
+                reflectance: Vec3::splat(0.5),
+            }],
+            Vec::new(),
+        )
     }
 }
 

@@ -239,6 +239,40 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// A scene of the given geometry, materials and lights with simple settings for everything
+    /// else (camera at the origin looking down +z, fov 45; 256x256 film; 0.5-pixel box filter;
+    /// 1 sample; the photon mapper): for tests and generated benchmark scenes, which override
+    /// what they need with struct-update syntax.
+    pub fn with_geometry(meshes: Vec<Mesh>, materials: Vec<Material>, lights: Vec<Light>) -> Scene {
+        Scene {
+            meshes,
+            materials,
+            lights,
+            camera: CameraDesc {
+                world_from_camera: Mat4::IDENTITY,
+                fov_deg: 45.0,
+            },
+            film: FilmDesc {
+                xres: 256,
+                yres: 256,
+                filename: None,
+            },
+            filter: FilterDesc::Box {
+                radius: Vec2::splat(0.5),
+            },
+            sampler: SamplerDesc {
+                name: "independent".into(),
+                pixel_samples: 1,
+            },
+            integrator: IntegratorDesc {
+                name: "photonmap".into(),
+                params: ParamSet::default(),
+                loc: None,
+            },
+            path: PathBuf::from("generated.pbrt"),
+        }
+    }
+
     pub fn triangle_count(&self) -> usize {
         self.meshes.iter().map(|m| m.indices.len()).sum()
     }

@@ -12,11 +12,8 @@
 //! Shape "trianglemesh" ...   # the bumpy sphere (radius ~1, centre 0)
 //! Shape "trianglemesh" ...   # floor z = -1.1, 8 x 8
 //! ```
-use crate::math::{Mat4, Vec2, Vec3};
-use crate::scene::{
-    CameraDesc, FilmDesc, FilterDesc, IntegratorDesc, Light, Material, Mesh, ParamSet, SamplerDesc,
-    Scene,
-};
+use crate::math::{Mat4, Vec3};
+use crate::scene::{CameraDesc, Light, Material, Mesh, Scene};
 use std::path::PathBuf;
 
 /// A bumpy UV sphere of `2 * nlat * nlon + 3` triangles around the origin (radius 1 +- 5 %).
@@ -104,36 +101,21 @@ pub fn sphere_scene(triangles: usize) -> Scene {
         eye.extend(1.0),
     );
     Scene {
-        meshes: vec![sphere, floor],
-        materials: vec![Material::Diffuse {
-            reflectance: Vec3::splat(0.6),
-        }],
-        lights: vec![Light::Point {
-            pos: Vec3::new(2.0, -2.0, 4.0),
-            intensity: Vec3::splat(30.0),
-        }],
         camera: CameraDesc {
             world_from_camera,
             fov_deg: 40.0,
         },
-        film: FilmDesc {
-            xres: 256,
-            yres: 256,
-            filename: None,
-        },
-        filter: FilterDesc::Box {
-            radius: Vec2::splat(0.5),
-        },
-        sampler: SamplerDesc {
-            name: "independent".into(),
-            pixel_samples: 1,
-        },
-        integrator: IntegratorDesc {
-            name: "photonmap".into(),
-            params: ParamSet::default(),
-            loc: None,
-        },
         path: PathBuf::from(format!("sphere-{}", short_count(triangles))),
+        ..Scene::with_geometry(
+            vec![sphere, floor],
+            vec![Material::Diffuse {
+                reflectance: Vec3::splat(0.6),
+            }],
+            vec![Light::Point {
+                pos: Vec3::new(2.0, -2.0, 4.0),
+                intensity: Vec3::splat(30.0),
+            }],
+        )
     }
 }
 
