@@ -355,28 +355,55 @@ fn trace_one(
         if kind == MapKind::Caustic && !bsdf.is_specular() {
             break; // a caustic path ends at its first non-specular surface
         }
-        // Scatter: sample the BSDF, then Russian + RGB roulette on its weight.
-        let ns = mesh.shading_normal(hit.prim, hit.u, hit.v).unwrap_or(ng);
-        let frame = Frame::from_normal(ns);
-        let wo = frame.to_local(-dir);
-        let uc = sampler.next_1d();
-        let u2 = sampler.next_2d();
-        let u_rr = sampler.next_1d();
-        let Some(bs) = bsdf.sample(wo, uc, u2, TransportMode::Importance) else {
+        let Some(sc) = scatter(mesh, bsdf, &hit, ng, dir, sampler) else {
             break;
         };
-        let w = bs.f * (bs.wi.z.abs() / bs.pdf);
-        let q = ((w.x + w.y + w.z) / 3.0).min(1.0);
-        if q.is_nan() || q <= 0.0 || u_rr >= q {
-            break;
-        }
-        power *= w / q;
-        specular_only &= bs.specular;
-        let wi = frame.to_world(bs.wi);
-        let off = if ng.dot(wi) >= 0.0 { ng } else { -ng };
-        ray = Ray::new(mesh.spawn(hit.prim, hit.u, hit.v, off), wi);
+        power *= sc.power_scale;
+        specular_only &= sc.specular;
+        ray = sc.ray;
     }
     (first_specular, rays)
+}
+
+/// A photon's next leg after a surface hit.
+pub struct Scattered {
+    pub ray: Ray,
+    /// Per-channel factor of the photon's power: `w / q` (RGB roulette).
+    pub power_scale: Vec3,
+    /// Whether the sampled lobe was a delta (specular) one.
+    pub specular: bool,
+}
+
+/// Scatters a photon travelling along unit `dir` at `hit` (geometric normal `ng`): samples
+/// the BSDF in importance mode, then Russian + RGB roulette on its weight `w = f |cos| / pdf`
+/// (survive with `q = min(1, mean(w))`). Uses 4 sample dimensions. `None`: absorbed.
+pub fn scatter(
+    mesh: &crate::scene::Mesh,
+    bsdf: &Bsdf,
+    hit: &crate::accel::Hit,
+    ng: Vec3,
+    dir: Vec3,
+    sampler: &mut Sampler,
+) -> Option<Scattered> {
+    let ns = mesh.shading_normal(hit.prim, hit.u, hit.v).unwrap_or(ng);
+    let frame = Frame::from_normal(ns);
+    let wo = frame.to_local(-dir);
+    let uc = sampler.next_1d();
+    let u2 = sampler.next_2d();
+    let u_rr = sampler.next_1d();
+    let bs = bsdf.sample(wo, uc, u2, TransportMode::Importance)?;
+    let w = bs.f * (bs.wi.z.abs() / bs.pdf);
+    let q = ((w.x + w.y + w.z) / 3.0).min(1.0);
+    if q.is_nan() || q <= 0.0 || u_rr >= q {
+        return None;
+    }
+    let wi = frame.to_world(bs.wi);
+    let off = if ng.dot(wi) >= 0.0 { ng } else { -ng };
+    Some(Scattered {
+        ray: Ray::new(mesh.spawn(hit.prim, hit.u, hit.v, off), wi),
+        power_scale: w / q,
+        specular: bs.specular,
+    })
 }
 
 /// Whether the ray from `o` along unit `d` meets the sphere `(c, r)`.

@@ -27,7 +27,7 @@ use crate::integrator::{tile_pixels, RenderSettings, TILE};
 use crate::light::Lights;
 use crate::math::{spawn_origin, Frame, Ray, Vec2, Vec3};
 use crate::photon::projection::ProjectionMap;
-use crate::photon::trace::{allocate, specular_targets, MapKind, TraceSettings};
+use crate::photon::trace::{allocate, scatter, specular_targets, MapKind, TraceSettings};
 use crate::sampling::warp::square_to_cosine_hemisphere;
 use crate::sampling::{hash, permute, strata, Sampler};
 use crate::scene::Scene;
@@ -454,23 +454,10 @@ impl PhotonPath<'_> {
                 break;
             }
             let ng = mesh.geometric_normal(hit.prim, hit.u, hit.v);
-            let ns = mesh.shading_normal(hit.prim, hit.u, hit.v).unwrap_or(ng);
-            let frame = Frame::from_normal(ns);
-            let wo = frame.to_local(-ray.d.normalize());
-            let uc = sampler.next_1d();
-            let u2 = sampler.next_2d();
-            let u_rr = sampler.next_1d();
-            let Some(bs) = bsdf.sample(wo, uc, u2, TransportMode::Importance) else {
+            let Some(sc) = scatter(mesh, bsdf, &hit, ng, ray.d.normalize(), sampler) else {
                 break;
             };
-            let w = bs.f * (bs.wi.z.abs() / bs.pdf);
-            let q = ((w.x + w.y + w.z) / 3.0).min(1.0);
-            if q.is_nan() || q <= 0.0 || u_rr >= q {
-                break;
-            }
-            let wi = frame.to_world(bs.wi);
-            let off = if ng.dot(wi) >= 0.0 { ng } else { -ng };
-            ray = Ray::new(mesh.spawn(hit.prim, hit.u, hit.v, off), wi);
+            ray = sc.ray;
         }
     }
 }
