@@ -5,6 +5,7 @@ use photon::tools::bench::{self, BenchOptions};
 use photon::tools::compare::{self, CompareOptions};
 use photon::tools::converge::{self, ConvergeOptions};
 use photon::tools::crosscheck::{self, CrosscheckOptions};
+use photon::tools::merge::{self, MergeOptions};
 use photon::tools::render::{self, RenderOptions};
 use std::process::ExitCode;
 
@@ -35,6 +36,9 @@ enum Command {
     /// Benchmark both backends (build, camera/secondary/shadow rays, packets, threads) and the
     /// photon side (tracing, kd-tree, k-nearest, radiance estimates); table, CSV, JSON.
     Bench(BenchOptions),
+    /// Sum partial images of one render (`render --passes A..B`) into the final image, bit for
+    /// bit the same whatever the split.
+    Merge(MergeOptions),
 }
 
 fn main() -> ExitCode {
@@ -45,7 +49,15 @@ fn main() -> ExitCode {
         Command::Converge(opts) => converge::run(&opts),
         Command::Crosscheck(opts) => crosscheck::run(&opts),
         Command::Bench(opts) => bench::run(&opts).map(|()| true),
+        Command::Merge(opts) => merge::run(&opts).map(|()| true),
     };
+    // A render stopped by SIGINT/SIGTERM has saved what it finished; report the signal.
+    if let Some(sig) = photon::interrupt::requested() {
+        if let Err(e) = &result {
+            eprintln!("photon: {e}");
+        }
+        return ExitCode::from(sig.exit_code());
+    }
     match result {
         Ok(true) => ExitCode::SUCCESS,
         Ok(false) => ExitCode::from(1),

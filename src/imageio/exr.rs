@@ -199,12 +199,31 @@ impl Drop for Context {
     }
 }
 
+/// Pixels of one written layer: three 4-byte samples per pixel.
+#[derive(Clone, Copy)]
+enum Samples<'a> {
+    /// Linear radiance, stored as half or float.
+    F32(&'a [[f32; 3]]),
+    /// Raw 32-bit words, stored as `UINT` channels bit for bit.
+    U32(&'a [[u32; 3]]),
+}
+
 /// One written channel: its name and where its samples come from.
 struct ChannelSource<'a> {
     name: CString,
-    image: &'a RgbImage,
-    /// 0, 1 or 2: R, G or B of `image`.
+    samples: Samples<'a>,
+    /// 0, 1 or 2: R, G or B of `samples`.
     component: usize,
+}
+
+/// What [`write_exr_with`] stores besides the RGB image and its float layers.
+#[derive(Clone, Copy, Default)]
+pub struct ExrExtra<'a> {
+    /// Layers of raw 32-bit words (channels `<name>.R/G/B` of type `UINT`), kept bit for bit
+    /// (used for the exact fixed-point sums of partial renders).
+    pub uint_layers: &'a [(&'a str, &'a [[u32; 3]])],
+    /// String attributes of the header, as `(name, value)`.
+    pub attributes: &'a [(&'a str, &'a str)],
 }
 
 /// Writes `rgb` (channels R, G, B) plus each named extra layer (channels `<name>.R/G/B`) to
@@ -219,28 +238,71 @@ pub fn write_exr(
     layers: &[(&str, &RgbImage)],
     pixel: ExrPixel,
 ) -> Result<(), ImageError> {
+    write_exr_with(path, rgb, layers, pixel, ExrExtra::default())
+}
+
+/// [`write_exr`] plus raw `UINT` layers and string header attributes (`extra`).
+pub fn write_exr_with(
+    path: &Path,
+    rgb: &RgbImage,
+    layers: &[(&str, &RgbImage)],
+    pixel: ExrPixel,
+    extra: ExrExtra,
+) -> Result<(), ImageError> {
     let (width, height) = checked_size(path, rgb)?;
-    let mut channels = rgb_channels(path, "", rgb)?;
-    for (i, (name, image)) in layers.iter().enumerate() {
-        if name.is_empty() || layers[..i].iter().any(|(other, _)| other == name) {
+    let mut channels = rgb_channels(path, "", Samples::F32(&rgb.pixels))?;
+    let named = layers
+        .iter()
+        .map(|(n, i)| {
+            let same = (i.width, i.height) == (rgb.width, rgb.height);
+            (
+                *n,
+                Samples::F32(&i.pixels),
+                if same { i.width * i.height } else { usize::MAX },
+            )
+        })
+        .chain(
+            extra
+                .uint_layers
+                .iter()
+                .map(|(n, p)| (*n, Samples::U32(p), rgb.width * rgb.height)),
+        );
+    let mut seen: Vec<&str> = Vec::new();
+    for (name, samples, declared) in named {
+        if name.is_empty() || seen.contains(&name) {
             return Err(ImageError::invalid(
                 path,
                 format!("layer name {name:?} is empty or repeated"),
             ));
         }
-        if (image.width, image.height) != (rgb.width, rgb.height) || !image.is_consistent() {
+        seen.push(name);
+        let len = match samples {
+            Samples::F32(p) => p.len(),
+            Samples::U32(p) => p.len(),
+        };
+        if declared != rgb.width * rgb.height || len != declared {
             return Err(ImageError::invalid(
                 path,
                 format!(
-                    "layer {name:?} is {}x{}, the image is {}x{}",
-                    image.width, image.height, rgb.width, rgb.height
+                    "layer {name:?} holds {len} pixels, the image is {}x{}",
+                    rgb.width, rgb.height
                 ),
             ));
         }
-        channels.extend(rgb_channels(path, &format!("{name}."), image)?);
+        channels.extend(rgb_channels(path, &format!("{name}."), samples)?);
     }
+    let attributes = extra
+        .attributes
+        .iter()
+        .map(|(k, v)| {
+            Ok((
+                CString::new(*k).map_err(|_| ImageError::invalid(path, "NUL in attribute"))?,
+                CString::new(*v).map_err(|_| ImageError::invalid(path, "NUL in attribute"))?,
+            ))
+        })
+        .collect::<Result<Vec<_>, ImageError>>()?;
     write_atomically(path, |tmp| {
-        write_scanlines(tmp, path, width, height, &channels, pixel)
+        write_scanlines(tmp, path, width, height, &channels, &attributes, pixel)
     })
 }
 
@@ -266,7 +328,7 @@ fn checked_size(path: &Path, img: &RgbImage) -> Result<(i32, i32), ImageError> {
 fn rgb_channels<'a>(
     path: &Path,
     prefix: &str,
-    image: &'a RgbImage,
+    samples: Samples<'a>,
 ) -> Result<Vec<ChannelSource<'a>>, ImageError> {
     ["R", "G", "B"]
         .iter()
@@ -276,7 +338,7 @@ fn rgb_channels<'a>(
                 .map_err(|_| ImageError::invalid(path, "layer name contains a NUL byte"))?;
             Ok(ChannelSource {
                 name,
-                image,
+                samples,
                 component,
             })
         })
@@ -284,12 +346,14 @@ fn rgb_channels<'a>(
 }
 
 /// Writes the whole file `tmp` (errors name `shown`): header, then every chunk, then finish.
+#[allow(clippy::too_many_arguments)]
 fn write_scanlines(
     tmp: &Path,
     shown: &Path,
     width: i32,
     height: i32,
     channels: &[ChannelSource],
+    attributes: &[(CString, CString)],
     pixel: ExrPixel,
 ) -> Result<(), ImageError> {
     let ctx = Context::create_write(tmp, shown)?;
@@ -316,7 +380,16 @@ fn write_scanlines(
         ExrPixel::Half => ffi::EXR_PIXEL_HALF,
         ExrPixel::Float => ffi::EXR_PIXEL_FLOAT,
     };
+    for (k, v) in attributes {
+        ctx.check("exr_attr_set_string", || unsafe {
+            ffi::exr_attr_set_string(ctx.raw, part, k.as_ptr(), v.as_ptr())
+        })?;
+    }
     for ch in channels {
+        let ptype = match ch.samples {
+            Samples::F32(_) => ptype,
+            Samples::U32(_) => ffi::EXR_PIXEL_UINT,
+        };
         ctx.check("exr_add_channel", || unsafe {
             ffi::exr_add_channel(
                 ctx.raw,
@@ -406,16 +479,24 @@ fn encode_chunks(
                 .iter()
                 .find(|c| c.name.as_c_str() == name)
                 .ok_or_else(|| ImageError::invalid(&ctx.path, "library added a channel"))?;
-            let start = src.image.pixels.as_ptr().wrapping_add(first_pixel);
+            let (start, user_type) = match src.samples {
+                Samples::F32(p) => (
+                    p.as_ptr().wrapping_add(first_pixel).cast::<u8>(),
+                    ffi::EXR_PIXEL_FLOAT,
+                ),
+                Samples::U32(p) => (
+                    p.as_ptr().wrapping_add(first_pixel).cast::<u8>(),
+                    ffi::EXR_PIXEL_UINT,
+                ),
+            };
             info.user_bytes_per_element = F32_BYTES as i16;
-            info.user_data_type = ffi::EXR_PIXEL_FLOAT as u16;
+            info.user_data_type = user_type as u16;
             info.user_pixel_stride = 3 * F32_BYTES;
             info.user_line_stride = row_stride;
             // The chunk's rows start at `first_pixel` (checked in bounds above); the channel is
             // `component` floats into each pixel. The image outlives the pipeline run below.
-            info.__bindgen_anon_1.encode_from_ptr = start
-                .cast::<u8>()
-                .wrapping_add(src.component * F32_BYTES as usize);
+            info.__bindgen_anon_1.encode_from_ptr =
+                start.wrapping_add(src.component * F32_BYTES as usize);
         }
         if fresh {
             ctx.check("exr_encoding_choose_default_routines", || unsafe {
@@ -446,13 +527,66 @@ fn pipeline_channels(
 /// library decodes, half/float/uint) into a linear f32 image of the data window's size.
 /// Other channels (A, layers) are ignored.
 pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
-    read_rgb_channels(path, ["R".into(), "G".into(), "B".into()])
+    read_rgb_channels(path, ["R".into(), "G".into(), "B".into()], false)
 }
 
 /// Reads the extra layer `layer` (channels `<layer>.R`, `<layer>.G`, `<layer>.B`) of part 0
 /// of `path`, as written by [`write_exr`].
 pub fn read_exr_layer(path: &Path, layer: &str) -> Result<RgbImage, ImageError> {
-    read_rgb_channels(path, ["R", "G", "B"].map(|c| format!("{layer}.{c}")))
+    read_rgb_channels(path, ["R", "G", "B"].map(|c| format!("{layer}.{c}")), false)
+}
+
+/// Reads the `UINT` layer `layer` (as written through [`ExrExtra::uint_layers`]) bit for bit:
+/// the width, height and the 32-bit words of each pixel.
+pub fn read_exr_uint_layer(
+    path: &Path,
+    layer: &str,
+) -> Result<(usize, usize, Vec<[u32; 3]>), ImageError> {
+    let img = read_rgb_channels(path, ["R", "G", "B"].map(|c| format!("{layer}.{c}")), true)?;
+    let words = img.pixels.iter().map(|p| p.map(f32::to_bits)).collect();
+    Ok((img.width, img.height, words))
+}
+
+/// The string attributes of part 0's header, as `(name, value)` in the file's order.
+pub fn read_exr_attributes(path: &Path) -> Result<Vec<(String, String)>, ImageError> {
+    let ctx = Context::open_read(path)?;
+    let mut count = 0;
+    // SAFETY: live context, valid out-pointer.
+    ctx.check("exr_get_attribute_count", || unsafe {
+        ffi::exr_get_attribute_count(ctx.raw, 0, &mut count)
+    })?;
+    let mut out = Vec::new();
+    for i in 0..count {
+        let mut attr: *const ffi::exr_attribute_t = std::ptr::null();
+        // SAFETY: live context, index in range, valid out-pointer.
+        ctx.check("exr_get_attribute_by_index", || unsafe {
+            ffi::exr_get_attribute_by_index(ctx.raw, 0, ffi::EXR_ATTR_LIST_FILE_ORDER, i, &mut attr)
+        })?;
+        // SAFETY: on success `attr` points to an attribute owned by the context.
+        let Some(a) = (unsafe { attr.as_ref() }) else {
+            continue;
+        };
+        if a.type_ != ffi::EXR_ATTR_STRING || a.name.is_null() {
+            continue;
+        }
+        // SAFETY: string attributes hold a pointer to an `exr_attr_string_t` whose `str_` is
+        // NUL-terminated, and names are NUL-terminated; both live with the context.
+        let value = unsafe { a.__bindgen_anon_1.string.as_ref() }
+            .filter(|v| !v.str_.is_null())
+            .map(|v| {
+                unsafe { CStr::from_ptr(v.str_) }
+                    .to_string_lossy()
+                    .into_owned()
+            });
+        let name = unsafe { CStr::from_ptr(a.name) }
+            .to_string_lossy()
+            .into_owned();
+        if let Some(value) = value {
+            out.push((name, value));
+        }
+    }
+    ctx.finish()?;
+    Ok(out)
 }
 
 /// The geometry of part 0 that the reader needs.
@@ -466,7 +600,8 @@ struct PartInfo {
 }
 
 /// Reads the three named channels of part 0 into an image.
-fn read_rgb_channels(path: &Path, names: [String; 3]) -> Result<RgbImage, ImageError> {
+/// With `raw`, the samples are decoded as `UINT` words and stored bit for bit in the f32s.
+fn read_rgb_channels(path: &Path, names: [String; 3], raw: bool) -> Result<RgbImage, ImageError> {
     let ctx = Context::open_read(path)?;
     let info = part_info(&ctx)?;
     check_channels(&ctx, &names)?;
@@ -476,6 +611,7 @@ fn read_rgb_channels(path: &Path, names: [String; 3]) -> Result<RgbImage, ImageE
         pipe: Box::default(),
         initialized: false,
         buffer: Vec::new(),
+        raw,
     };
     if info.tiled {
         read_tiles(&mut dec, &info, &names, &mut img)?;
@@ -583,6 +719,8 @@ struct Decoder<'c> {
     pipe: Box<ffi::exr_decode_pipeline_t>,
     initialized: bool,
     buffer: Vec<f32>,
+    /// Decode as `UINT` words (bit patterns in the f32 buffer) instead of floats.
+    raw: bool,
 }
 
 impl Drop for Decoder<'_> {
@@ -724,7 +862,11 @@ fn decode_chunk(
         let name = unsafe { CStr::from_ptr(info.channel_name) }.to_string_lossy();
         let target = names.iter().position(|n| *n == name);
         info.user_bytes_per_element = F32_BYTES as i16;
-        info.user_data_type = ffi::EXR_PIXEL_FLOAT as u16;
+        info.user_data_type = if dec.raw {
+            ffi::EXR_PIXEL_UINT as u16
+        } else {
+            ffi::EXR_PIXEL_FLOAT as u16
+        };
         info.user_pixel_stride = F32_BYTES;
         info.user_line_stride = cw as i32 * F32_BYTES;
         // Plane k of the buffer (cw * ch floats) receives channel k; others are skipped.

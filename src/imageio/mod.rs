@@ -20,7 +20,10 @@ pub mod exr;
 pub mod metrics;
 pub mod png;
 
-pub use exr::{read_exr, read_exr_layer, write_exr, ExrPixel};
+pub use exr::{
+    read_exr, read_exr_attributes, read_exr_layer, read_exr_uint_layer, write_exr, write_exr_with,
+    ExrExtra, ExrPixel,
+};
 pub use png::write_png;
 
 use std::fmt;

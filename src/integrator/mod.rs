@@ -8,6 +8,7 @@
 //! (default: the direct-lighting + specular ray tracer until the photon mapper lands); the
 //! statistics say which. Parameters the chosen integrator does not read are errors.
 pub mod direct;
+pub mod passes;
 pub mod path;
 pub mod photonmap;
 
@@ -56,6 +57,8 @@ pub struct RenderSettings {
     pub light_samples: u32,
     /// The photon mapper's settings (read from the file's `Integrator` parameters).
     pub photon: photonmap::PhotonSettings,
+    /// Samples per pixel of each pass when rendering in passes (`"integer passspp"`).
+    pub pass_spp: u32,
 }
 
 impl RenderSettings {
@@ -72,6 +75,13 @@ impl RenderSettings {
             });
         }
         let photon = photonmap::PhotonSettings::from_params(&mut params)?;
+        let pass_spp = params.get_int("passspp", 4)?;
+        if pass_spp < 1 {
+            return Err(SceneError {
+                loc: params.loc("passspp").cloned(),
+                msg: format!("\"passspp\" must be >= 1, got {pass_spp}"),
+            });
+        }
         params.check_unused()?;
         Ok(RenderSettings {
             width: scene.film.xres,
@@ -82,7 +92,35 @@ impl RenderSettings {
             max_depth: max_depth as u32,
             light_samples: 1,
             photon,
+            pass_spp: pass_spp as u32,
         })
+    }
+}
+
+impl RenderOutput {
+    /// No image, no counts (to add passes into).
+    pub fn empty() -> RenderOutput {
+        RenderOutput {
+            image: RgbImage::new(0, 0),
+            components: Vec::new(),
+            seconds: 0.0,
+            photon_seconds: 0.0,
+            map_build_seconds: 0.0,
+            photons_emitted: 0,
+            counters: Counters::default(),
+            notes: Vec::new(),
+        }
+    }
+
+    /// Adds `other`'s counters, pass-1 times and photon counts to these.
+    pub fn add_counts(&mut self, other: &RenderOutput) {
+        self.counters.add(&other.counters);
+        self.photon_seconds += other.photon_seconds;
+        self.map_build_seconds += other.map_build_seconds;
+        self.photons_emitted += other.photons_emitted;
+        if self.notes.is_empty() {
+            self.notes = other.notes.clone();
+        }
     }
 }
 
@@ -105,6 +143,19 @@ pub fn charge(counter: &AtomicU64, start: Instant) {
 }
 
 impl Counters {
+    /// Adds `other`'s counts to these.
+    pub fn add(&self, other: &Counters) {
+        for (x, y) in [
+            (&self.camera_rays, &other.camera_rays),
+            (&self.secondary_rays, &other.secondary_rays),
+            (&self.shadow_rays, &other.shadow_rays),
+            (&self.ray_ns, &other.ray_ns),
+            (&self.lookup_ns, &other.lookup_ns),
+        ] {
+            x.fetch_add(y.load(Ordering::Relaxed), Ordering::Relaxed);
+        }
+    }
+
     pub fn total(&self) -> u64 {
         self.camera_rays.load(Ordering::Relaxed)
             + self.secondary_rays.load(Ordering::Relaxed)
@@ -210,6 +261,11 @@ pub fn render_prepared(
         .map(|&(x0, y0)| {
             let x1 = (x0 + TILE).min(w);
             let y1 = (y0 + TILE).min(h);
+            if crate::interrupt::requested().is_some() {
+                // Stopping: the caller discards this render.
+                let n = ((x1 - x0) * (y1 - y0)) as usize;
+                return ((x0, y0), vec![Radiance::default(); n]);
+            }
             let px = match kind {
                 IntegratorKind::Direct | IntegratorKind::Photonmap => {
                     direct::render_tile(&ctx, x0, y0, x1, y1)
@@ -301,6 +357,9 @@ pub fn render_for_time(
     kind: IntegratorKind,
     budget_s: f64,
 ) -> (RenderOutput, u32) {
+    if kind == IntegratorKind::Photonmap && settings.photon.progressive {
+        return passes::render_for_time(scene, accel, settings, kind, budget_s);
+    }
     let start = Instant::now();
     let photons = prepare(scene, accel, settings, kind);
     let mut s = settings.clone();
@@ -345,18 +404,7 @@ fn merge(a: RenderOutput, na: u32, b: RenderOutput, nb: u32) -> RenderOutput {
             .map(|(p, q)| std::array::from_fn(|c| p[c] * wa + q[c] * wb))
             .collect(),
     };
-    let add = |x: &AtomicU64, y: &AtomicU64| {
-        x.fetch_add(y.load(Ordering::Relaxed), Ordering::Relaxed);
-    };
-    for (x, y) in [
-        (&a.counters.camera_rays, &b.counters.camera_rays),
-        (&a.counters.secondary_rays, &b.counters.secondary_rays),
-        (&a.counters.shadow_rays, &b.counters.shadow_rays),
-        (&a.counters.ray_ns, &b.counters.ray_ns),
-        (&a.counters.lookup_ns, &b.counters.lookup_ns),
-    ] {
-        add(x, y);
-    }
+    a.counters.add(&b.counters);
     RenderOutput {
         image: mix(&a.image, &b.image),
         components: a

@@ -50,6 +50,14 @@ pub struct PhotonSettings {
     pub gather_samples: u32,
     pub final_gather: bool,
     pub irradiance_cache: bool,
+    /// Progressive photon mapping (Knaus and Zwicker 2011): every pass traces fresh maps and
+    /// estimates with a fixed radius that shrinks from pass to pass (see [`super::passes`]).
+    pub progressive: bool,
+    /// The radius schedule's alpha in (0, 1): `r_{i+1}^2 = r_i^2 (i + alpha) / (i + 1)`.
+    pub alpha: f32,
+    /// Factor on both squared radii for the current pass (1 for pass 0 and for Jensen's fixed
+    /// maps; set by the pass driver).
+    pub radius_scale2: f64,
 }
 
 impl Default for PhotonSettings {
@@ -72,6 +80,9 @@ impl Default for PhotonSettings {
             gather_samples: 2,
             final_gather: true,
             irradiance_cache: true,
+            progressive: false,
+            alpha: 2.0 / 3.0,
+            radius_scale2: 1.0,
         }
     }
 }
@@ -102,6 +113,14 @@ impl PhotonSettings {
         s.final_gather = params.get_bool("finalgather", s.final_gather)?;
         s.irradiance_cache = params.get_bool("irradiancecache", s.irradiance_cache)?;
         s.trace.projection_maps = params.get_bool("projectionmaps", s.trace.projection_maps)?;
+        s.progressive = params.get_bool("progressive", s.progressive)?;
+        s.alpha = params.get_float("alpha", s.alpha)?;
+        if !(s.alpha > 0.0 && s.alpha < 1.0) {
+            return Err(SceneError {
+                loc: params.loc("alpha").cloned(),
+                msg: format!("\"alpha\" must be in (0, 1), got {}", s.alpha),
+            });
+        }
         if let Some(k) = params.get_string_opt("kernel")? {
             s.kernel = parse_kernel(&k).ok_or_else(|| SceneError {
                 loc: params.loc("kernel").cloned(),
@@ -172,12 +191,18 @@ pub fn prepare(
     }
     let maps = trace::trace(scene, accel, lights, &s.trace);
     let (_, radius) = lights.scene_sphere();
-    let mut global_params =
-        EstimateParams::new(s.global_lookup.max(1), (s.global_radius * radius).powi(2));
-    global_params.kernel = s.kernel;
-    let mut caustic_params =
-        EstimateParams::new(s.caustic_lookup.max(1), (s.caustic_radius * radius).powi(2));
-    caustic_params.kernel = s.kernel;
+    let r2 = |fraction: f32| ((fraction * radius) as f64).powi(2) * s.radius_scale2;
+    let params = |k: usize, r2: f64| {
+        let mut p = if s.progressive {
+            EstimateParams::fixed_radius(r2 as f32)
+        } else {
+            EstimateParams::new(k.max(1), r2 as f32)
+        };
+        p.kernel = s.kernel;
+        p
+    };
+    let global_params = params(s.global_lookup, r2(s.global_radius));
+    let caustic_params = params(s.caustic_lookup, r2(s.caustic_radius));
     let t = Instant::now();
     let cache = if s.irradiance_cache && s.final_gather {
         build_cache(&maps, &global_params)

@@ -273,6 +273,53 @@ impl Scene {
         }
     }
 
+    /// A 64-bit hash of everything that decides the image: geometry (vertex bits, indices,
+    /// normals, uvs, material and light of each mesh), materials, lights, camera and pixel filter
+    /// (the resolution is checked on its own). Partial renders carry it so that parts of different scenes never merge.
+    pub fn content_hash(&self) -> u64 {
+        use crate::sampling::hash;
+        let text = |s: String| {
+            s.bytes()
+                .fold(0u64, |h, b| crate::sampling::mix64(h ^ b as u64))
+        };
+        let mut h = hash(&[
+            text(format!("{:?}", self.materials)),
+            text(format!("{:?}", self.lights)),
+            text(format!("{:?}", self.camera)),
+            text(format!("{:?}", self.filter)),
+        ]);
+        for m in &self.meshes {
+            let bits = |v: &[f32]| {
+                v.iter()
+                    .fold(0u64, |h, x| crate::sampling::mix64(h ^ x.to_bits() as u64))
+            };
+            let pos: Vec<f32> = m.positions.iter().flat_map(|p| p.to_array()).collect();
+            let nrm: Vec<f32> = m
+                .normals
+                .iter()
+                .flatten()
+                .flat_map(|p| p.to_array())
+                .collect();
+            let uv: Vec<f32> = m.uvs.iter().flatten().flat_map(|p| p.to_array()).collect();
+            let idx = m
+                .indices
+                .iter()
+                .flatten()
+                .fold(0u64, |h, &i| crate::sampling::mix64(h ^ i as u64));
+            h = hash(&[
+                h,
+                bits(&pos),
+                bits(&nrm),
+                bits(&uv),
+                idx,
+                m.material as u64,
+                m.area_light.map_or(u64::MAX, |l| l as u64),
+                m.flip_normals as u64,
+            ]);
+        }
+        h
+    }
+
     pub fn triangle_count(&self) -> usize {
         self.meshes.iter().map(|m| m.indices.len()).sum()
     }

@@ -3,7 +3,9 @@ pub mod bench;
 pub mod compare;
 pub mod converge;
 pub mod crosscheck;
+pub mod merge;
 pub mod meshgen;
+pub mod passes;
 pub mod rays;
 pub mod render;
 

@@ -71,6 +71,68 @@ pub struct RenderOptions {
     pub exposure: f32,
     #[command(flatten)]
     pub photon: PhotonOverrides,
+    #[command(flatten)]
+    pub passes: PassOptions,
+}
+
+/// Rendering in independent passes (see `integrator::passes`).
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct PassOptions {
+    /// Progressive photon mapping: fresh photon maps every pass, radii shrinking by the
+    /// Knaus-Zwicker schedule (also `Integrator "photonmap" "bool progressive" [ true ]`).
+    #[arg(long)]
+    pub progressive: bool,
+    /// The radius schedule's alpha, in (0, 1) (default 2/3).
+    #[arg(long)]
+    pub alpha: Option<f32>,
+    /// Render only passes A..B (half-open, as in Rust) and write a partial image that
+    /// `photon merge` sums with the other parts; `N` means 0..N. Default with --progressive:
+    /// enough passes for the file's samples per pixel.
+    #[arg(long, value_parser = parse_pass_range)]
+    pub passes: Option<std::ops::Range<u64>>,
+    /// Samples per pixel of each pass (default: `"integer passspp"`, else 4).
+    #[arg(long)]
+    pub pass_spp: Option<u32>,
+    /// Write the partial image to FILE as the render goes (atomically), at most every
+    /// --every; on SIGINT/SIGTERM it is written before exiting.
+    #[arg(long)]
+    pub checkpoint: Option<PathBuf>,
+    /// Time between checkpoints (e.g. 30s, 5m).
+    #[arg(long, value_parser = parse_duration, default_value = "5m")]
+    pub every: f64,
+    /// Continue the render saved in FILE (a checkpoint or partial image of the same scene and
+    /// settings) from its last pass.
+    #[arg(long)]
+    pub resume: Option<PathBuf>,
+}
+
+impl PassOptions {
+    /// True when the render runs in passes.
+    pub fn active(&self) -> bool {
+        self.progressive
+            || self.passes.is_some()
+            || self.checkpoint.is_some()
+            || self.resume.is_some()
+    }
+}
+
+/// Parses `A..B` (passes A to B-1) or `N` (0..N).
+pub fn parse_pass_range(s: &str) -> Result<std::ops::Range<u64>, String> {
+    let num = |t: &str| {
+        t.trim()
+            .parse::<u64>()
+            .map_err(|_| format!("expected A..B or N (pass numbers), got {s:?}"))
+    };
+    let r = match s.split_once("..") {
+        Some((a, b)) => num(a)?..num(b)?,
+        None => 0..num(s)?,
+    };
+    if r.start >= r.end {
+        return Err(format!(
+            "empty pass range {s:?} (A..B renders passes A to B-1)"
+        ));
+    }
+    Ok(r)
 }
 
 /// Command-line overrides of the photon mapper's `Integrator "photonmap"` parameters.
@@ -236,6 +298,26 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
         settings.max_depth,
         pool.current_num_threads()
     );
+
+    if opts.passes.active() {
+        if let Some(a) = opts.passes.alpha {
+            settings.photon.alpha = a;
+        }
+        if !(settings.photon.alpha > 0.0 && settings.photon.alpha < 1.0) {
+            return Err(ToolError(format!(
+                "--alpha must be in (0, 1), got {}",
+                settings.photon.alpha
+            )));
+        }
+        settings.photon.progressive |= opts.passes.progressive;
+        if let Some(n) = opts.passes.pass_spp {
+            if n == 0 {
+                return Err(ToolError("--pass-spp must be at least 1".into()));
+            }
+            settings.pass_spp = n;
+        }
+        return super::passes::run(opts, &scene, &accel, &settings, &pool, &exr, png.as_deref());
+    }
 
     let bar = progress_bar();
     let progress = |done: u64, total: u64| {

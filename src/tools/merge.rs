@@ -1,0 +1,55 @@
+//! `photon merge PART.exr... -o OUT.exr`: sums partial images (from `photon render --passes`)
+//! into the final image. The parts must come from one render (same scene, seed, resolution
+//! and settings: the error names the field that differs) and their pass ranges must tile
+//! `[0, N)` (the error lists overlaps and missing ranges). The sums are exact, so any split of
+//! the passes merges to the same file, bit for bit; the output is itself a partial image of
+//! passes `0..N` (it can be merged further or resumed).
+use super::ToolError;
+use crate::integrator::passes::{merge, Partial};
+use std::path::PathBuf;
+
+/// Options of `photon merge`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct MergeOptions {
+    /// Partial images written by `photon render --passes A..B`.
+    #[arg(required = true)]
+    pub parts: Vec<PathBuf>,
+    /// The merged EXR.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// PNG preview (default: the EXR path with .png).
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Skip the PNG preview.
+    #[arg(long)]
+    pub no_png: bool,
+    /// PNG exposure in stops.
+    #[arg(long, default_value_t = 0.0)]
+    pub exposure: f32,
+}
+
+pub fn run(opts: &MergeOptions) -> Result<(), ToolError> {
+    let parts = opts
+        .parts
+        .iter()
+        .map(|p| Ok((p.clone(), Partial::read(p).map_err(ToolError)?)))
+        .collect::<Result<Vec<_>, ToolError>>()?;
+    let merged = merge(&parts).map_err(ToolError)?;
+    merged.write(&opts.output)?;
+    println!(
+        "merged {} parts: passes {}..{} -> {}",
+        parts.len(),
+        merged.passes.start,
+        merged.passes.end,
+        opts.output.display()
+    );
+    if !opts.no_png {
+        let png = opts
+            .png
+            .clone()
+            .unwrap_or_else(|| opts.output.with_extension("png"));
+        crate::imageio::write_png(&png, &merged.mean().0, opts.exposure)?;
+        println!("wrote {}", png.display());
+    }
+    Ok(())
+}
