@@ -51,12 +51,13 @@ pub struct PhotonSettings {
     pub final_gather: bool,
     pub irradiance_cache: bool,
     /// Progressive photon mapping (Knaus and Zwicker 2011): every pass traces fresh maps and
-    /// estimates with a fixed radius that shrinks from pass to pass (see [`super::passes`]).
+    /// its estimates use only the photons within a shrinking fraction of the k-nearest radius
+    /// (see [`super::passes`]).
     pub progressive: bool,
     /// The radius schedule's alpha in (0, 1): `r_{i+1}^2 = r_i^2 (i + alpha) / (i + 1)`.
     pub alpha: f32,
-    /// Factor on both squared radii for the current pass (1 for pass 0 and for Jensen's fixed
-    /// maps; set by the pass driver).
+    /// Factor on the squared k-nearest radii of the current pass's estimates (1 for pass 0
+    /// and for Jensen's fixed maps; set by the pass driver).
     pub radius_scale2: f64,
 }
 
@@ -191,15 +192,11 @@ pub fn prepare(
     }
     let maps = trace::trace(scene, accel, lights, &s.trace);
     let (_, radius) = lights.scene_sphere();
-    let r2 = |fraction: f32| ((fraction * radius) as f64).powi(2) * s.radius_scale2;
-    let params = |k: usize, r2: f64| {
-        let mut p = if s.progressive {
-            EstimateParams::fixed_radius(r2 as f32)
-        } else {
-            EstimateParams::new(k.max(1), r2 as f32)
-        };
-        p.kernel = s.kernel;
-        p
+    let r2 = |fraction: f32| ((fraction * radius) as f64).powi(2);
+    let params = |k: usize, r2: f64| EstimateParams {
+        kernel: s.kernel,
+        shrink2: s.radius_scale2 as f32,
+        ..EstimateParams::new(k.max(1), r2 as f32)
     };
     let global_params = params(s.global_lookup, r2(s.global_radius));
     let caustic_params = params(s.caustic_lookup, r2(s.caustic_radius));

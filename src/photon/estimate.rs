@@ -77,6 +77,9 @@ pub struct EstimateParams {
     pub disc_fraction: f32,
     /// Photons carrying any of these flags (`Photon::DIRECT`, `Photon::CAUSTIC`) are left out.
     pub exclude_flags: u8,
+    /// Progressive shrinking: only the photons within `shrink2 * r^2` of the k-nearest radius
+    /// `r` count, with the kernel over that smaller disc (1: Jensen's estimate).
+    pub shrink2: f32,
 }
 
 impl EstimateParams {
@@ -89,24 +92,8 @@ impl EstimateParams {
             min_photons: 8,
             disc_fraction: 0.25,
             exclude_flags: 0,
+            shrink2: 1.0,
         }
-    }
-}
-
-impl EstimateParams {
-    /// Every photon within `r2` counts and the kernel spans `r2` (progressive photon mapping:
-    /// the radius, not a photon count, is given); no minimum count, disc guard 0.25.
-    pub fn fixed_radius(r2: f32) -> Self {
-        EstimateParams {
-            k: usize::MAX,
-            min_photons: 0,
-            ..EstimateParams::new(usize::MAX, r2)
-        }
-    }
-
-    /// True for [`EstimateParams::fixed_radius`] lookups.
-    pub fn is_fixed_radius(&self) -> bool {
-        self.k == usize::MAX
     }
 }
 
@@ -146,18 +133,14 @@ pub fn irradiance_with(
     } else {
         f32::INFINITY // f <= 0 or NaN: only photons exactly on the plane
     };
-    let metric = |ph: &super::Photon, off: Vec3, d2: f32| {
+    map.knn_by(p, params.k, params.max_r2, buf, |ph, off, d2| {
         if ph.flags() & params.exclude_flags != 0 || !ph.arrives_against(n) {
             return None;
         }
         let h = off.dot(n);
         let extra = if h == 0.0 { 0.0 } else { stretch * h * h };
         Some(d2 + extra)
-    };
-    if params.is_fixed_radius() {
-        return fixed_radius_sum(map, p, params, metric);
-    }
-    map.knn_by(p, params.k, params.max_r2, buf, metric);
+    });
     let r2 = buf.r2();
     // When full, the farthest photon (the heap top) only defines the radius.
     let skip = usize::from(buf.is_full());
@@ -165,34 +148,26 @@ pub fn irradiance_with(
     if used < params.min_photons.max(1) || !(r2 > 0.0 && r2.is_finite()) {
         return (Vec3::ZERO, 0, r2);
     }
-    let sum = buf.neighbors()[skip..].iter().fold(Vec3::ZERO, |acc, nb| {
+    let neighbors = &buf.neighbors()[skip..];
+    if params.shrink2 < 1.0 {
+        // Given r, the other photons are uniform in the disc, so those in the smaller disc
+        // are uniform in it: the same estimator over fewer photons.
+        let r2s = r2 * params.shrink2.max(0.0);
+        let (sum, n) =
+            neighbors
+                .iter()
+                .filter(|nb| nb.d2 <= r2s)
+                .fold((Vec3::ZERO, 0), |(acc, n), nb| {
+                    (
+                        acc + map.photon(nb.idx).power() * params.kernel.weight(nb.d2, r2s),
+                        n + 1,
+                    )
+                });
+        return (sum, n, r2s);
+    }
+    let sum = neighbors.iter().fold(Vec3::ZERO, |acc, nb| {
         acc + map.photon(nb.idx).power() * params.kernel.weight(nb.d2, r2)
     });
-    (sum, used, r2)
-}
-
-/// The fixed-radius estimate: every photon whose `metric` distance is within `max_r2`,
-/// weighted by the kernel over `max_r2`.
-fn fixed_radius_sum(
-    map: &PhotonMap,
-    p: Vec3,
-    params: &EstimateParams,
-    metric: impl Fn(&super::Photon, Vec3, f32) -> Option<f32>,
-) -> (Vec3, usize, f32) {
-    let r2 = params.max_r2;
-    if !(r2 > 0.0 && r2.is_finite()) {
-        return (Vec3::ZERO, 0, r2);
-    }
-    let (mut sum, mut used) = (Vec3::ZERO, 0usize);
-    map.radius_query(p, r2, |ph, d2| {
-        if let Some(m) = metric(ph, ph.pos() - p, d2).filter(|&m| m <= r2) {
-            sum += ph.power() * params.kernel.weight(m, r2);
-            used += 1;
-        }
-    });
-    if used < params.min_photons {
-        return (Vec3::ZERO, 0, r2);
-    }
     (sum, used, r2)
 }
 

@@ -90,6 +90,11 @@ pub fn methods() -> Vec<Method> {
             adjust: |s, b| scale_photons(s, b, 800_000),
         },
         Method {
+            name: "progressive",
+            kind: IntegratorKind::Photonmap,
+            adjust: |s, _| s.photon.progressive = true,
+        },
+        Method {
             name: "path",
             kind: IntegratorKind::Path,
             adjust: |_, _| {},

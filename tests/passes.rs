@@ -1,0 +1,251 @@
+//! Rendering in passes: any split of the passes merges to the same file bit for bit, `merge`
+//! refuses parts of other renders and bad ranges, a render killed with -9 resumes from its
+//! checkpoint to the uninterrupted image, SIGTERM keeps what was finished, and progressive
+//! photon mapping falls below the fixed-map error floor.
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn photon() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_photon"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join("passes")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A small progressive render of the glass Cornell box (caustics, both maps, gathering).
+const SMALL: [&str; 8] = [
+    "--global-photons",
+    "4000",
+    "--caustic-photons",
+    "4000",
+    "--pass-spp",
+    "2",
+    "--progressive",
+    "--no-png",
+];
+
+fn render(dir: &Path, out: &str, extra: &[&str]) -> Output {
+    let res = if extra.contains(&"--res") {
+        &[][..]
+    } else {
+        &["--res", "24x20"][..]
+    };
+    let o = photon()
+        .args(["render", "scenes/cornell-glass.pbrt"])
+        .args(SMALL)
+        .args(res)
+        .args(extra)
+        .arg("-o")
+        .arg(dir.join(out))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    o
+}
+
+fn merge(dir: &Path, parts: &[&str], out: &str) -> Output {
+    photon()
+        .arg("merge")
+        .args(parts.iter().map(|p| dir.join(p)))
+        .arg("-o")
+        .arg(dir.join(out))
+        .arg("--no-png")
+        .output()
+        .unwrap()
+}
+
+fn bytes(p: PathBuf) -> Vec<u8> {
+    std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+#[test]
+fn any_split_merges_to_the_same_file() {
+    let dir = tmp("split");
+    render(&dir, "whole.exr", &["--passes", "0..6"]);
+    let ok = merge(&dir, &["whole.exr"], "whole-merged.exr");
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    let reference = bytes(dir.join("whole-merged.exr"));
+    // Splits of different shapes, thread counts and part orders.
+    let splits: [&[(&str, &str)]; 3] = [
+        &[("0..3", "1"), ("3..6", "2")],
+        &[("4..6", "2"), ("0..1", "1"), ("1..4", "1")],
+        &[
+            ("0..1", "2"),
+            ("1..2", "1"),
+            ("2..3", "2"),
+            ("3..4", "1"),
+            ("4..5", "2"),
+            ("5..6", "1"),
+        ],
+    ];
+    for (i, split) in splits.iter().enumerate() {
+        let names: Vec<String> = split.iter().map(|(r, _)| format!("s{i}-{r}.exr")).collect();
+        for ((range, threads), name) in split.iter().zip(&names) {
+            render(&dir, name, &["--passes", range, "--threads", threads]);
+        }
+        let refs: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
+        let out = format!("merged{i}.exr");
+        let m = merge(&dir, &refs, &out);
+        assert!(m.status.success(), "{}", String::from_utf8_lossy(&m.stderr));
+        assert!(
+            bytes(dir.join(&out)) == reference,
+            "split {split:?} differs from 0..6"
+        );
+    }
+    // The merged mean is an image: finite, not black.
+    let img = photon::imageio::read_exr(&dir.join("merged0.exr")).unwrap();
+    assert_eq!(img.count_nonfinite(), 0);
+    let mean: f32 = img.pixels.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>() / 3.0;
+    assert!(mean > 0.0);
+}
+
+#[test]
+fn merge_refuses_parts_of_other_renders_and_bad_ranges() {
+    let dir = tmp("refuse");
+    render(&dir, "a.exr", &["--passes", "0..2"]);
+    render(&dir, "b.exr", &["--passes", "2..4"]);
+    render(&dir, "seed.exr", &["--passes", "2..4", "--seed", "7"]);
+    render(&dir, "res.exr", &["--passes", "2..4", "--res", "20x20"]);
+    render(&dir, "set.exr", &["--passes", "2..4", "--alpha", "0.5"]);
+    render(&dir, "c.exr", &["--passes", "1..3"]);
+    render(&dir, "d.exr", &["--passes", "5..6"]);
+    let scene = photon()
+        .args([
+            "render",
+            "scenes/cornell-glass.pbrt",
+            "--integrator",
+            "path",
+        ])
+        .args(["--res", "24x20", "--passes", "2..4", "--no-png", "-o"])
+        .arg(dir.join("other.exr"))
+        .output()
+        .unwrap();
+    assert!(scene.status.success());
+    let ok = merge(&dir, &["b.exr", "a.exr"], "ok.exr");
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    for (part, field) in [
+        ("seed.exr", "seed differs"),
+        ("res.exr", "resolution differs"),
+        ("set.exr", "settings differs"),
+        ("other.exr", "settings differs"),
+        ("c.exr", "overlap"),
+        ("d.exr", "passes 2..5 are missing"),
+    ] {
+        let o = merge(&dir, &["a.exr", part], "bad.exr");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{part}: {err}");
+        assert!(err.contains(field), "{part}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(!dir.join("bad.exr").exists());
+    }
+    // A file that is no partial image.
+    let plain = dir.join("plain.exr");
+    photon::imageio::write_exr(
+        &plain,
+        &photon::imageio::RgbImage::new(2, 2),
+        &[],
+        photon::imageio::ExrPixel::Float,
+    )
+    .unwrap();
+    let o = merge(&dir, &["a.exr", "plain.exr"], "bad.exr");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("not a partial image"));
+    // Resuming with other settings names the field.
+    let o = photon()
+        .args(["render", "scenes/cornell-glass.pbrt", "--res", "24x20"])
+        .args(SMALL)
+        .args(["--passes", "0..4", "--seed", "3", "--resume"])
+        .arg(dir.join("a.exr"))
+        .arg("-o")
+        .arg(dir.join("r.exr"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("another seed"));
+}
+
+/// Passes recorded in a partial image's `photon.passes` attribute.
+fn passes_of(p: &Path) -> (u64, u64) {
+    let attrs = photon::imageio::read_exr_attributes(p).unwrap();
+    let v = &attrs.iter().find(|(k, _)| k == "photon.passes").unwrap().1;
+    let (a, b) = v.split_once("..").unwrap();
+    (a.parse().unwrap(), b.parse().unwrap())
+}
+
+/// Starts a long render with a checkpoint after every pass and waits for `passes` of them.
+fn start_and_wait(dir: &Path, ckpt: &Path, passes: u64) -> std::process::Child {
+    let child = photon()
+        .args(["render", "scenes/cornell-glass.pbrt", "--res", "24x20"])
+        .args(SMALL)
+        .args(["--passes", "0..400", "--every", "1ms", "--checkpoint"])
+        .arg(ckpt)
+        .arg("-o")
+        .arg(dir.join("never.exr"))
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let t = std::time::Instant::now();
+    while !(ckpt.exists() && passes_of(ckpt).1 >= passes) {
+        assert!(t.elapsed().as_secs() < 120, "no checkpoint");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child
+}
+
+#[test]
+fn resume_after_kill_9_gives_the_uninterrupted_image() {
+    let dir = tmp("kill9");
+    let ckpt = dir.join("ckpt.exr");
+    let mut child = start_and_wait(&dir, &ckpt, 3);
+    child.kill().unwrap(); // SIGKILL: no chance to clean up
+    child.wait().unwrap();
+    let (_, done) = passes_of(&ckpt);
+    assert!(done >= 3 && done < 400, "{done}");
+    let end = (done + 2).to_string();
+    let range = format!("0..{end}");
+    let ck = ckpt.to_str().unwrap();
+    render(&dir, "resumed.exr", &["--passes", &range, "--resume", ck]);
+    render(&dir, "straight.exr", &["--passes", &range]);
+    assert_eq!(passes_of(&dir.join("resumed.exr")), (0, done + 2));
+    assert!(bytes(dir.join("resumed.exr")) == bytes(dir.join("straight.exr")));
+    assert!(!dir.join("never.exr").exists());
+}
+
+#[test]
+fn sigterm_writes_the_checkpoint_and_the_image_and_exits_143() {
+    let dir = tmp("sigterm");
+    let ckpt = dir.join("ckpt.exr");
+    let child = start_and_wait(&dir, &ckpt, 2);
+    let pid = child.id().to_string();
+    assert!(Command::new("kill")
+        .args(["-TERM", &pid])
+        .status()
+        .unwrap()
+        .success());
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(143));
+    // Both files hold the same finished passes (at least the two seen), none cut short.
+    let (a, b) = passes_of(&dir.join("never.exr"));
+    assert_eq!((a, b), passes_of(&ckpt));
+    assert!(b >= 2 && b < 400);
+    let names: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names.len(), 2, "temporary files left: {names:?}");
+}
