@@ -193,9 +193,17 @@ pub fn prepare(
     let maps = trace::trace(scene, accel, lights, &s.trace);
     let (_, radius) = lights.scene_sphere();
     let r2 = |fraction: f32| ((fraction * radius) as f64).powi(2);
+    // Progressive: no minimum photon count (a zero where photons are sparse would be a bias
+    // that never averages out; the noise does).
+    let min_photons = if s.progressive {
+        1
+    } else {
+        EstimateParams::new(1, 0.0).min_photons
+    };
     let params = |k: usize, r2: f64| EstimateParams {
         kernel: s.kernel,
         shrink2: s.radius_scale2 as f32,
+        min_photons,
         ..EstimateParams::new(k.max(1), r2 as f32)
     };
     let global_params = params(s.global_lookup, r2(s.global_radius));
