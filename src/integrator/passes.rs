@@ -383,13 +383,23 @@ pub fn render_passes(
     let shared: Option<PhotonPass> = (!progressive)
         .then(|| super::prepare(scene, accel, settings, kind))
         .flatten();
+    let first = range.start;
     for k in range {
         let s = pass_settings(settings, k);
         let own = progressive
             .then(|| super::prepare(scene, accel, &s, kind))
             .flatten();
         let photons = own.as_ref().or(shared.as_ref());
-        let out = super::render_prepared(scene, accel, &s, kind, photons, &|_, _| {});
+        let mut out = super::render_prepared(scene, accel, &s, kind, photons, &|_, _| {});
+        if own.is_none() && k != first {
+            // Shared maps: their pass 1 is charged to the first pass only.
+            out.seconds -= out.photon_seconds + out.map_build_seconds;
+            (
+                out.photon_seconds,
+                out.map_build_seconds,
+                out.photons_emitted,
+            ) = (0.0, 0.0, 0);
+        }
         if crate::interrupt::requested().is_some() {
             break; // the pass was cut short: it is not added
         }

@@ -142,7 +142,13 @@ pub fn run(
                     let now = t0.elapsed().as_secs_f64();
                     longest = longest.max(now - last);
                     last = now;
-                    eprintln!("pass {} done: {:.2} s", acc.passes.end - 1, out.seconds);
+                    eprintln!(
+                    "pass {} done: {:.3} s, of which photon tracing {:.1}% and map building {:.1}%",
+                    acc.passes.end - 1,
+                    out.seconds,
+                    100.0 * out.photon_seconds / out.seconds.max(1e-9),
+                    100.0 * out.map_build_seconds / out.seconds.max(1e-9)
+                );
                     if let Some(c) = &po.checkpoint {
                         if last_checkpoint.elapsed().as_secs_f64() >= po.every {
                             if let Err(e) = acc.write(c) {
@@ -168,9 +174,11 @@ pub fn run(
     println!("{}", progress_note(settings, &acc));
     let rays = totals.counters.total();
     println!(
-        "rendered in {seconds:.3} s: {rays} rays ({:.2} Mrays/s), {} photons emitted",
+        "rendered in {seconds:.3} s: {rays} rays ({:.2} Mrays/s), {} photons emitted; per-pass overhead: photon tracing {:.1}%, map building {:.1}% of the time",
         rays as f64 / seconds.max(1e-9) / 1e6,
-        totals.photons_emitted
+        totals.photons_emitted,
+        100.0 * totals.photon_seconds / seconds.max(1e-9),
+        100.0 * totals.map_build_seconds / seconds.max(1e-9)
     );
     if let Some(sig) = crate::interrupt::requested() {
         eprintln!(
