@@ -156,6 +156,9 @@ pub fn run(opts: &ConvergeOptions) -> Result<bool, ToolError> {
             rows.push(row);
         }
     }
+    for line in trend_lines(&rows) {
+        println!("{line}");
+    }
     let csv = opts.out.join("converge.csv");
     crate::imageio::write_atomically(&csv, |tmp| {
         std::fs::write(tmp, to_csv(&rows)).map_err(|e| crate::imageio::ImageError::io(tmp, e))
@@ -216,6 +219,44 @@ fn measure(
 }
 
 /// The rows as CSV with a header line.
+/// Per method: the least-squares slope of log relMSE against log seconds over the upper half
+/// of its budgets, and whether its curve has a floor (the last doubling of time gained less
+/// than 15%).
+pub fn trend_lines(rows: &[Row]) -> Vec<String> {
+    let mut names: Vec<&str> = rows.iter().map(|r| r.method.as_str()).collect();
+    names.dedup();
+    names
+        .into_iter()
+        .filter_map(|name| {
+            let pts: Vec<(f64, f64)> = rows
+                .iter()
+                .filter(|r| r.method == name && r.relmse > 0.0 && r.seconds > 0.0)
+                .map(|r| (r.seconds.ln(), r.relmse.ln()))
+                .collect();
+            let tail = &pts[pts.len() / 2..];
+            if tail.len() < 2 {
+                return None;
+            }
+            let n = tail.len() as f64;
+            let (mx, my) = tail.iter().fold((0.0, 0.0), |(a, b), p| (a + p.0 / n, b + p.1 / n));
+            let sxy: f64 = tail.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+            let sxx: f64 = tail.iter().map(|p| (p.0 - mx).powi(2)).sum();
+            let slope = sxy / sxx.max(1e-12);
+            let [.., a, b] = pts[..] else { return None };
+            let gain = (a.1 - b.1).exp(); // relMSE ratio over the last step
+            let floor = if gain < 1.15 {
+                format!("FLOOR: the last step gained only {:.0}%", 100.0 * (gain - 1.0))
+            } else {
+                format!("still falling ({:.2}x over the last step)", gain)
+            };
+            Some(format!(
+                "{name}: relMSE ~ t^{slope:.2} over the upper half of the budgets; {floor}; best {:.5}",
+                pts.iter().map(|p| p.1.exp()).fold(f64::INFINITY, f64::min)
+            ))
+        })
+        .collect()
+}
+
 pub fn to_csv(rows: &[Row]) -> String {
     let mut s = String::from("integrator,settings,budget_s,seconds,spp,rays,photons,relmse,rmse\n");
     for r in rows {
