@@ -13,6 +13,7 @@ pub mod camera;
 pub mod film;
 pub mod imageio;
 pub mod integrator;
+pub mod interaction;
 pub mod interrupt;
 pub mod light;
 pub mod math;

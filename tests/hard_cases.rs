@@ -26,13 +26,14 @@
 //! `$CARGO_TARGET_TMPDIR/hard_cases/summary.txt`): run with
 //! `cargo test --release --test hard_cases -- --nocapture | grep '^summary'`.
 use photon::accel::{Accel, AccelOptions, BackendKind, Hit, RayQuery};
-use photon::bsdf::{Bsdf, BsdfSample, TransportMode};
+use photon::bsdf::{BsdfSample, TransportMode};
 use photon::camera::Camera;
 use photon::imageio::metrics::{compare, MaskOptions};
 use photon::imageio::RgbImage;
 use photon::integrator::{self, IntegratorKind, RenderOutput, RenderSettings};
+use photon::interaction::SurfaceInteraction;
 use photon::light::Lights;
-use photon::math::{spawn_origin, Frame, Ray, Vec2, Vec3};
+use photon::math::{spawn_origin, Ray, Vec2, Vec3};
 use photon::photon::estimate::{irradiance_with, EstimateParams};
 use photon::photon::trace::{self, TraceSettings};
 use photon::photon::{Kernel, KnnResult, Photon, PhotonMap};
@@ -133,21 +134,15 @@ struct Step {
 
 fn step(scene: &Scene, accel: &Accel, ray: &Ray, uc: f32) -> Option<Step> {
     let hit = accel.intersect(ray)?;
-    let mesh = &scene.meshes[hit.mesh as usize];
-    let p = hit_point(scene, &hit).0;
-    let ng = mesh.geometric_normal(hit.prim, hit.u, hit.v);
-    let ns = mesh.shading_normal(hit.prim, hit.u, hit.v).unwrap_or(ng);
-    let frame = Frame::from_normal(ns);
-    let wo = frame.to_local(-ray.d.normalize());
-    let bsdf = Bsdf::from_material(&scene.materials[mesh.material as usize]);
-    let sample = bsdf.sample(wo, uc, Vec2::splat(0.5), TransportMode::Radiance)?;
-    let wi = frame.to_world(sample.wi);
-    let o = spawn(scene, &hit, if ng.dot(wi) >= 0.0 { ng } else { -ng });
+    let si = SurfaceInteraction::new(scene, &hit, ray);
+    let sample = si
+        .bsdf(scene)
+        .sample(si.wo, uc, Vec2::splat(0.5), TransportMode::Radiance)?;
     Some(Step {
         hit,
-        p,
+        p: si.p,
         sample,
-        next: Ray::new(o, wi),
+        next: si.spawn_ray(si.frame.to_world(sample.wi)),
     })
 }
 

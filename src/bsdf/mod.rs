@@ -64,6 +64,62 @@ pub struct BsdfSample {
     pub eta: f32,
 }
 
+/// What lobes a BSDF has, as pbrt-v4's `BxDFFlags`: reflection and/or transmission, each
+/// diffuse, glossy or specular (delta). Integrators and the photon tracer decide from these
+/// alone where photons are stored (diffuse lobes), where light is sampled (any non-delta
+/// lobe), and what is traced onwards (specular and glossy lobes), so a new material never
+/// touches them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BxdfFlags(u8);
+
+impl BxdfFlags {
+    pub const REFLECTION: BxdfFlags = BxdfFlags(1);
+    pub const TRANSMISSION: BxdfFlags = BxdfFlags(2);
+    pub const DIFFUSE: BxdfFlags = BxdfFlags(4);
+    pub const GLOSSY: BxdfFlags = BxdfFlags(8);
+    pub const SPECULAR: BxdfFlags = BxdfFlags(16);
+
+    pub const fn union(self, other: BxdfFlags) -> BxdfFlags {
+        BxdfFlags(self.0 | other.0)
+    }
+
+    pub fn contains(self, other: BxdfFlags) -> bool {
+        self.0 & other.0 == other.0
+    }
+
+    /// A Lambertian (diffuse) lobe: photons are stored and gathered here.
+    pub fn has_diffuse(self) -> bool {
+        self.contains(BxdfFlags::DIFFUSE)
+    }
+
+    /// A rough, non-Lambertian lobe: direct lighting uses MIS with BSDF sampling.
+    pub fn has_glossy(self) -> bool {
+        self.contains(BxdfFlags::GLOSSY)
+    }
+
+    /// A delta lobe (mirror, smooth glass).
+    pub fn has_specular(self) -> bool {
+        self.contains(BxdfFlags::SPECULAR)
+    }
+
+    /// A lobe that light sampling can reach (diffuse or glossy).
+    pub fn has_non_specular(self) -> bool {
+        self.has_diffuse() || self.has_glossy()
+    }
+
+    /// Only delta lobes.
+    pub fn is_specular_only(self) -> bool {
+        self.has_specular() && !self.has_non_specular()
+    }
+}
+
+impl std::ops::BitOr for BxdfFlags {
+    type Output = BxdfFlags;
+    fn bitor(self, other: BxdfFlags) -> BxdfFlags {
+        self.union(other)
+    }
+}
+
 /// The BSDF at a surface point (a closed set; no dynamic dispatch).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Bsdf {
@@ -142,24 +198,15 @@ impl Bsdf {
         valid.then_some(s)
     }
 
-    /// Only delta lobes (smooth glass, mirror conductor): no direct lighting or photon
-    /// storage there.
-    pub fn is_specular(&self) -> bool {
+    /// The lobes this BSDF has.
+    pub fn flags(&self) -> BxdfFlags {
+        use BxdfFlags as F;
         match self {
-            Bsdf::Diffuse(_) => false,
-            Bsdf::Dielectric(_) => true,
-            Bsdf::Conductor(c) => c.is_smooth(),
+            Bsdf::Diffuse(_) => F::REFLECTION | F::DIFFUSE,
+            Bsdf::Dielectric(_) => F::REFLECTION | F::TRANSMISSION | F::SPECULAR,
+            Bsdf::Conductor(c) if c.is_smooth() => F::REFLECTION | F::SPECULAR,
+            Bsdf::Conductor(_) => F::REFLECTION | F::GLOSSY,
         }
-    }
-
-    /// Has a Lambertian part (photons are stored here).
-    pub fn is_diffuse(&self) -> bool {
-        matches!(self, Bsdf::Diffuse(_))
-    }
-
-    /// A rough (non-delta, non-Lambertian) lobe: direct lighting uses MIS.
-    pub fn is_glossy(&self) -> bool {
-        matches!(self, Bsdf::Conductor(c) if !c.is_smooth())
     }
 
     /// A rough albedo for Russian roulette: the diffuse reflectance, 1 for a dielectric, the
@@ -182,11 +229,15 @@ mod tests {
         let diffuse = Bsdf::from_material(&Material::Diffuse {
             reflectance: Vec3::new(0.1, 0.2, 0.3),
         });
-        assert!(diffuse.is_diffuse() && !diffuse.is_specular() && !diffuse.is_glossy());
+        let f = diffuse.flags();
+        assert!(f.has_diffuse() && !f.has_specular() && !f.has_glossy() && f.has_non_specular());
+        assert!(f.contains(BxdfFlags::REFLECTION) && !f.contains(BxdfFlags::TRANSMISSION));
         assert_eq!(diffuse.reflectance_estimate(), Vec3::new(0.1, 0.2, 0.3));
 
         let glass = Bsdf::from_material(&Material::Dielectric { eta: 1.5 });
-        assert!(glass.is_specular() && !glass.is_diffuse() && !glass.is_glossy());
+        let f = glass.flags();
+        assert!(f.is_specular_only() && !f.has_diffuse() && !f.has_glossy());
+        assert!(f.contains(BxdfFlags::REFLECTION | BxdfFlags::TRANSMISSION));
         assert_eq!(glass.reflectance_estimate(), Vec3::ONE);
         let wo = Vec3::new(0.6, 0.0, 0.8);
         assert_eq!(
@@ -211,9 +262,9 @@ mod tests {
                 alpha_v: a,
             };
             let b = Bsdf::from_material(&m);
-            assert_eq!(b.is_specular(), smooth);
-            assert_eq!(b.is_glossy(), !smooth);
-            assert!(!b.is_diffuse());
+            assert_eq!(b.flags().is_specular_only(), smooth);
+            assert_eq!(b.flags().has_glossy(), !smooth);
+            assert!(!b.flags().has_diffuse());
             assert!((b.reflectance_estimate() - r).abs().max_element() < 1e-5);
         }
     }

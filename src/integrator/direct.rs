@@ -12,9 +12,10 @@
 use super::photonmap::{self, Gather};
 use super::{charge, power_heuristic, tile_pixels, RenderContext};
 use crate::accel::{Hit, RayQuery};
-use crate::bsdf::{Bsdf, TransportMode};
+use crate::bsdf::TransportMode;
 use crate::film::Radiance;
-use crate::math::{spawn_origin, Frame, Ray, Vec3};
+use crate::interaction::SurfaceInteraction;
+use crate::math::{Ray, Vec3};
 use crate::photon::KnnResult;
 use crate::sampling::Sampler;
 use std::sync::atomic::Ordering;
@@ -151,17 +152,14 @@ fn shade(
     gathers: &mut Gathers,
 ) {
     let scene = ctx.scene;
-    let mesh = &scene.meshes[hit.mesh as usize];
-    let p = mesh.point(hit.prim, hit.u, hit.v);
-    let wo_world = -path.ray.d.normalize();
-    let ng = mesh.geometric_normal(hit.prim, hit.u, hit.v);
+    let si = SurfaceInteraction::new(scene, hit, &path.ray);
 
     // Emission seen along the ray.
-    if let Some(li) = mesh.area_light {
-        let le = ctx.lights.le(li as usize, ng, wo_world);
+    if let Some(li) = si.area_light() {
+        let le = ctx.lights.le(li, si.ng, si.wo_world);
         if le.max_element() > 0.0 {
             let w = if path.prev_pdf > 0.0 {
-                let light_pdf = ctx.lights.pdf_area(li as usize, path.ray.o, p, ng);
+                let light_pdf = ctx.lights.pdf_area(li, path.ray.o, si.p, si.ng);
                 power_heuristic(path.prev_pdf, light_pdf)
             } else {
                 1.0
@@ -174,29 +172,28 @@ fn shade(
         return;
     }
 
-    let bsdf = Bsdf::from_material(&scene.materials[mesh.material as usize]);
-    let ns = mesh.shading_normal(hit.prim, hit.u, hit.v).unwrap_or(ng);
-    let frame = Frame::from_normal(ns);
-    let wo = frame.to_local(wo_world);
+    let bsdf = si.bsdf(scene);
+    let flags = bsdf.flags();
+    let wo = si.wo;
     let ls = ctx.settings.light_samples.max(1);
     path.sampler
         .set_dimension(CAMERA_DIMS + path.depth * dims_per_vertex(ls));
 
     // Gather rays double as BSDF samples for direct light at diffuse points.
     let gather_n = match &ctx.photons {
-        Some(pass) if bsdf.is_diffuse() => photonmap::gather_count(pass),
+        Some(pass) if flags.has_diffuse() => photonmap::gather_count(pass),
         _ => 0,
     };
 
     // Direct light by shadow rays.
-    if !bsdf.is_specular() && !ctx.lights.is_empty() {
+    if flags.has_non_specular() && !ctx.lights.is_empty() {
         for _ in 0..ls {
             let u_sel = path.sampler.next_1d();
             let u = path.sampler.next_2d();
-            let Some(s) = ctx.lights.sample(scene, p, u_sel, u) else {
+            let Some(s) = ctx.lights.sample(scene, si.p, u_sel, u) else {
                 continue;
             };
-            let wi = frame.to_local(s.wi);
+            let wi = si.frame.to_local(s.wi);
             let f = bsdf.f(wo, wi, TransportMode::Radiance) * wi.z.abs();
             if f.max_element() <= 0.0 {
                 continue;
@@ -205,7 +202,7 @@ fn shade(
             // gather's cosine-distributed rays on diffuse ones (multi-sample power heuristic).
             let w = if s.delta {
                 1.0
-            } else if bsdf.is_glossy() {
+            } else if flags.has_glossy() {
                 power_heuristic(s.pdf, bsdf.pdf(wo, wi))
             } else if gather_n > 0 {
                 power_heuristic(ls as f32 * s.pdf, gather_n as f32 * bsdf.pdf(wo, wi))
@@ -213,21 +210,9 @@ fn shade(
                 1.0
             };
             let contrib = path.beta * f * s.li * (w / (s.pdf * ls as f32));
-            let o = mesh.spawn(
-                hit.prim,
-                hit.u,
-                hit.v,
-                if ng.dot(s.wi) >= 0.0 { ng } else { -ng },
-            );
-            let target = if s.n == Vec3::ZERO {
-                s.p
-            } else {
-                spawn_origin(s.p, s.err, if s.n.dot(o - s.p) >= 0.0 { s.n } else { -s.n })
-            };
-            let ray = Ray::segment(o, target - o, 1.0 - 1e-4);
             shadows.push(Shadow {
                 pixel: path.pixel,
-                ray,
+                ray: si.shadow_ray(&s),
                 contrib,
                 direct: path.depth == 0,
             });
@@ -240,8 +225,7 @@ fn shade(
     }
 
     // Caustics and indirect diffuse light from the photon maps (pass 2).
-    if let (Some(pass), true) = (&ctx.photons, bsdf.is_diffuse()) {
-        let n = if wo.z >= 0.0 { ns } else { -ns };
+    if let (Some(pass), true) = (&ctx.photons, flags.has_diffuse()) {
         let f_d = bsdf.f(
             wo,
             Vec3::new(0.0, 0.0, wo.z.signum()),
@@ -254,9 +238,7 @@ fn shade(
             pass,
             &ctx.counters.lookup_ns,
             ls,
-            p,
-            mesh.point_error(hit.prim, hit.u, hit.v),
-            n,
+            &si,
             f_d,
             path.beta,
             path.pixel,
@@ -275,7 +257,7 @@ fn shade(
     }
 
     // Continue through specular and glossy surfaces.
-    if !(bsdf.is_specular() || bsdf.is_glossy()) {
+    if !(flags.has_specular() || flags.has_glossy()) {
         return;
     }
     let uc = path.sampler.next_1d();
@@ -290,16 +272,9 @@ fn shade(
     if beta.max_element() <= 0.0 || !beta.is_finite() {
         return;
     }
-    let wi_world = frame.to_world(bs.wi);
-    let o = mesh.spawn(
-        hit.prim,
-        hit.u,
-        hit.v,
-        if ng.dot(wi_world) >= 0.0 { ng } else { -ng },
-    );
     next.push(PathState {
         pixel: path.pixel,
-        ray: Ray::new(o, wi_world),
+        ray: si.spawn_ray(si.frame.to_world(bs.wi)),
         beta,
         depth: path.depth + 1,
         prev_pdf: if bs.specular { 0.0 } else { bs.pdf },

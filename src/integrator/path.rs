@@ -42,7 +42,8 @@ use super::{power_heuristic, tile_pixels, RenderContext};
 use crate::accel::{Hit, RayQuery};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::film::Radiance;
-use crate::math::{max_component, spawn_origin, Frame, Ray, Vec3};
+use crate::interaction::SurfaceInteraction;
+use crate::math::{max_component, Ray, Vec3};
 use crate::sampling::Sampler;
 use std::sync::atomic::Ordering;
 
@@ -179,19 +180,6 @@ fn add(acc: &mut [Radiance], pixel: usize, direct: bool, value: Vec3) {
     }
 }
 
-/// The local geometry of a path vertex.
-struct Vertex {
-    p: Vec3,
-    /// Rounding-error bound of `p`, for spawning rays.
-    err: Vec3,
-    /// Geometric normal (pbrt's orientation, see `Mesh::geometric_normal`).
-    ng: Vec3,
-    /// Shading frame (z = shading normal).
-    frame: Frame,
-    /// Direction towards the previous vertex, in the shading frame.
-    wo: Vec3,
-}
-
 /// Shades one hit: emission, a light sample, and a BSDF-sampled continuation.
 ///
 /// - `path`: the path whose ray produced `hit`;
@@ -205,36 +193,25 @@ fn shade(
     shadows: &mut Vec<Shadow>,
     next: &mut Vec<PathState>,
 ) {
-    let mesh = &ctx.scene.meshes[hit.mesh as usize];
-    let p = mesh.point(hit.prim, hit.u, hit.v);
-    let ng = mesh.geometric_normal(hit.prim, hit.u, hit.v);
-    if let Some(li) = mesh.area_light {
-        let le = emitted(ctx, &path, li as usize, p, ng);
+    let si = SurfaceInteraction::new(ctx.scene, hit, &path.ray);
+    if let Some(li) = si.area_light() {
+        let le = emitted(ctx, &path, li, si.p, si.ng);
         let direct = path.depth == 0 || (path.depth == 1 && path.prev_pdf > 0.0);
         add(acc, path.pixel, direct, le);
     }
     if path.depth >= ctx.settings.max_depth {
         return;
     }
-    let ns = mesh.shading_normal(hit.prim, hit.u, hit.v).unwrap_or(ng);
-    let frame = Frame::from_normal(ns);
-    let v = Vertex {
-        p,
-        err: mesh.point_error(hit.prim, hit.u, hit.v),
-        ng,
-        frame,
-        wo: frame.to_local(-path.ray.d.normalize()),
-    };
-    let bsdf = Bsdf::from_material(&ctx.scene.materials[mesh.material as usize]);
+    let bsdf = si.bsdf(ctx.scene);
     let base = CAMERA_DIMS.wrapping_add(path.depth.wrapping_mul(DIMS_PER_VERTEX));
     path.sampler.set_dimension(base);
-    if !bsdf.is_specular() {
-        if let Some(s) = light_sample(ctx, &path, &bsdf, &v) {
+    if bsdf.flags().has_non_specular() {
+        if let Some(s) = light_sample(ctx, &path, &bsdf, &si) {
             shadows.push(s);
         }
     }
     path.sampler.set_dimension(base + 3);
-    if let Some(cont) = continue_path(path, &bsdf, &v) {
+    if let Some(cont) = continue_path(path, &bsdf, &si) {
         next.push(cont);
     }
 }
@@ -258,7 +235,12 @@ fn emitted(ctx: &RenderContext, path: &PathState, li: usize, p: Vec3, ng: Vec3) 
 /// Next-event estimation at a non-delta vertex: one light chosen by power, one point on it,
 /// MIS-weighted against BSDF sampling. Reads 3 dimensions of the path's sampler. `None` when
 /// the sample carries nothing.
-fn light_sample(ctx: &RenderContext, path: &PathState, bsdf: &Bsdf, v: &Vertex) -> Option<Shadow> {
+fn light_sample(
+    ctx: &RenderContext,
+    path: &PathState,
+    bsdf: &Bsdf,
+    v: &SurfaceInteraction,
+) -> Option<Shadow> {
     let mut sampler = path.sampler.clone();
     let u_sel = sampler.next_1d();
     let u = sampler.next_2d();
@@ -277,15 +259,9 @@ fn light_sample(ctx: &RenderContext, path: &PathState, bsdf: &Bsdf, v: &Vertex) 
     if !contrib.is_finite() || contrib.max_element() <= 0.0 {
         return None;
     }
-    let o = spawn_origin(v.p, v.err, if v.ng.dot(s.wi) >= 0.0 { v.ng } else { -v.ng });
-    let target = if s.n == Vec3::ZERO {
-        s.p
-    } else {
-        spawn_origin(s.p, s.err, if s.n.dot(o - s.p) >= 0.0 { s.n } else { -s.n })
-    };
     Some(Shadow {
         pixel: path.pixel,
-        ray: Ray::segment(o, target - o, 1.0 - 1e-4),
+        ray: v.shadow_ray(&s),
         contrib,
         direct: path.depth == 0,
     })
@@ -293,7 +269,7 @@ fn light_sample(ctx: &RenderContext, path: &PathState, bsdf: &Bsdf, v: &Vertex) 
 
 /// Samples the BSDF for the next bounce and applies Russian roulette; `None` when the path
 /// ends. Reads 4 dimensions of the path's sampler (lobe, direction, roulette).
-fn continue_path(mut path: PathState, bsdf: &Bsdf, v: &Vertex) -> Option<PathState> {
+fn continue_path(mut path: PathState, bsdf: &Bsdf, v: &SurfaceInteraction) -> Option<PathState> {
     let uc = path.sampler.next_1d();
     let u = path.sampler.next_2d();
     let u_rr = path.sampler.next_1d();
@@ -316,9 +292,7 @@ fn continue_path(mut path: PathState, bsdf: &Bsdf, v: &Vertex) -> Option<PathSta
     if beta.max_element() <= 0.0 || !beta.is_finite() {
         return None;
     }
-    let wi = v.frame.to_world(bs.wi);
-    let o = spawn_origin(v.p, v.err, if v.ng.dot(wi) >= 0.0 { v.ng } else { -v.ng });
-    path.ray = Ray::new(o, wi);
+    path.ray = v.spawn_ray(v.frame.to_world(bs.wi));
     path.beta = beta;
     path.depth = depth;
     path.prev_pdf = if bs.specular { 0.0 } else { bs.pdf };

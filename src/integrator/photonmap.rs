@@ -26,8 +26,9 @@
 use super::{charge, RenderContext};
 use crate::accel::{Accel, Hit, RayQuery};
 use crate::bsdf::{Bsdf, TransportMode};
+use crate::interaction::SurfaceInteraction;
 use crate::light::Lights;
-use crate::math::{spawn_origin, Frame, Ray, Vec2, Vec3};
+use crate::math::{Frame, Ray, Vec2, Vec3};
 use crate::photon::estimate::{irradiance_with, EstimateParams};
 use crate::photon::trace::{self, PhotonMaps, TraceSettings};
 use crate::photon::{Kernel, KnnResult, Photon, PhotonMap};
@@ -166,8 +167,8 @@ pub fn needed_maps(scene: &Scene) -> (bool, bool) {
         .collect();
     let any_diffuse = bsdfs
         .iter()
-        .any(|b| b.is_diffuse() && b.reflectance_estimate().max_element() > 0.0);
-    let any_specular = bsdfs.iter().any(|b| b.is_specular());
+        .any(|b| b.flags().has_diffuse() && b.reflectance_estimate().max_element() > 0.0);
+    let any_specular = bsdfs.iter().any(|b| b.flags().has_specular());
     let lights = !scene.lights.is_empty();
     (lights && any_diffuse, lights && any_diffuse && any_specular)
 }
@@ -279,17 +280,14 @@ pub struct DiffusePhotons {
 /// Dimensions of the sampler used per gather ray.
 pub const GATHER_DIMS: u32 = 2;
 
-/// Photon-map radiance at a diffuse point `p` (rounding-error bound `p_err`, unit normal `n`
-/// facing the viewer, diffuse
-/// BRDF value `f_d`), and its gather rays pushed to `gathers` with throughput `beta`.
+/// Photon-map radiance at the diffuse point `si` (diffuse BRDF value `f_d`), and its gather
+/// rays pushed to `gathers` with throughput `beta`.
 #[allow(clippy::too_many_arguments)]
 pub fn at_diffuse(
     pass: &PhotonPass,
     counters: &AtomicU64,
     light_samples: u32,
-    p: Vec3,
-    p_err: Vec3,
-    n: Vec3,
+    si: &SurfaceInteraction,
     f_d: Vec3,
     beta: Vec3,
     pixel: usize,
@@ -298,6 +296,7 @@ pub fn at_diffuse(
     buf: &mut KnnResult,
     gathers: &mut Vec<Gather>,
 ) -> DiffusePhotons {
+    let (p, n) = (si.p, si.facing_normal());
     let mut out = DiffusePhotons {
         caustic: Vec3::ZERO,
         indirect: Vec3::ZERO,
@@ -329,7 +328,7 @@ pub fn at_diffuse(
     let (nx, ny) = strata(g);
     let frame = Frame::from_normal(n);
     let weight = beta * f_d * (std::f32::consts::PI / g as f32);
-    let o = spawn_origin(p, p_err, n);
+    let o = si.spawn(n);
     for k in 0..g {
         let j = sampler.next_2d();
         let u = Vec2::new(
@@ -414,21 +413,16 @@ fn reflected(
     let mut throughput = Vec3::ONE;
     for _ in 0..=GATHER_SPECULAR_BOUNCES {
         let Some(h) = hit else { return Vec3::ZERO };
-        let mesh = &scene.meshes[h.mesh as usize];
-        let bsdf = Bsdf::from_material(&scene.materials[mesh.material as usize]);
-        let p = mesh.point(h.prim, h.u, h.v);
-        let ng = mesh.geometric_normal(h.prim, h.u, h.v);
-        let ns = mesh.shading_normal(h.prim, h.u, h.v).unwrap_or(ng);
-        let frame = Frame::from_normal(ns);
-        let wo = frame.to_local(-ray.d.normalize());
-        if bsdf.is_diffuse() {
-            let n = if wo.z >= 0.0 { ns } else { -ns };
+        let si = SurfaceInteraction::new(scene, &h, &ray);
+        let bsdf = si.bsdf(scene);
+        let wo = si.wo;
+        if bsdf.flags().has_diffuse() {
             let f_d = bsdf.f(
                 wo,
                 Vec3::new(0.0, 0.0, wo.z.signum()),
                 TransportMode::Radiance,
             );
-            let e = cached_irradiance(pass, global, p, n, buf);
+            let e = cached_irradiance(pass, global, si.p, si.facing_normal(), buf);
             return throughput * f_d * e;
         }
         // Specular or glossy: follow one sampled direction.
@@ -441,11 +435,7 @@ fn reflected(
             return Vec3::ZERO;
         };
         throughput *= bs.f * (bs.wi.z.abs() / bs.pdf);
-        let wi = frame.to_world(bs.wi);
-        ray = Ray::new(
-            mesh.spawn(h.prim, h.u, h.v, if ng.dot(wi) >= 0.0 { ng } else { -ng }),
-            wi,
-        );
+        ray = si.spawn_ray(si.frame.to_world(bs.wi));
         hit = ctx.accel.intersect(&ray);
         ctx.counters
             .secondary_rays

@@ -20,8 +20,9 @@ use super::projection::ProjectionMap;
 use super::{Photon, PhotonMap};
 use crate::accel::{Accel, RayQuery};
 use crate::bsdf::{Bsdf, TransportMode};
+use crate::interaction::SurfaceInteraction;
 use crate::light::{bounding_sphere, Lights};
-use crate::math::{spawn_origin, Frame, Ray, Vec3};
+use crate::math::{spawn_origin, Ray, Vec3};
 use crate::sampling::{hash, Pattern, Sampler};
 use crate::scene::Scene;
 use rayon::prelude::*;
@@ -93,7 +94,11 @@ pub fn specular_targets(scene: &Scene) -> Vec<(Vec3, f32)> {
     scene
         .meshes
         .iter()
-        .filter(|m| Bsdf::from_material(&scene.materials[m.material as usize]).is_specular())
+        .filter(|m| {
+            Bsdf::from_material(&scene.materials[m.material as usize])
+                .flags()
+                .has_specular()
+        })
         .map(|m| m.sphere.unwrap_or_else(|| bounding_sphere(&m.positions)))
         .collect()
 }
@@ -234,7 +239,6 @@ fn shoot(
             (0..n.div_ceil(CHUNK)).map(move |c| (i, c * CHUNK, ((c + 1) * CHUNK).min(n)))
         })
         .collect();
-    let bsdfs: Vec<Bsdf> = scene.materials.iter().map(Bsdf::from_material).collect();
     let parts: Vec<(Vec<Landing>, u64, u64)> = work
         .par_iter()
         .map(|&(light, lo, hi)| {
@@ -249,7 +253,6 @@ fn shoot(
                     scene,
                     accel,
                     lights,
-                    &bsdfs,
                     s,
                     kind,
                     light,
@@ -281,7 +284,6 @@ fn trace_one(
     scene: &Scene,
     accel: &Accel,
     lights: &Lights,
-    bsdfs: &[Bsdf],
     s: &TraceSettings,
     kind: MapKind,
     light: usize,
@@ -326,16 +328,15 @@ fn trace_one(
         let Some(hit) = accel.intersect(&ray) else {
             break;
         };
-        let mesh = &scene.meshes[hit.mesh as usize];
-        let bsdf = &bsdfs[mesh.material as usize];
+        let si = SurfaceInteraction::new(scene, &hit, &ray);
+        let bsdf = si.bsdf(scene);
+        let flags = bsdf.flags();
         if bounce == 0 {
-            first_specular = bsdf.is_specular();
+            first_specular = flags.has_specular();
         }
-        let p = mesh.point(hit.prim, hit.u, hit.v);
-        let ng = mesh.geometric_normal(hit.prim, hit.u, hit.v);
-        let dir = ray.d.normalize();
-        let facing = if ng.dot(dir) < 0.0 { ng } else { -ng };
-        if bsdf.is_diffuse() {
+        let dir = -si.wo_world;
+        let facing = if si.ng.dot(dir) < 0.0 { si.ng } else { -si.ng };
+        if flags.has_diffuse() {
             let store = match kind {
                 MapKind::Global => true,
                 MapKind::Caustic => specular_only && bounce > 0,
@@ -347,15 +348,15 @@ fn trace_one(
                     _ => 0,
                 };
                 out.push(Landing {
-                    photon: Photon::new(p, power, dir, flags),
+                    photon: Photon::new(si.p, power, dir, flags),
                     normal: facing,
                 });
             }
         }
-        if kind == MapKind::Caustic && !bsdf.is_specular() {
+        if kind == MapKind::Caustic && !flags.has_specular() {
             break; // a caustic path ends at its first non-specular surface
         }
-        let Some(sc) = scatter(mesh, bsdf, &hit, ng, dir, sampler) else {
+        let Some(sc) = scatter(&si, &bsdf, sampler) else {
             break;
         };
         power *= sc.power_scale;
@@ -374,20 +375,11 @@ pub struct Scattered {
     pub specular: bool,
 }
 
-/// Scatters a photon travelling along unit `dir` at `hit` (geometric normal `ng`): samples
-/// the BSDF in importance mode, then Russian + RGB roulette on its weight `w = f |cos| / pdf`
-/// (survive with `q = min(1, mean(w))`). Uses 4 sample dimensions. `None`: absorbed.
-pub fn scatter(
-    mesh: &crate::scene::Mesh,
-    bsdf: &Bsdf,
-    hit: &crate::accel::Hit,
-    ng: Vec3,
-    dir: Vec3,
-    sampler: &mut Sampler,
-) -> Option<Scattered> {
-    let ns = mesh.shading_normal(hit.prim, hit.u, hit.v).unwrap_or(ng);
-    let frame = Frame::from_normal(ns);
-    let wo = frame.to_local(-dir);
+/// Scatters a photon arriving at `si`: samples the BSDF in importance mode, then Russian +
+/// RGB roulette on its weight `w = f |cos| / pdf` (survive with `q = min(1, mean(w))`). Uses
+/// 4 sample dimensions. `None`: absorbed.
+pub fn scatter(si: &SurfaceInteraction, bsdf: &Bsdf, sampler: &mut Sampler) -> Option<Scattered> {
+    let wo = si.wo;
     let uc = sampler.next_1d();
     let u2 = sampler.next_2d();
     let u_rr = sampler.next_1d();
@@ -397,10 +389,8 @@ pub fn scatter(
     if q.is_nan() || q <= 0.0 || u_rr >= q {
         return None;
     }
-    let wi = frame.to_world(bs.wi);
-    let off = if ng.dot(wi) >= 0.0 { ng } else { -ng };
     Some(Scattered {
-        ray: Ray::new(mesh.spawn(hit.prim, hit.u, hit.v, off), wi),
+        ray: si.spawn_ray(si.frame.to_world(bs.wi)),
         power_scale: w / q,
         specular: bs.specular,
     })
@@ -443,7 +433,9 @@ fn unrestricted_efficiency(
                 spawn_origin(e.p, e.err, e.n)
             };
             if let Some(h) = accel.intersect(&Ray::new(o, e.dir)) {
-                hits += bsdfs[scene.meshes[h.mesh as usize].material as usize].is_specular() as u64;
+                hits += bsdfs[scene.meshes[h.mesh as usize].material as usize]
+                    .flags()
+                    .has_specular() as u64;
             }
         }
     }

@@ -19,11 +19,12 @@
 //! permutation of the photon indices. The hits that shadow and gather rays start from come
 //! from the `reference` backend given to [`record`].
 use crate::accel::{Hit, RayQuery};
-use crate::bsdf::{Bsdf, TransportMode};
+use crate::bsdf::TransportMode;
 use crate::camera::Camera;
 use crate::film::Filter;
 use crate::integrator::photonmap::needed_maps;
 use crate::integrator::{tile_pixels, RenderSettings, TILE};
+use crate::interaction::SurfaceInteraction;
 use crate::light::Lights;
 use crate::math::{spawn_origin, Frame, Ray, Vec2, Vec3};
 use crate::photon::projection::ProjectionMap;
@@ -215,65 +216,34 @@ fn shade(
     if s.max_depth == 0 {
         return;
     }
-    let mesh = &c.scene.meshes[hit.mesh as usize];
-    let p = mesh.point(hit.prim, hit.u, hit.v);
-    let ng = mesh.geometric_normal(hit.prim, hit.u, hit.v);
-    let bsdf = Bsdf::from_material(&c.scene.materials[mesh.material as usize]);
-    let ns = mesh.shading_normal(hit.prim, hit.u, hit.v).unwrap_or(ng);
-    let frame = Frame::from_normal(ns);
-    let wo = frame.to_local(-ray.d.normalize());
+    let si = SurfaceInteraction::new(c.scene, hit, ray);
+    let bsdf = si.bsdf(c.scene);
     let ls = s.light_samples.max(1);
     sampler.set_dimension(CAMERA_DIMS);
-    if !bsdf.is_specular() && !c.lights.is_empty() {
+    if bsdf.flags().has_non_specular() && !c.lights.is_empty() {
         for _ in 0..ls {
             let u_sel = sampler.next_1d();
             let u = sampler.next_2d();
-            let Some(ls) = c.lights.sample(c.scene, p, u_sel, u) else {
+            let Some(ls) = c.lights.sample(c.scene, si.p, u_sel, u) else {
                 continue;
             };
-            let wi = frame.to_local(ls.wi);
-            let f = bsdf.f(wo, wi, TransportMode::Radiance) * wi.z.abs();
+            let wi = si.frame.to_local(ls.wi);
+            let f = bsdf.f(si.wo, wi, TransportMode::Radiance) * wi.z.abs();
             if f.max_element() <= 0.0 {
                 continue;
             }
-            let o = mesh.spawn(
-                hit.prim,
-                hit.u,
-                hit.v,
-                if ng.dot(ls.wi) >= 0.0 { ng } else { -ng },
-            );
-            let target = if ls.n == Vec3::ZERO {
-                ls.p
-            } else {
-                spawn_origin(
-                    ls.p,
-                    ls.err,
-                    if ls.n.dot(o - ls.p) >= 0.0 {
-                        ls.n
-                    } else {
-                        -ls.n
-                    },
-                )
-            };
-            out.shadow.push(Ray::segment(o, target - o, 1.0 - 1e-4));
+            out.shadow.push(si.shadow_ray(&ls));
         }
     }
-    if !bsdf.is_diffuse() {
+    if !bsdf.flags().has_diffuse() {
         return;
     }
-    let n = if wo.z >= 0.0 { ns } else { -ns };
-    out.diffuse_points.push(DiffusePoint { p, n });
+    let n = si.facing_normal();
+    out.diffuse_points.push(DiffusePoint { p: si.p, n });
     if c.gathers {
         sampler.set_dimension(CAMERA_DIMS + 3 * ls);
-        out.gather.push(gather_ray(
-            c,
-            p,
-            mesh.point_error(hit.prim, hit.u, hit.v),
-            n,
-            pixel,
-            sample,
-            &mut sampler,
-        ));
+        out.gather
+            .push(gather_ray(c, &si, pixel, sample, &mut sampler));
     }
 }
 
@@ -281,18 +251,17 @@ fn shade(
 /// the k-th of the point's stratified set for a k chosen by hashing the pixel and sample.
 fn gather_ray(
     c: &Shading,
-    p: Vec3,
-    p_err: Vec3,
-    n: Vec3,
+    si: &SurfaceInteraction,
     pixel: u64,
     sample: u32,
     sampler: &mut Sampler,
 ) -> Ray {
+    let n = si.facing_normal();
     let g = c.settings.photon.gather_samples.max(1);
     let keep = (hash(&[c.select_seed, pixel, sample as u64, 0x6a7]) % g as u64) as u32;
     let (nx, ny) = strata(g);
     let frame = Frame::from_normal(n);
-    let o = spawn_origin(p, p_err, n);
+    let o = si.spawn(n);
     let mut d = n;
     for k in 0..=keep {
         let j = sampler.next_2d();
@@ -374,7 +343,6 @@ fn photon_paths(
             _ => ProjectionMap::full(lights.emission_domain(scene, i)),
         })
         .collect();
-    let bsdfs: Vec<Bsdf> = scene.materials.iter().map(Bsdf::from_material).collect();
     let Ok(total) = u32::try_from(counts.iter().sum::<u64>()) else {
         return;
     };
@@ -395,7 +363,6 @@ fn photon_paths(
         let path = PhotonPath {
             scene,
             lights,
-            bsdfs: &bsdfs,
             kind,
             light,
             map: &maps[light],
@@ -410,7 +377,6 @@ fn photon_paths(
 struct PhotonPath<'a> {
     scene: &'a Scene,
     lights: &'a Lights,
-    bsdfs: &'a [Bsdf],
     kind: MapKind,
     light: usize,
     map: &'a ProjectionMap,
@@ -448,13 +414,12 @@ impl PhotonPath<'_> {
             let Some(hit) = accel.intersect(&ray) else {
                 break;
             };
-            let mesh = &self.scene.meshes[hit.mesh as usize];
-            let bsdf = &self.bsdfs[mesh.material as usize];
-            if self.kind == MapKind::Caustic && !bsdf.is_specular() {
+            let si = SurfaceInteraction::new(self.scene, &hit, &ray);
+            let bsdf = si.bsdf(self.scene);
+            if self.kind == MapKind::Caustic && !bsdf.flags().has_specular() {
                 break;
             }
-            let ng = mesh.geometric_normal(hit.prim, hit.u, hit.v);
-            let Some(sc) = scatter(mesh, bsdf, &hit, ng, ray.d.normalize(), sampler) else {
+            let Some(sc) = scatter(&si, &bsdf, sampler) else {
                 break;
             };
             ray = sc.ray;
