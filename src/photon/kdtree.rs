@@ -280,7 +280,8 @@ impl KdTree {
     where
         F: FnMut(u32, Vec3, f32) -> Option<f32>,
     {
-        out.reset(k, max_r2);
+        // No tree holds more than `len` points: a huge `k` must not reserve for itself.
+        out.reset(k.min(self.len), max_r2);
         if k == 0 || self.len == 0 || max_r2.is_nan() || max_r2 < 0.0 {
             return;
         }

@@ -474,6 +474,7 @@ fn unsupported(name: &str) -> String {
     } else if PBRT_V4.contains(&name) {
         format!("unsupported directive \"{name}\"")
     } else {
+        let name = crate::scene::clip_for_message(name, crate::scene::MAX_TOKEN);
         format!("unknown directive \"{name}\"")
     }
 }
@@ -569,7 +570,7 @@ fn parse_float(tok: &Tokenizer, t: &Token) -> Result<f32, SceneError> {
     }
     match t.text.parse::<f32>() {
         Ok(v) if v.is_finite() => Ok(v),
-        _ => Err(tok.err(t, format!("\"{}\" is not a finite number", t.text))),
+        _ => Err(tok.err(t, format!("\"{}\" is not a finite number", t.clipped()))),
     }
 }
 
@@ -594,14 +595,18 @@ fn read_param(tok: &mut Tokenizer, decl: &Token) -> Result<Param, SceneError> {
             decl,
             format!(
                 "expected a parameter declaration \"type name\", found \"{}\"",
-                decl.text
+                decl.clipped()
             ),
         ));
     };
     let Some(ty) = ParamType::from_name(ty_name) else {
         return Err(tok.err(
             decl,
-            format!("unknown parameter type \"{ty_name}\" in \"{}\"", decl.text),
+            format!(
+                "unknown parameter type \"{}\" in \"{}\"",
+                crate::scene::clip_for_message(ty_name, crate::scene::MAX_TOKEN),
+                decl.clipped()
+            ),
         ));
     };
     let values = read_values(tok, ty, decl)?;
@@ -660,7 +665,7 @@ impl Values {
                 t,
                 format!(
                     "parameter \"{}\": expected {what}, found {}",
-                    decl.text,
+                    decl.clipped(),
                     t.describe()
                 ),
             )
@@ -748,8 +753,10 @@ fn film(ty: &str, params: &mut ParamSet, at: &Loc) -> Result<FilmDesc, SceneErro
         .zip([("xresolution", 1280), ("yresolution", 720)])
     {
         let v = params.get_int(name, default)?;
-        if v <= 0 {
-            return Err(params.peek(name).expect("given").err("must be positive"));
+        let max = crate::resources::MAX_RESOLUTION as i32;
+        if v <= 0 || v > max {
+            let msg = format!("must be positive and at most {max}, got {v}");
+            return Err(params.peek(name).expect("given").err(msg));
         }
         *r = v as u32;
     }
@@ -783,7 +790,16 @@ fn sampler(ty: &str, params: &mut ParamSet, at: &Loc) -> Result<SamplerDesc, Sce
         let x = positive_int(params, "xsamples", 4)?;
         let y = positive_int(params, "ysamples", 4)?;
         x.checked_mul(y)
-            .ok_or_else(|| SceneError::at(at, "xsamples * ysamples is too large"))?
+            .filter(|&n| n <= crate::resources::MAX_SPP)
+            .ok_or_else(|| {
+                SceneError::at(
+                    at,
+                    format!(
+                        "xsamples * ysamples is larger than {}",
+                        crate::resources::MAX_SPP
+                    ),
+                )
+            })?
     } else {
         positive_int(params, "pixelsamples", 16)?
     };
@@ -796,8 +812,10 @@ fn sampler(ty: &str, params: &mut ParamSet, at: &Loc) -> Result<SamplerDesc, Sce
 /// An `integer` parameter that must be positive.
 fn positive_int(params: &mut ParamSet, name: &str, default: i32) -> Result<u32, SceneError> {
     let v = params.get_int(name, default)?;
-    if v <= 0 {
-        return Err(params.peek(name).expect("given").err("must be positive"));
+    let max = crate::resources::MAX_SPP as i32;
+    if v <= 0 || v > max {
+        let msg = format!("must be positive and at most {max}, got {v}");
+        return Err(params.peek(name).expect("given").err(msg));
     }
     Ok(v as u32)
 }
