@@ -164,6 +164,12 @@ impl Mesh {
         Some(n.normalize_or_zero())
     }
 
+    /// The area of triangle `prim` computed in f64 (exact for any finite f32 vertices).
+    pub fn area_f64(&self, prim: u32) -> f64 {
+        let [p0, p1, p2] = self.triangle(prim).map(|p| p.as_dvec3());
+        0.5 * (p1 - p0).cross(p2 - p0).length()
+    }
+
     pub fn area(&self, prim: u32) -> f32 {
         let [p0, p1, p2] = self.triangle(prim);
         0.5 * (p1 - p0).cross(p2 - p0).length()

@@ -22,6 +22,7 @@
 //! `file:line:column: what is wrong`: an unknown or unsupported directive or type, a parameter
 //! that is given but never read, a wrong type or count of values, a missing or malformed file.
 //! See the README for the supported subset.
+pub mod extent;
 pub mod lights;
 pub mod materials;
 pub mod params;

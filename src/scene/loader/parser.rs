@@ -69,6 +69,8 @@ pub struct Builder {
     default_material: Option<u32>,
     world_begun: bool,
     meshes: Vec<Mesh>,
+    /// Where each mesh's `Shape` was written.
+    mesh_locs: Vec<Loc>,
     materials: Vec<Material>,
     lights: Vec<crate::scene::Light>,
     camera: CameraDesc,
@@ -100,6 +102,7 @@ impl Builder {
             default_material: None,
             world_begun: false,
             meshes: Vec::new(),
+            mesh_locs: Vec::new(),
             materials: Vec::new(),
             lights: Vec::new(),
             camera: CameraDesc {
@@ -141,6 +144,7 @@ impl Builder {
         if !self.world_begun {
             return Err(SceneError::at(&end, "the scene has no WorldBegin"));
         }
+        super::extent::check(&self.meshes, &self.mesh_locs)?;
         Ok(Scene {
             meshes: self.meshes,
             materials: self.materials,
@@ -424,8 +428,10 @@ impl Builder {
         mesh.material = self.material_index();
         if let Some(spec) = &self.gs.area {
             let area = match mesh.sphere {
-                Some((_, r)) => 4.0 * std::f32::consts::PI * r * r,
-                None => (0..mesh.indices.len() as u32).map(|t| mesh.area(t)).sum(),
+                Some((_, r)) => 4.0 * std::f64::consts::PI * (r as f64).powi(2),
+                None => (0..mesh.indices.len() as u32)
+                    .map(|t| mesh.area_f64(t))
+                    .sum(),
             };
             let l = spec.radiance(area).map_err(|m| SceneError::at(&at, m))?;
             mesh.area_light = Some(self.lights.len() as u32);
@@ -436,6 +442,7 @@ impl Builder {
             });
         }
         self.meshes.push(mesh);
+        self.mesh_locs.push(at);
         Ok(())
     }
 
@@ -490,18 +497,19 @@ fn rotate(deg: f32, axis: Vec3, loc: &Loc) -> Result<Mat4, SceneError> {
 
 /// pbrt's `LookAt eye look up`: the camera-from-world matrix.
 fn look_at(v: &[f32], loc: &Loc) -> Result<Mat4, SceneError> {
+    // Directions in f64: at coordinates near 1e20 an f32 length squared overflows.
     let eye = Vec3::new(v[0], v[1], v[2]);
-    let look = Vec3::new(v[3], v[4], v[5]);
-    let up = Vec3::new(v[6], v[7], v[8]);
-    let dir = (look - eye).normalize_or_zero();
-    if dir == Vec3::ZERO {
+    let look = glam::DVec3::new(v[3] as f64, v[4] as f64, v[5] as f64);
+    let up = glam::DVec3::new(v[6] as f64, v[7] as f64, v[8] as f64);
+    let dir = (look - eye.as_dvec3()).normalize_or_zero();
+    if dir == glam::DVec3::ZERO {
         return Err(SceneError::at(
             loc,
             "LookAt: the eye and the look-at point coincide",
         ));
     }
     let right = up.normalize_or_zero().cross(dir).normalize_or_zero();
-    if right == Vec3::ZERO {
+    if right == glam::DVec3::ZERO {
         return Err(SceneError::at(
             loc,
             "LookAt: the up vector is zero or along the view direction",
@@ -509,9 +517,9 @@ fn look_at(v: &[f32], loc: &Loc) -> Result<Mat4, SceneError> {
     }
     let new_up = dir.cross(right);
     let world_from_camera = Mat4::from_cols(
-        right.extend(0.0),
-        new_up.extend(0.0),
-        dir.extend(0.0),
+        right.as_vec3().extend(0.0),
+        new_up.as_vec3().extend(0.0),
+        dir.as_vec3().extend(0.0),
         eye.extend(1.0),
     );
     Ok(world_from_camera.inverse())

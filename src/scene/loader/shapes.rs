@@ -161,6 +161,21 @@ pub fn xform_point(m: &Mat4, p: Vec3) -> Vec3 {
     }
 }
 
+/// Every world-space vertex must be finite (a zero or projective `Transform`, or translations
+/// that overflow, make them infinite or NaN).
+fn check_finite(positions: &[Vec3], loc: &Loc) -> Result<(), SceneError> {
+    match positions.iter().position(|p| !p.is_finite()) {
+        None => Ok(()),
+        Some(i) => Err(SceneError::at(
+            loc,
+            format!(
+                "vertex {i} is not finite after the current transform ({}): check Transform, Scale and Translate",
+                positions[i]
+            ),
+        )),
+    }
+}
+
 /// Whether `m` swaps handedness (its linear part has a negative determinant).
 pub fn swaps_handedness(m: &Mat4) -> bool {
     Mat3::from_mat4(*m).determinant() < 0.0
@@ -169,7 +184,8 @@ pub fn swaps_handedness(m: &Mat4) -> bool {
 /// Moves an object-space mesh to world space through `ctm`; `reverse` is the
 /// `ReverseOrientation` state.
 pub fn to_world(obj: ObjMesh, ctm: &Mat4, reverse: bool, loc: &Loc) -> Result<Mesh, SceneError> {
-    let positions = obj.positions.iter().map(|&p| xform_point(ctm, p)).collect();
+    let positions: Vec<Vec3> = obj.positions.iter().map(|&p| xform_point(ctm, p)).collect();
+    check_finite(&positions, loc)?;
     let normals = match obj.normals {
         Some(nn) => {
             let lin = Mat3::from_mat4(*ctm);
@@ -267,6 +283,7 @@ pub fn sphere(
             t.swap(1, 2);
         }
     }
+    check_finite(&mesh.positions, loc)?;
     mesh.normals = Some(normals);
     mesh.flip_normals = reverse;
     mesh.sphere = Some((centre, radius));
