@@ -45,6 +45,11 @@ pub const MAX_RADIUS: f32 = 4.0;
 pub const MAX_EXPOSURE: f32 = 64.0;
 /// Largest scene or included file, in bytes.
 pub const MAX_SCENE_FILE: u64 = 1 << 30;
+/// Largest PLY file, in bytes.
+pub const MAX_PLY_FILE: u64 = 4 << 30;
+/// Largest input read from something that is not a regular file (a FIFO, a device such as
+/// /dev/zero that never ends): its size is not known before reading.
+pub const MAX_STREAM_FILE: u64 = 64 << 20;
 /// Pending gather or shadow rays per tile before they are traced (a batch); a point adds at most
 /// [`MAX_GATHER_SAMPLES`] or [`MAX_LIGHT_SAMPLES`] more before the next flush.
 pub const BATCH: usize = 1 << 14;

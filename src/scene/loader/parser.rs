@@ -169,12 +169,21 @@ impl Builder {
             Some(loc) => SceneError::at(loc, msg),
             None => SceneError::new(msg),
         };
-        let bytes = std::fs::read(path)
+        let bytes = super::read_capped(path, crate::resources::MAX_SCENE_FILE)
             .map_err(|e| fail(format!("cannot read \"{}\": {e}", path.display())))?;
-        let text = String::from_utf8(bytes)
-            .map_err(|_| fail(format!("\"{}\" is not UTF-8 text", path.display())))?;
-        let mut tok = Tokenizer::new(&text, Arc::new(path.to_path_buf()));
+        let file = Arc::new(path.to_path_buf());
+        let text = String::from_utf8(bytes).map_err(|e| not_utf8(&file, e))?;
+        let mut tok = Tokenizer::new(&text, file);
+        let mut first = true;
         while let Some(t) = tok.next()? {
+            if first && !(t.kind == TokKind::Word && is_directive(t.text)) {
+                // Do not quote a file that is not a scene (an Include of /etc/passwd).
+                return Err(tok.err(
+                    &t,
+                    "not a pbrt-v4 scene file: it does not start with a directive",
+                ));
+            }
+            first = false;
             if t.kind != TokKind::Word {
                 return Err(tok.err(&t, format!("expected a directive, found {}", t.describe())));
             }
@@ -460,25 +469,92 @@ impl Builder {
     }
 }
 
+/// The directives this parser reads.
+const DIRECTIVES: [&str; 27] = [
+    "Identity",
+    "Translate",
+    "Scale",
+    "Rotate",
+    "LookAt",
+    "Transform",
+    "ConcatTransform",
+    "CoordinateSystem",
+    "CoordSysTransform",
+    "TransformBegin",
+    "TransformEnd",
+    "AttributeBegin",
+    "AttributeEnd",
+    "ReverseOrientation",
+    "WorldBegin",
+    "Camera",
+    "Film",
+    "Sampler",
+    "Integrator",
+    "PixelFilter",
+    "Material",
+    "MakeNamedMaterial",
+    "NamedMaterial",
+    "Shape",
+    "AreaLightSource",
+    "LightSource",
+    "Include",
+];
+
+/// pbrt-v4 directives photon knows but does not render.
+const PBRT_V4_UNSUPPORTED: [&str; 11] = [
+    "Attribute",
+    "Texture",
+    "ObjectBegin",
+    "ObjectEnd",
+    "ObjectInstance",
+    "MakeNamedMedium",
+    "MediumInterface",
+    "ColorSpace",
+    "Option",
+    "ActiveTransform",
+    "TransformTimes",
+];
+
+/// Whether `name` is a pbrt directive (read or not): how a scene file starts.
+fn is_directive(name: &str) -> bool {
+    DIRECTIVES.contains(&name)
+        || PBRT_V4_UNSUPPORTED.contains(&name)
+        || matches!(name, "Import" | "WorldEnd")
+}
+
+/// The error for a file that is not UTF-8: the location of the first bad byte.
+fn not_utf8(file: &Arc<PathBuf>, e: std::string::FromUtf8Error) -> SceneError {
+    let bytes = e.as_bytes();
+    let good = e.utf8_error().valid_up_to();
+    let line = 1 + bytes[..good].iter().filter(|&&b| b == b'\n').count();
+    let line_start = bytes[..good]
+        .iter()
+        .rposition(|&b| b == b'\n')
+        .map_or(0, |i| i + 1);
+    // Columns count characters, as the tokenizer's do for ASCII text.
+    let col = 1 + String::from_utf8_lossy(&bytes[line_start..good])
+        .chars()
+        .count();
+    let loc = Loc {
+        file: file.clone(),
+        line: line as u32,
+        col: col as u32,
+    };
+    SceneError::at(
+        &loc,
+        format!(
+            "invalid UTF-8 (byte 0x{:02x}): scene files are UTF-8 text",
+            bytes[good]
+        ),
+    )
+}
+
 /// The message for a directive we do not read.
 fn unsupported(name: &str) -> String {
-    const PBRT_V4: [&str; 11] = [
-        "Attribute",
-        "Texture",
-        "ObjectBegin",
-        "ObjectEnd",
-        "ObjectInstance",
-        "MakeNamedMedium",
-        "MediumInterface",
-        "ColorSpace",
-        "Option",
-        "ActiveTransform",
-        "TransformTimes",
-    ];
     if name == "WorldEnd" {
         "unsupported directive \"WorldEnd\" (pbrt-v4 has no WorldEnd: is this a pbrt-v3 file?)"
             .to_string()
-    } else if PBRT_V4.contains(&name) {
+    } else if PBRT_V4_UNSUPPORTED.contains(&name) {
         format!("unsupported directive \"{name}\"")
     } else {
         let name = crate::scene::clip_for_message(name, crate::scene::MAX_TOKEN);
