@@ -296,15 +296,43 @@ pub fn check(e: &Estimate, budget: &Budget) -> Result<(), String> {
     ))
 }
 
+/// Which sizes the command line gave (the rest came from the scene file), to say where the
+/// largest part of an estimate comes from.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FromCli {
+    pub res: bool,
+    pub photons: bool,
+}
+
+/// Where the largest part of `e` was set: a flag, the photon-count parameter's
+/// `file:line:col`, or the scene file.
+fn blame(e: &Estimate, scene: &Scene, cli: FromCli) -> String {
+    let largest = e
+        .parts
+        .iter()
+        .max_by_key(|(_, b)| *b)
+        .map_or("", |(n, _)| *n);
+    let params = &scene.integrator.params;
+    let photon_loc = params
+        .loc("globalphotons")
+        .or_else(|| params.loc("causticphotons"));
+    match (largest, photon_loc) {
+        ("film", _) if cli.res => "--res".to_string(),
+        ("photon maps", _) if cli.photons => "--global-photons/--caustic-photons".to_string(),
+        ("photon maps", Some(loc)) => loc.to_string(),
+        _ => scene.path.display().to_string(),
+    }
+}
+
 /// Checks a render against `max_memory` (bytes; default [`default_budget`]) before it starts;
-/// `threads` 0 means all cores.
+/// `threads` 0 means all cores. The message starts with where the largest part was set.
 pub fn check_render(
     scene: &Scene,
     settings: &RenderSettings,
-    kind: IntegratorKind,
-    backend: BackendKind,
+    (kind, backend): (IntegratorKind, BackendKind),
     threads: usize,
     max_memory: Option<u64>,
+    cli: FromCli,
 ) -> Result<(), String> {
     let threads = match threads {
         0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
@@ -317,7 +345,8 @@ pub fn check_render(
         },
         None => default_budget(),
     };
-    check(&estimate(scene, settings, kind, backend, threads), &budget)
+    let e = estimate(scene, settings, kind, backend, threads);
+    check(&e, &budget).map_err(|m| format!("{}: {m}", blame(&e, scene, cli)))
 }
 
 #[cfg(test)]

@@ -206,13 +206,17 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
             .unwrap_or_else(|| exr.with_extension("png"))
     });
     let outputs = Outputs::plan(&exr, png.as_deref()).map_err(ToolError)?;
+    let cli = crate::resources::FromCli {
+        res: opts.res.is_some(),
+        photons: opts.photon.global_photons.is_some() || opts.photon.caustic_photons.is_some(),
+    };
     crate::resources::check_render(
         &scene,
         &settings,
-        opts.integrator,
-        opts.backend,
+        (opts.integrator, opts.backend),
         opts.threads,
         opts.max_memory,
+        cli,
     )
     .map_err(ToolError)?;
 

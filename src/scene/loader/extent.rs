@@ -27,6 +27,26 @@ pub const MAX_COORDINATE: f32 = 1e9;
 /// scene far from the origin for its size loses its detail).
 pub const MIN_RADIUS_TO_OFFSET: f32 = 1e-5;
 
+/// Errors (at `loc`) when a vertex of `mesh` (or its sphere) lies beyond [`MAX_COORDINATE`]:
+/// checked for each shape as it is read, before its emission is computed.
+pub fn check_shape(mesh: &Mesh, loc: &Loc) -> Result<(), SceneError> {
+    let far = match mesh.sphere {
+        Some((c, r)) => c.abs().max_element() + r,
+        None => mesh
+            .positions
+            .iter()
+            .map(|p| p.abs().max_element())
+            .fold(0.0, f32::max),
+    };
+    if far > MAX_COORDINATE {
+        return Err(SceneError::at(
+            loc,
+            format!("the scene is too large: a vertex at distance {far:e} from the origin (photon supports coordinates up to {MAX_COORDINATE:e}; scale the scene down)"),
+        ));
+    }
+    Ok(())
+}
+
 /// Errors unless the geometry of `meshes` (written at `locs`) lies in the supported range.
 pub fn check(meshes: &[Mesh], locs: &[Loc]) -> Result<(), SceneError> {
     let mut lo = Vec3::splat(f32::INFINITY);

@@ -71,6 +71,8 @@ pub struct Builder {
     meshes: Vec<Mesh>,
     /// Where each mesh's `Shape` was written.
     mesh_locs: Vec<Loc>,
+    /// Spheres waiting for their tessellation (mesh index, sphere).
+    spheres: Vec<(usize, shapes::SphereSpec)>,
     materials: Vec<Material>,
     lights: Vec<crate::scene::Light>,
     camera: CameraDesc,
@@ -103,6 +105,7 @@ impl Builder {
             world_begun: false,
             meshes: Vec::new(),
             mesh_locs: Vec::new(),
+            spheres: Vec::new(),
             materials: Vec::new(),
             lights: Vec::new(),
             camera: CameraDesc {
@@ -144,6 +147,7 @@ impl Builder {
         if !self.world_begun {
             return Err(SceneError::at(&end, "the scene has no WorldBegin"));
         }
+        self.tessellate_spheres();
         super::extent::check(&self.meshes, &self.mesh_locs)?;
         Ok(Scene {
             meshes: self.meshes,
@@ -190,6 +194,28 @@ impl Builder {
             self.directive(&t, &mut tok, depth)?;
         }
         Ok(tok.end_loc())
+    }
+
+    /// Tessellates every sphere by its size in the scene and on screen
+    /// ([`shapes::sphere_rings`]).
+    fn tessellate_spheres(&mut self) {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for p in self.meshes.iter().flat_map(|m| m.positions.iter()) {
+            (lo, hi) = (lo.min(*p), hi.max(*p));
+        }
+        for (_, s) in &self.spheres {
+            (lo, hi) = (lo.min(s.centre - s.radius), hi.max(s.centre + s.radius));
+        }
+        let scene_radius = 0.5 * (hi - lo).as_dvec3().length() as f32;
+        for (i, spec) in std::mem::take(&mut self.spheres) {
+            // An emitter's power goes with its area: always the full tessellation.
+            let rings = match self.meshes[i].area_light {
+                Some(_) => shapes::SPHERE_RINGS,
+                None => shapes::sphere_rings(&spec, scene_radius, &self.camera, &self.film),
+            };
+            shapes::tessellate(&spec, rings, &mut self.meshes[i]);
+        }
     }
 
     /// Carries out the directive `t`, reading its arguments from `tok`.
@@ -423,8 +449,9 @@ impl Builder {
                 shapes::to_world(obj, &gs.ctm, gs.reverse, &at)?
             }
             "sphere" => {
-                let m = shapes::sphere(&mut params, &at, &gs.ctm, gs.reverse)?;
+                let (spec, m) = shapes::sphere(&mut params, &at, &gs.ctm, gs.reverse)?;
                 params.check_unused()?;
+                self.spheres.push((self.meshes.len(), spec));
                 m
             }
             other => {
@@ -434,6 +461,7 @@ impl Builder {
                 ))
             }
         };
+        super::extent::check_shape(&mesh, &at)?;
         mesh.material = self.material_index();
         if let Some(spec) = &self.gs.area {
             let area = match mesh.sphere {
@@ -813,7 +841,8 @@ fn camera(ty: &str, params: &mut ParamSet, at: &Loc, ctm: &Mat4) -> Result<Camer
         let p = params.peek("lensradius").expect("given");
         return Err(p.err("depth of field is not supported (lensradius must be 0)"));
     }
-    let world_from_camera = ctm.inverse();
+    // Inverted in f64: a camera-from-world scale near 1e-20 has a determinant below f32's range.
+    let world_from_camera = ctm.as_dmat4().inverse().as_mat4();
     if !world_from_camera.is_finite() {
         return Err(SceneError::at(at, "the camera transform is singular"));
     }
