@@ -193,10 +193,11 @@ fn intensity(params: &mut ParamSet, loc: &Loc, solid_angle: f64) -> Result<Vec3,
 fn position(params: &mut ParamSet, loc: &Loc, ctm: &Mat4) -> Result<Vec3, SceneError> {
     let from = params.get_point3("from", Vec3::ZERO)?;
     let p = xform_point(ctm, from);
-    if !p.is_finite() {
+    let max = super::extent::MAX_COORDINATE;
+    if !(p.abs().max_element() <= max) {
         return Err(SceneError::at(
             loc,
-            "\"from\" is not finite after the current transform",
+            format!("the light is at {p} after the current transform, beyond the supported coordinates (up to {max:e})"),
         ));
     }
     Ok(p)

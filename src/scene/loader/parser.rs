@@ -846,6 +846,14 @@ fn camera(ty: &str, params: &mut ParamSet, at: &Loc, ctm: &Mat4) -> Result<Camer
     if !world_from_camera.is_finite() {
         return Err(SceneError::at(at, "the camera transform is singular"));
     }
+    let eye = world_from_camera.transform_point3(Vec3::ZERO);
+    let max = super::extent::MAX_COORDINATE;
+    if eye.abs().max_element() > max {
+        return Err(SceneError::at(
+            at,
+            format!("the camera is at {eye}, beyond the supported coordinates (up to {max:e})"),
+        ));
+    }
     Ok(CameraDesc {
         world_from_camera,
         fov_deg,
