@@ -59,6 +59,14 @@ pub fn requested() -> Option<Signal> {
     }
 }
 
+/// The signal received since [`install`], clearing the flag: for a caller that saves its work
+/// after a signal and must still notice a second one (it [`raise`]s the first again after).
+pub fn take() -> Option<Signal> {
+    let s = requested();
+    flag().store(0, Ordering::Relaxed);
+    s
+}
+
 /// Sets the flag as a signal would (for tests and for code that wants a clean stop).
 pub fn raise(sig: Signal) {
     let n = match sig {

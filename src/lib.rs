@@ -18,6 +18,7 @@ pub mod interrupt;
 pub mod light;
 pub mod math;
 pub mod photon;
+pub mod resources;
 pub mod sampling;
 pub mod scene;
 pub mod tools;

@@ -41,8 +41,38 @@ enum Command {
     Merge(MergeOptions),
 }
 
+/// Parses the command line; a usage error becomes one line naming the flag (exit 2), help and
+/// version print as usual.
+fn parse() -> Result<Cli, ExitCode> {
+    use clap::error::ErrorKind;
+    Cli::try_parse().map_err(|e| match e.kind() {
+        ErrorKind::DisplayHelp
+        | ErrorKind::DisplayVersion
+        | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+            let _ = e.print();
+            ExitCode::SUCCESS
+        }
+        _ => {
+            let text = e.to_string();
+            let lines: Vec<&str> = text
+                .lines()
+                .map(str::trim)
+                .take_while(|l| !l.starts_with("Usage:") && !l.starts_with("For more information"))
+                .filter(|l| !l.is_empty())
+                .collect();
+            let line = lines.join(" ");
+            let line = line.strip_prefix("error: ").unwrap_or(&line);
+            eprintln!("photon: {}", photon::scene::clip_for_message(line, 400));
+            ExitCode::from(2)
+        }
+    })
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match parse() {
+        Ok(c) => c,
+        Err(code) => return code,
+    };
     let result = match cli.command {
         Command::Render(opts) => render::run(&opts).map(|()| true),
         Command::Compare(opts) => compare::run(&opts),
@@ -63,7 +93,10 @@ fn main() -> ExitCode {
         Ok(false) => ExitCode::from(1),
         Err(e) => {
             eprintln!("photon: {e}");
-            ExitCode::from(2)
+            match photon::interrupt::requested() {
+                Some(sig) => ExitCode::from(sig.exit_code()),
+                None => ExitCode::from(2),
+            }
         }
     }
 }

@@ -176,10 +176,14 @@ pub(crate) fn face_normals(mesh: &crate::scene::Mesh) -> Vec<Vec3> {
 
 /// The part of a ray both backends agree to query: `Some((tmin, tmax))` with `tmin` clamped to
 /// 0 (Embree accepts no negative `tnear`), or `None` when the ray cannot hit anything: empty
-/// or NaN interval, non-finite origin, zero or non-finite direction.
+/// or NaN interval, non-finite origin, zero or non-finite direction, or coordinates beyond
+/// 1.8e18 (which Embree rejects with an assertion).
 #[inline]
 pub(crate) fn query_interval(ray: &Ray) -> Option<(f32, f32)> {
     let tmin = ray.tmin.max(0.0);
-    let ok = tmin <= ray.tmax && ray.o.is_finite() && ray.d.is_finite() && ray.d != Vec3::ZERO;
+    // Embree asserts (and aborts) on rays with coordinates beyond its FLT_LARGE (1.844e18).
+    const LARGE: f32 = 1.8e18;
+    let inside = |v: Vec3| v.is_finite() && v.abs().max_element() <= LARGE;
+    let ok = tmin <= ray.tmax && inside(ray.o) && inside(ray.d) && ray.d != Vec3::ZERO;
     ok.then_some((tmin, ray.tmax))
 }

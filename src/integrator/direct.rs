@@ -17,6 +17,7 @@ use crate::film::Radiance;
 use crate::interaction::SurfaceInteraction;
 use crate::math::{Ray, Vec3};
 use crate::photon::KnnResult;
+use crate::resources::BATCH;
 use crate::sampling::Sampler;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
@@ -107,6 +108,15 @@ pub fn render_tile(ctx: &RenderContext, x0: u32, y0: u32, x1: u32, y1: u32) -> V
                         &mut next,
                         &mut gathers,
                     );
+                }
+                // Bounded batches: a point adds at most MAX_LIGHT_SAMPLES shadow rays and
+                // MAX_GATHER_SAMPLES gathers beyond BATCH before they are traced.
+                if shadows.len() >= BATCH {
+                    trace_shadows(ctx, &shadows, &mut shadow_rays, &mut occluded, &mut acc);
+                    shadows.clear();
+                }
+                if gathers.pending.len() >= BATCH {
+                    trace_gathers(ctx, &mut gathers, &mut acc);
                 }
             }
             trace_shadows(ctx, &shadows, &mut shadow_rays, &mut occluded, &mut acc);

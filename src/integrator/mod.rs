@@ -67,13 +67,15 @@ impl RenderSettings {
     pub fn from_scene(scene: &Scene) -> Result<RenderSettings, SceneError> {
         let mut params = scene.integrator.params.clone();
         let max_depth = params.get_int("maxdepth", 5)?;
-        if max_depth < 0 {
-            let loc = scene.integrator.loc.clone();
-            return Err(SceneError {
-                loc,
-                msg: format!("maxdepth must be >= 0, got {max_depth}"),
-            });
-        }
+        crate::resources::check_range(max_depth, 0, crate::resources::MAX_DEPTH as i32).map_err(
+            |m| SceneError {
+                loc: params
+                    .loc("maxdepth")
+                    .or(scene.integrator.loc.as_ref())
+                    .cloned(),
+                msg: format!("\"maxdepth\" {m}"),
+            },
+        )?;
         let photon = photonmap::PhotonSettings::from_params(&mut params)?;
         let pass_spp = params.get_int("passspp", 4)?;
         if pass_spp < 1 {

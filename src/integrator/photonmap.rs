@@ -93,25 +93,36 @@ impl PhotonSettings {
     /// Reads the `photonmap` parameters (each marked used); others stay for the caller.
     pub fn from_params(params: &mut ParamSet) -> Result<PhotonSettings, SceneError> {
         let mut s = PhotonSettings::default();
-        let count = |params: &mut ParamSet, name: &str, default: u64| -> Result<u64, SceneError> {
-            let v = params.get_int(name, default.min(i32::MAX as u64) as i32)?;
-            if v < 0 {
-                let loc = params.loc(name).cloned();
-                return Err(SceneError {
-                    loc,
-                    msg: format!("\"{name}\" must be >= 0, got {v}"),
-                });
-            }
-            Ok(v as u64)
+        use crate::resources as r;
+        let count = |params: &mut ParamSet, name: &str, default: u64, hi: u64| {
+            let v = params.get_int(name, default.min(i32::MAX as u64) as i32)? as i64;
+            r::check_range(v, 0, hi.min(i32::MAX as u64) as i64)
+                .map(|v| v as u64)
+                .map_err(|m| SceneError {
+                    loc: params.loc(name).cloned(),
+                    msg: format!("\"{name}\" {m}"),
+                })
         };
-        s.trace.global_photons = count(params, "globalphotons", s.trace.global_photons)?;
-        s.trace.caustic_photons = count(params, "causticphotons", s.trace.caustic_photons)?;
-        s.trace.max_bounces = count(params, "maxphotonbounces", s.trace.max_bounces as u64)? as u32;
-        s.global_lookup = count(params, "globallookup", s.global_lookup as u64)? as usize;
-        s.caustic_lookup = count(params, "causticlookup", s.caustic_lookup as u64)? as usize;
-        s.gather_samples = count(params, "gathersamples", s.gather_samples as u64)? as u32;
-        s.global_radius = params.get_float("globalradius", s.global_radius)?;
-        s.caustic_radius = params.get_float("causticradius", s.caustic_radius)?;
+        let t = &mut s.trace;
+        t.global_photons = count(params, "globalphotons", t.global_photons, r::MAX_PHOTONS)?;
+        t.caustic_photons = count(params, "causticphotons", t.caustic_photons, r::MAX_PHOTONS)?;
+        let depth = r::MAX_DEPTH as u64;
+        t.max_bounces = count(params, "maxphotonbounces", t.max_bounces as u64, depth)? as u32;
+        let lookup = r::MAX_LOOKUP as u64;
+        s.global_lookup = count(params, "globallookup", s.global_lookup as u64, lookup)? as usize;
+        s.caustic_lookup =
+            count(params, "causticlookup", s.caustic_lookup as u64, lookup)? as usize;
+        let gathers = r::MAX_GATHER_SAMPLES as u64;
+        s.gather_samples = count(params, "gathersamples", s.gather_samples as u64, gathers)? as u32;
+        let radius = |params: &mut ParamSet, name: &str, default: f32| {
+            let v = params.get_float(name, default)?;
+            r::check_float(v, 0.0, r::MAX_RADIUS, true).map_err(|m| SceneError {
+                loc: params.loc(name).cloned(),
+                msg: format!("\"{name}\" (a fraction of the scene radius) {m}"),
+            })
+        };
+        s.global_radius = radius(params, "globalradius", s.global_radius)?;
+        s.caustic_radius = radius(params, "causticradius", s.caustic_radius)?;
         s.final_gather = params.get_bool("finalgather", s.final_gather)?;
         s.irradiance_cache = params.get_bool("irradiancecache", s.irradiance_cache)?;
         s.trace.projection_maps = params.get_bool("projectionmaps", s.trace.projection_maps)?;

@@ -80,9 +80,11 @@ impl KnnResult {
         }
     }
 
-    fn reset(&mut self, k: usize, max_r2: f32) {
+    /// Starts a query for `k` neighbours among `len` points: room is reserved for what can
+    /// be found (a huge `k` does not reserve for itself).
+    fn reset(&mut self, k: usize, max_r2: f32, len: usize) {
         self.buf.clear();
-        self.buf.reserve(2 * k);
+        self.buf.reserve(2 * k.min(len));
         self.k = k;
         self.max_r2 = max_r2;
         self.bound = max_r2;
@@ -280,7 +282,7 @@ impl KdTree {
     where
         F: FnMut(u32, Vec3, f32) -> Option<f32>,
     {
-        out.reset(k, max_r2);
+        out.reset(k, max_r2, self.len);
         if k == 0 || self.len == 0 || max_r2.is_nan() || max_r2 < 0.0 {
             return;
         }
@@ -489,7 +491,7 @@ mod heap_layout {
     }
 
     fn knn(nodes: &[Vec4], q: Vec3, k: usize, out: &mut KnnResult) {
-        out.reset(k, f32::INFINITY);
+        out.reset(k, f32::INFINITY, nodes.len());
         let q4 = Vec3A::from(q);
         let mut stack = [(0usize, 0f32); STACK];
         let mut sp = 1;

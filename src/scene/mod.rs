@@ -50,11 +50,39 @@ impl SceneError {
 
 impl fmt::Display for SceneError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let msg = clip_for_message(&self.msg, MAX_MESSAGE);
         match &self.loc {
-            Some(loc) => write!(f, "{loc}: {}", self.msg),
-            None => write!(f, "{}", self.msg),
+            Some(loc) => write!(
+                f,
+                "{}: {msg}",
+                clip_for_message(&loc.to_string(), MAX_MESSAGE)
+            ),
+            None => write!(f, "{msg}"),
         }
     }
+}
+
+/// Longest message (in characters) an error prints.
+pub const MAX_MESSAGE: usize = 600;
+/// Longest token (in characters) an error quotes.
+pub const MAX_TOKEN: usize = 40;
+
+/// `s` made fit for one line of a terminal: control characters (newlines, NUL, ESC, ...)
+/// escaped as `\n`, `\u{1b}`, and the text cut after `max` characters with an ellipsis.
+pub fn clip_for_message(s: &str, max: usize) -> String {
+    let mut out = String::new();
+    for (n, c) in s.chars().enumerate() {
+        if n >= max {
+            out.push('…');
+            break;
+        }
+        if c.is_control() {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    out
 }
 
 impl std::error::Error for SceneError {}
@@ -134,6 +162,12 @@ impl Mesh {
         let n =
             normals[a as usize] * (1.0 - u - v) + normals[b as usize] * u + normals[c as usize] * v;
         Some(n.normalize_or_zero())
+    }
+
+    /// The area of triangle `prim` computed in f64 (exact for any finite f32 vertices).
+    pub fn area_f64(&self, prim: u32) -> f64 {
+        let [p0, p1, p2] = self.triangle(prim).map(|p| p.as_dvec3());
+        0.5 * (p1 - p0).cross(p2 - p0).length()
     }
 
     pub fn area(&self, prim: u32) -> f32 {

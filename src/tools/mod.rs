@@ -5,6 +5,7 @@ pub mod converge;
 pub mod crosscheck;
 pub mod merge;
 pub mod meshgen;
+pub mod output;
 pub mod passes;
 pub mod rays;
 pub mod render;
@@ -51,10 +52,33 @@ pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
         .trim()
         .parse()
         .map_err(|_| format!("bad height in {s:?}"))?;
-    if w == 0 || h == 0 || w > 1 << 15 || h > 1 << 15 {
-        return Err(format!("resolution {w}x{h} out of range (1..32768)"));
+    let max = crate::resources::MAX_RESOLUTION;
+    if w == 0 || h == 0 || w > max || h > max {
+        return Err(format!("resolution {w}x{h} out of range (1..={max} each)"));
     }
     Ok((w, h))
+}
+
+/// A clap value parser for an integer in `lo..=hi`.
+pub fn usize_in(lo: usize, hi: usize) -> impl Fn(&str) -> Result<usize, String> + Clone {
+    move |s| {
+        let v: usize = s
+            .trim()
+            .parse()
+            .map_err(|_| format!("expected an integer in {lo}..={hi}, got {s:?}"))?;
+        crate::resources::check_range(v, lo, hi)
+    }
+}
+
+/// A clap value parser for a finite float in `[lo, hi]` (`(lo, hi]` when `open`).
+pub fn float_in(lo: f32, hi: f32, open: bool) -> impl Fn(&str) -> Result<f32, String> + Clone {
+    move |s| {
+        let v: f32 = s
+            .trim()
+            .parse()
+            .map_err(|_| format!("expected a number, got {s:?}"))?;
+        crate::resources::check_float(v, lo, hi, open)
+    }
 }
 
 /// A rayon pool of `threads` workers (0 = all cores) with flush-to-zero set on each.

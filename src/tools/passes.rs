@@ -2,6 +2,7 @@
 //! renders a range of independent passes (see `integrator::passes`) and writes the partial
 //! image (exact per-pixel sums plus the mean so far), checkpointing as it goes and on
 //! SIGINT/SIGTERM, so that nothing rendered is lost and `photon merge` can sum the parts.
+use super::output::{OutputError, Outputs, Writer};
 use super::render::RenderOptions;
 use super::ToolError;
 use crate::accel::Accel;
@@ -55,18 +56,18 @@ fn describe_field(h: &PartialHeader, field: &str) -> String {
     }
 }
 
-/// Renders in passes and writes the partial image to `exr` (and the mean to `png`).
+/// Renders in passes and writes the partial image (and the PNG of its mean) to `outputs`.
 pub fn run(
     opts: &RenderOptions,
     scene: &Scene,
     accel: &Accel,
     settings: &RenderSettings,
     pool: &rayon::ThreadPool,
-    exr: &Path,
-    png: Option<&Path>,
+    outputs: &Outputs,
 ) -> Result<(), ToolError> {
     crate::interrupt::install();
     let po = &opts.passes;
+    let checkpoint = plan_checkpoint(po.checkpoint.as_deref(), outputs)?;
     let kind = opts.integrator;
     let header = PartialHeader::new(scene, settings, kind, &backend_name(opts));
     let start_pass = po.passes.as_ref().map_or(0, |r| r.start);
@@ -125,8 +126,7 @@ pub fn run(
     let mut totals = RenderOutput::empty();
     let mut last_checkpoint = Instant::now();
     let mut checkpoint_error = None;
-    let mut longest = 0f64;
-    let mut last = 0f64;
+    let (mut longest, mut last) = (0f64, 0f64);
     if acc.passes.end < end {
         let first = acc.passes.end;
         pool.install(|| {
@@ -149,9 +149,9 @@ pub fn run(
                     100.0 * out.photon_seconds / out.seconds.max(1e-9),
                     100.0 * out.map_build_seconds / out.seconds.max(1e-9)
                 );
-                    if let Some(c) = &po.checkpoint {
+                    if let Some(c) = &checkpoint {
                         if last_checkpoint.elapsed().as_secs_f64() >= po.every {
-                            if let Err(e) = acc.write(c) {
+                            if let Err(e) = write_partial(c, acc) {
                                 checkpoint_error = Some(e);
                                 return false;
                             }
@@ -165,13 +165,49 @@ pub fn run(
         });
     }
     if let Some(e) = checkpoint_error {
-        return Err(ToolError(format!("checkpoint: {e}")));
+        return Err(e.into());
     }
-    let seconds = t0.elapsed().as_secs_f64();
+    report(settings, &acc, &totals, t0.elapsed().as_secs_f64());
+
+    // A signal stopped the render: the finished passes are saved all the same (a second
+    // signal while writing aborts the writes and removes their temporaries).
+    let signal = crate::interrupt::take();
+    if let Some(sig) = signal {
+        eprintln!(
+            "photon: {} received: keeping passes {}..{}",
+            sig.name(),
+            acc.passes.start,
+            acc.passes.end
+        );
+    }
+    let saved = save(&acc, checkpoint.as_ref(), outputs, opts.exposure);
+    if let Some(sig) = signal {
+        crate::interrupt::raise(sig);
+    }
+    saved
+}
+
+/// The checkpoint's plan, refusing a checkpoint that is one of the other outputs.
+fn plan_checkpoint(c: Option<&Path>, outputs: &Outputs) -> Result<Option<Outputs>, ToolError> {
+    let Some(c) = c else { return Ok(None) };
+    let mut all: Vec<(&str, &Path)> = outputs
+        .files
+        .iter()
+        .map(|f| (f.flag.as_str(), f.shown.as_path()))
+        .collect();
+    all.push(("--checkpoint", c));
+    Outputs::plan_files(&all).map_err(ToolError)?;
+    Ok(Some(
+        Outputs::plan_files(&[("--checkpoint", c)]).map_err(ToolError)?,
+    ))
+}
+
+/// The statistics lines of a render in passes.
+fn report(settings: &RenderSettings, acc: &Partial, totals: &RenderOutput, seconds: f64) {
     for note in &totals.notes {
         println!("{note}");
     }
-    println!("{}", progress_note(settings, &acc));
+    println!("{}", progress_note(settings, acc));
     let rays = totals.counters.total();
     println!(
         "rendered in {seconds:.3} s: {rays} rays ({:.2} Mrays/s), {} photons emitted; per-pass overhead: photon tracing {:.1}%, map building {:.1}% of the time",
@@ -180,33 +216,47 @@ pub fn run(
         100.0 * totals.photon_seconds / seconds.max(1e-9),
         100.0 * totals.map_build_seconds / seconds.max(1e-9)
     );
-    if let Some(sig) = crate::interrupt::requested() {
-        eprintln!(
-            "photon: {} received: keeping passes {}..{}",
-            sig.name(),
-            acc.passes.start,
-            acc.passes.end
-        );
-    }
-    // Outputs: the checkpoint (if any), the partial image and the PNG of the mean.
+}
+
+/// Writes the checkpoint (if any) and the outputs: the partial image and the PNG of its mean.
+fn save(
+    acc: &Partial,
+    checkpoint: Option<&Outputs>,
+    outputs: &Outputs,
+    exposure: f32,
+) -> Result<(), ToolError> {
     if acc.passes.is_empty() {
         eprintln!("photon: no pass finished: nothing written");
         return Ok(());
     }
-    if let Some(c) = &po.checkpoint {
-        acc.write(c)?;
-        println!("wrote checkpoint {}", c.display());
+    if let Some(c) = checkpoint {
+        write_partial(c, acc)?;
+        println!("wrote checkpoint {}", c.files[0].shown.display());
     }
-    acc.write(exr)?;
-    println!(
-        "wrote {} (passes {}..{})",
-        exr.display(),
-        acc.passes.start,
-        acc.passes.end
-    );
-    if let Some(png) = png {
-        crate::imageio::write_png(png, &acc.mean().0, opts.exposure)?;
-        println!("wrote {}", png.display());
+    let mean = acc.mean().0;
+    let mut writers: Vec<Writer> = vec![Box::new(|tmp: &Path| {
+        acc.write(tmp).map_err(|e| e.to_string())
+    })];
+    if outputs.files.len() > 1 {
+        writers.push(Box::new(|tmp: &Path| {
+            crate::imageio::write_png(tmp, &mean, exposure).map_err(|e| e.to_string())
+        }));
+    }
+    outputs.commit(writers)?;
+    for f in &outputs.files {
+        println!(
+            "wrote {} (passes {}..{})",
+            f.shown.display(),
+            acc.passes.start,
+            acc.passes.end
+        );
     }
     Ok(())
+}
+
+/// Writes `acc` as the one planned file of `plan`.
+fn write_partial(plan: &Outputs, acc: &Partial) -> Result<(), OutputError> {
+    plan.commit(vec![Box::new(|tmp: &Path| {
+        acc.write(tmp).map_err(|e| e.to_string())
+    })])
 }

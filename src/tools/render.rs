@@ -1,8 +1,13 @@
 //! `photon render SCENE`: load, build the accelerator, render, write EXR + PNG, print stats.
-use super::{parse_resolution, thread_pool, ToolError};
+use super::output::Outputs;
+use super::{float_in, parse_resolution, thread_pool, usize_in, ToolError};
 use crate::accel::{Accel, AccelOptions, BackendKind};
 use crate::imageio::{self, ExrPixel};
 use crate::integrator::{self, IntegratorKind, RenderSettings};
+use crate::resources::{
+    MAX_DEPTH, MAX_EXPOSURE, MAX_GATHER_SAMPLES, MAX_LIGHT_SAMPLES, MAX_LOOKUP, MAX_PHOTONS,
+    MAX_RADIUS, MAX_SPP, MAX_THREADS,
+};
 use crate::sampling::Pattern;
 use crate::scene::loader;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -30,7 +35,7 @@ pub struct RenderOptions {
     #[arg(long, value_parser = parse_duration)]
     pub time: Option<f64>,
     /// Samples per pixel (default: the Sampler's pixelsamples).
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
     pub spp: Option<u32>,
     /// Resolution WxH (default: the Film's).
     #[arg(long, value_parser = parse_resolution)]
@@ -42,7 +47,7 @@ pub struct RenderOptions {
     #[arg(long)]
     pub robust: bool,
     /// Worker threads (0 = all cores).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, value_parser = usize_in(0, MAX_THREADS))]
     pub threads: usize,
     /// Seed of every sample stream.
     #[arg(long, default_value_t = 0)]
@@ -54,10 +59,10 @@ pub struct RenderOptions {
     #[arg(long, value_enum, default_value_t = IntegratorKind::Photonmap)]
     pub integrator: IntegratorKind,
     /// Maximum bounces (default: the Integrator's maxdepth, else 5).
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=MAX_DEPTH as i64))]
     pub max_depth: Option<u32>,
     /// Shadow rays per shading point.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=MAX_LIGHT_SAMPLES as i64))]
     pub light_samples: u32,
     /// Write half floats instead of 32-bit floats.
     #[arg(long)]
@@ -67,8 +72,12 @@ pub struct RenderOptions {
     #[arg(long)]
     pub stats: bool,
     /// PNG exposure in stops.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = float_in(-MAX_EXPOSURE, MAX_EXPOSURE, false))]
     pub exposure: f32,
+    /// Memory budget (e.g. `8G`, `512M`): a render whose estimate exceeds it stops before it
+    /// starts (default: 80% of physical memory, or of what an address-space limit leaves).
+    #[arg(long, value_parser = crate::resources::parse_size)]
+    pub max_memory: Option<u64>,
     #[command(flatten)]
     pub photon: PhotonOverrides,
     #[command(flatten)]
@@ -139,28 +148,28 @@ pub fn parse_pass_range(s: &str) -> Result<std::ops::Range<u64>, String> {
 #[derive(clap::Args, Clone, Debug, Default)]
 pub struct PhotonOverrides {
     /// Photons emitted for the global map.
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u64).range(0..=MAX_PHOTONS))]
     pub global_photons: Option<u64>,
     /// Photons emitted for the caustic map.
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u64).range(0..=MAX_PHOTONS))]
     pub caustic_photons: Option<u64>,
     /// Photons per global-map lookup.
-    #[arg(long)]
+    #[arg(long, value_parser = usize_in(1, MAX_LOOKUP))]
     pub global_lookup: Option<usize>,
     /// Photons per caustic-map lookup.
-    #[arg(long)]
+    #[arg(long, value_parser = usize_in(1, MAX_LOOKUP))]
     pub caustic_lookup: Option<usize>,
     /// Largest global lookup radius, as a fraction of the scene's bounding radius.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = float_in(0.0, MAX_RADIUS, true))]
     pub global_radius: Option<f32>,
     /// Largest caustic lookup radius, as a fraction of the scene's bounding radius.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = float_in(0.0, MAX_RADIUS, true))]
     pub caustic_radius: Option<f32>,
     /// Radiance-estimate kernel: box, cone, biweight, epanechnikov.
     #[arg(long)]
     pub kernel: Option<String>,
     /// Final-gather rays per visible diffuse point.
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_GATHER_SAMPLES as i64))]
     pub gather_samples: Option<u32>,
     /// Final gathering on or off (off shows the global map directly).
     #[arg(long)]
@@ -258,6 +267,20 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
             .clone()
             .unwrap_or_else(|| exr.with_extension("png"))
     });
+    let outputs = Outputs::plan(&exr, png.as_deref()).map_err(ToolError)?;
+    let cli = crate::resources::FromCli {
+        res: opts.res.is_some(),
+        photons: opts.photon.global_photons.is_some() || opts.photon.caustic_photons.is_some(),
+    };
+    crate::resources::check_render(
+        &scene,
+        &settings,
+        (opts.integrator, opts.backend),
+        opts.threads,
+        opts.max_memory,
+        cli,
+    )
+    .map_err(ToolError)?;
 
     let pool = thread_pool(opts.threads)?;
     let t1 = Instant::now();
@@ -316,7 +339,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
             }
             settings.pass_spp = n;
         }
-        return super::passes::run(opts, &scene, &accel, &settings, &pool, &exr, png.as_deref());
+        return super::passes::run(opts, &scene, &accel, &settings, &pool, &outputs);
     }
 
     let bar = progress_bar();
@@ -374,8 +397,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
         eprintln!("photon: warning: {bad} non-finite pixel values");
     }
 
-    // Outputs: each written to a temporary file and renamed, so a good file is never
-    // replaced by a half-written one.
+    // Outputs: written to temporary files and renamed together (see `output`).
     let layers: Vec<(&str, &imageio::RgbImage)> =
         out.components.iter().map(|(n, i)| (*n, i)).collect();
     let pixel = if opts.half {
@@ -383,11 +405,9 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     } else {
         ExrPixel::Float
     };
-    imageio::write_exr(&exr, &out.image, &layers, pixel)?;
-    println!("wrote {}", exr.display());
-    if let Some(png) = png {
-        imageio::write_png(&png, &out.image, opts.exposure)?;
-        println!("wrote {}", png.display());
+    outputs.write(&out.image, &layers, pixel, opts.exposure)?;
+    for f in &outputs.files {
+        println!("wrote {}", f.shown.display());
     }
     Ok(())
 }

@@ -27,7 +27,6 @@ use super::params::ParamSet;
 use super::shapes::xform_point;
 use crate::math::{Mat3, Mat4, Vec3};
 use crate::scene::{Light, Loc, SceneError};
-use std::f32::consts::PI;
 
 /// An `AreaLightSource "diffuse"` waiting for the shapes it applies to.
 #[derive(Clone, Debug, PartialEq)]
@@ -40,23 +39,91 @@ pub struct AreaSpec {
 }
 
 impl AreaSpec {
-    /// The radiance for a shape of surface `area`.
-    pub fn radiance(&self, area: f32) -> Result<Vec3, String> {
-        let Some(power) = self.power else {
-            return Ok(self.l);
-        };
-        if area.is_nan() || area <= 0.0 {
-            return Err("\"power\" given for an area light on a shape of zero area".to_string());
-        }
+    /// The radiance for a shape of surface `area` (computed in f64: a large emitter's area can
+    /// overflow f32), checked so that the light's value and power stay in range.
+    pub fn radiance(&self, area: f64) -> Result<Vec3, String> {
         let sides = if self.two_sided { 2.0 } else { 1.0 };
-        Ok(self.l * (power / (PI * sides * area)))
+        let l = match self.power {
+            None => self.l,
+            Some(_) if !(area > 0.0) => {
+                return Err("\"power\" given for an area light on a shape of zero area".to_string())
+            }
+            Some(power) => {
+                let k = power as f64 / (std::f64::consts::PI * sides * area);
+                let big = self.l.max_element() as f64 * k;
+                if big > MAX_LIGHT_VALUE as f64 {
+                    return Err(format!(
+                        "\"power\" on a shape of area {area:e} makes its radiance {big:e}, above the limit {MAX_LIGHT_VALUE:e}"
+                    ));
+                }
+                self.l * k as f32
+            }
+        };
+        let power = std::f64::consts::PI * sides * area * l.max_element() as f64;
+        if !(power <= MAX_LIGHT_POWER) {
+            return Err(format!(
+                "the emitter's power {power:e} (area {area:e}) is above the limit {MAX_LIGHT_POWER:e}"
+            ));
+        }
+        Ok(l)
     }
 }
 
-/// Reads `scale` and `power` (as `Some` only when positive).
+/// Largest radiance or intensity component a light may have (after `scale` and `power`):
+/// beyond it sums of a few hundred photons or samples overflow f32.
+pub const MAX_LIGHT_VALUE: f32 = 1e20;
+/// Largest power (W) of one light, computed in f64: photon powers and irradiance estimates
+/// must stay finite in f32.
+pub const MAX_LIGHT_POWER: f64 = 1e30;
+
+/// An RGB light value (`L`, `I`): every component finite, >= 0 and at most
+/// [`MAX_LIGHT_VALUE`]; errors at the parameter.
+fn light_rgb(params: &mut ParamSet, name: &str) -> Result<Vec3, SceneError> {
+    let v = params.get_rgb(name, Vec3::ONE)?;
+    if v.cmpge(Vec3::ZERO).all() && v.max_element() <= MAX_LIGHT_VALUE {
+        return Ok(v);
+    }
+    let p = params.peek(name).expect("a bad value came from the file");
+    Err(p.err(format!(
+        "each component must be in [0, {MAX_LIGHT_VALUE:e}], got [{} {} {}]",
+        v.x, v.y, v.z
+    )))
+}
+
+/// The product `value * k` (from `scale` or `power`), checked against [`MAX_LIGHT_VALUE`];
+/// errors at parameter `name`.
+fn scaled(
+    params: &ParamSet,
+    name: &str,
+    loc: &Loc,
+    value: Vec3,
+    k: f64,
+) -> Result<Vec3, SceneError> {
+    let big = value.max_element() as f64 * k;
+    if big <= MAX_LIGHT_VALUE as f64 {
+        return Ok(value * k as f32);
+    }
+    let msg = format!("makes the light's value {big:e}, above the limit {MAX_LIGHT_VALUE:e}");
+    Err(match params.peek(name) {
+        Some(p) => p.err(msg),
+        None => SceneError::at(loc, msg),
+    })
+}
+
+/// Reads `scale` (finite, >= 0) and `power` (finite and > 0 when given).
 fn scale_power(params: &mut ParamSet) -> Result<(f32, Option<f32>), SceneError> {
     let scale = params.get_float("scale", 1.0)?;
-    let power = params.get_float_opt("power")?.filter(|&p| p > 0.0);
+    if !(scale >= 0.0) {
+        let p = params.peek("scale").expect("given");
+        return Err(p.err(format!("must be >= 0, got {scale}")));
+    }
+    let power = params.get_float_opt("power")?;
+    if let Some(pw) = power {
+        if !(pw > 0.0) || pw as f64 > MAX_LIGHT_POWER {
+            let p = params.peek("power").expect("given");
+            return Err(p.err(format!("must be in (0, {MAX_LIGHT_POWER:e}], got {pw}")));
+        }
+    }
     Ok((scale, power))
 }
 
@@ -68,12 +135,13 @@ pub fn area_light(ty: &str, params: &mut ParamSet, loc: &Loc) -> Result<AreaSpec
             format!("unsupported area light type \"{ty}\""),
         ));
     }
-    let l = params.get_rgb("L", Vec3::ONE)?;
+    let l = light_rgb(params, "L")?;
     let two_sided = params.get_bool("twosided", false)?;
     let (scale, power) = scale_power(params)?;
+    let l = scaled(params, "scale", loc, l, scale as f64)?;
     params.check_unused()?;
     Ok(AreaSpec {
-        l: l * scale,
+        l,
         two_sided,
         power,
     })
@@ -87,7 +155,7 @@ pub fn light_source(
     ctm: &Mat4,
 ) -> Result<Light, SceneError> {
     let light = match ty {
-        "point" => point(params, ctm)?,
+        "point" => point(params, loc, ctm)?,
         "spot" => spot(params, loc, ctm)?,
         "distant" => distant(params, loc, ctm)?,
         other => {
@@ -101,14 +169,45 @@ pub fn light_source(
     Ok(light)
 }
 
-fn point(params: &mut ParamSet, ctm: &Mat4) -> Result<Light, SceneError> {
-    let i = params.get_rgb("I", Vec3::ONE)?;
+/// `I * scale`, rescaled by `k(power)` when `power` is given, checked against the limits; a
+/// delta light's power is `solid_angle * I`.
+fn intensity(params: &mut ParamSet, loc: &Loc, solid_angle: f64) -> Result<Vec3, SceneError> {
+    let i = light_rgb(params, "I")?;
     let (scale, power) = scale_power(params)?;
+    let i = scaled(params, "scale", loc, i, scale as f64)?;
+    let i = match power {
+        Some(p) => scaled(params, "power", loc, i, p as f64 / solid_angle)?,
+        None => i,
+    };
+    let total = solid_angle * i.max_element() as f64;
+    if total > MAX_LIGHT_POWER {
+        return Err(SceneError::at(
+            loc,
+            format!("the light's power {total:e} is above the limit {MAX_LIGHT_POWER:e}"),
+        ));
+    }
+    Ok(i)
+}
+
+/// The light position `from` through the CTM, which must be finite.
+fn position(params: &mut ParamSet, loc: &Loc, ctm: &Mat4) -> Result<Vec3, SceneError> {
     let from = params.get_point3("from", Vec3::ZERO)?;
-    let k = power.map_or(1.0, |p| p / (4.0 * PI));
+    let p = xform_point(ctm, from);
+    let max = super::extent::MAX_COORDINATE;
+    if !(p.abs().max_element() <= max) {
+        return Err(SceneError::at(
+            loc,
+            format!("the light is at {p} after the current transform, beyond the supported coordinates (up to {max:e})"),
+        ));
+    }
+    Ok(p)
+}
+
+fn point(params: &mut ParamSet, loc: &Loc, ctm: &Mat4) -> Result<Light, SceneError> {
+    let intensity = intensity(params, loc, 4.0 * std::f64::consts::PI)?;
     Ok(Light::Point {
-        pos: xform_point(ctm, from),
-        intensity: i * scale * k,
+        pos: position(params, loc, ctm)?,
+        intensity,
     })
 }
 
@@ -123,30 +222,31 @@ fn direction(from: Vec3, to: Vec3, ctm: &Mat4, loc: &Loc) -> Result<Vec3, SceneE
 }
 
 fn spot(params: &mut ParamSet, loc: &Loc, ctm: &Mat4) -> Result<Light, SceneError> {
-    let i = params.get_rgb("I", Vec3::ONE)?;
-    let (scale, power) = scale_power(params)?;
-    let from = params.get_point3("from", Vec3::ZERO)?;
-    let to = params.get_point3("to", Vec3::Z)?;
     let cone = params.get_float("coneangle", 30.0)?;
     let delta = params.get_float("conedelta", 5.0)?;
     let cos_end = cone.to_radians().cos();
     let cos_start = (cone - delta).to_radians().cos();
-    let k = match power {
-        Some(p) => p / (2.0 * PI * (1.0 - 0.5 * (cos_start + cos_end))),
-        None => 1.0,
-    };
+    let solid_angle = 2.0 * std::f64::consts::PI * (1.0 - 0.5 * (cos_start + cos_end)) as f64;
+    let intensity = intensity(params, loc, solid_angle)?;
+    let from = params.get_point3("from", Vec3::ZERO)?;
+    let to = params.get_point3("to", Vec3::Z)?;
     Ok(Light::Spot {
-        pos: xform_point(ctm, from),
+        pos: position(params, loc, ctm)?,
         dir: direction(from, to, ctm, loc)?,
-        intensity: i * scale * k,
+        intensity,
         cos_falloff_start: cos_start,
         cos_falloff_end: cos_end,
     })
 }
 
 fn distant(params: &mut ParamSet, loc: &Loc, ctm: &Mat4) -> Result<Light, SceneError> {
-    let l = params.get_rgb("L", Vec3::ONE)?;
+    let l = light_rgb(params, "L")?;
     let scale = params.get_float("scale", 1.0)?;
+    if !(scale >= 0.0) {
+        let p = params.peek("scale").expect("given");
+        return Err(p.err(format!("must be >= 0, got {scale}")));
+    }
+    let l = scaled(params, "scale", loc, l, scale as f64)?;
     if params.get_float_opt("illuminance")?.is_some() {
         let p = params.peek("illuminance").expect("just read");
         return Err(p.err("\"illuminance\" is not supported"));
@@ -155,6 +255,6 @@ fn distant(params: &mut ParamSet, loc: &Loc, ctm: &Mat4) -> Result<Light, SceneE
     let to = params.get_point3("to", Vec3::Z)?;
     Ok(Light::Distant {
         dir: direction(from, to, ctm, loc)?,
-        l: l * scale,
+        l,
     })
 }

@@ -22,6 +22,7 @@
 //! `file:line:column: what is wrong`: an unknown or unsupported directive or type, a parameter
 //! that is given but never read, a wrong type or count of values, a missing or malformed file.
 //! See the README for the supported subset.
+pub mod extent;
 pub mod lights;
 pub mod materials;
 pub mod params;
@@ -32,6 +33,42 @@ pub mod tokenizer;
 
 use super::{Scene, SceneError};
 use std::path::Path;
+
+/// Reads at most `cap` bytes of `path`: a larger file (or a device such as /dev/zero that never
+/// ends) is an error without reading past the cap. A directory is an error too.
+pub fn read_capped(path: &Path, cap: u64) -> std::io::Result<Vec<u8>> {
+    use std::io::{Error, ErrorKind, Read};
+    let file = std::fs::File::open(path)?;
+    let meta = file.metadata()?;
+    let too_big = |cap: u64| {
+        Error::new(
+            ErrorKind::InvalidData,
+            format!("larger than the limit of {}", crate::resources::human(cap)),
+        )
+    };
+    if meta.is_dir() {
+        return Err(Error::new(ErrorKind::InvalidInput, "is a directory"));
+    }
+    let cap = if meta.is_file() {
+        cap
+    } else {
+        cap.min(crate::resources::MAX_STREAM_FILE)
+    };
+    if meta.is_file() && meta.len() > cap {
+        return Err(too_big(cap));
+    }
+    let mut bytes = Vec::new();
+    if meta.is_file() {
+        bytes
+            .try_reserve_exact(meta.len() as usize)
+            .map_err(|_| Error::new(ErrorKind::OutOfMemory, "not enough memory to read it"))?;
+    }
+    file.take(cap + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > cap {
+        return Err(too_big(cap));
+    }
+    Ok(bytes)
+}
 
 /// Loads a pbrt-v4 scene file (and everything it includes) into a [`Scene`].
 pub fn load(path: &Path) -> Result<Scene, SceneError> {

@@ -69,6 +69,10 @@ pub struct Builder {
     default_material: Option<u32>,
     world_begun: bool,
     meshes: Vec<Mesh>,
+    /// Where each mesh's `Shape` was written.
+    mesh_locs: Vec<Loc>,
+    /// Spheres waiting for their tessellation (mesh index, sphere).
+    spheres: Vec<(usize, shapes::SphereSpec)>,
     materials: Vec<Material>,
     lights: Vec<crate::scene::Light>,
     camera: CameraDesc,
@@ -100,6 +104,8 @@ impl Builder {
             default_material: None,
             world_begun: false,
             meshes: Vec::new(),
+            mesh_locs: Vec::new(),
+            spheres: Vec::new(),
             materials: Vec::new(),
             lights: Vec::new(),
             camera: CameraDesc {
@@ -141,6 +147,8 @@ impl Builder {
         if !self.world_begun {
             return Err(SceneError::at(&end, "the scene has no WorldBegin"));
         }
+        self.tessellate_spheres();
+        super::extent::check(&self.meshes, &self.mesh_locs)?;
         Ok(Scene {
             meshes: self.meshes,
             materials: self.materials,
@@ -165,18 +173,49 @@ impl Builder {
             Some(loc) => SceneError::at(loc, msg),
             None => SceneError::new(msg),
         };
-        let bytes = std::fs::read(path)
+        let bytes = super::read_capped(path, crate::resources::MAX_SCENE_FILE)
             .map_err(|e| fail(format!("cannot read \"{}\": {e}", path.display())))?;
-        let text = String::from_utf8(bytes)
-            .map_err(|_| fail(format!("\"{}\" is not UTF-8 text", path.display())))?;
-        let mut tok = Tokenizer::new(&text, Arc::new(path.to_path_buf()));
+        let file = Arc::new(path.to_path_buf());
+        let text = String::from_utf8(bytes).map_err(|e| not_utf8(&file, e))?;
+        let mut tok = Tokenizer::new(&text, file);
+        let mut first = true;
         while let Some(t) = tok.next()? {
+            if first && !(t.kind == TokKind::Word && is_directive(t.text)) {
+                // Do not quote a file that is not a scene (an Include of /etc/passwd).
+                return Err(tok.err(
+                    &t,
+                    "not a pbrt-v4 scene file: it does not start with a directive",
+                ));
+            }
+            first = false;
             if t.kind != TokKind::Word {
                 return Err(tok.err(&t, format!("expected a directive, found {}", t.describe())));
             }
             self.directive(&t, &mut tok, depth)?;
         }
         Ok(tok.end_loc())
+    }
+
+    /// Tessellates every sphere by its size in the scene and on screen
+    /// ([`shapes::sphere_rings`]).
+    fn tessellate_spheres(&mut self) {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for p in self.meshes.iter().flat_map(|m| m.positions.iter()) {
+            (lo, hi) = (lo.min(*p), hi.max(*p));
+        }
+        for (_, s) in &self.spheres {
+            (lo, hi) = (lo.min(s.centre - s.radius), hi.max(s.centre + s.radius));
+        }
+        let scene_radius = 0.5 * (hi - lo).as_dvec3().length() as f32;
+        for (i, spec) in std::mem::take(&mut self.spheres) {
+            // An emitter's power goes with its area: always the full tessellation.
+            let rings = match self.meshes[i].area_light {
+                Some(_) => shapes::SPHERE_RINGS,
+                None => shapes::sphere_rings(&spec, scene_radius, &self.camera, &self.film),
+            };
+            shapes::tessellate(&spec, rings, &mut self.meshes[i]);
+        }
     }
 
     /// Carries out the directive `t`, reading its arguments from `tok`.
@@ -410,8 +449,9 @@ impl Builder {
                 shapes::to_world(obj, &gs.ctm, gs.reverse, &at)?
             }
             "sphere" => {
-                let m = shapes::sphere(&mut params, &at, &gs.ctm, gs.reverse)?;
+                let (spec, m) = shapes::sphere(&mut params, &at, &gs.ctm, gs.reverse)?;
                 params.check_unused()?;
+                self.spheres.push((self.meshes.len(), spec));
                 m
             }
             other => {
@@ -421,11 +461,14 @@ impl Builder {
                 ))
             }
         };
+        super::extent::check_shape(&mesh, &at)?;
         mesh.material = self.material_index();
         if let Some(spec) = &self.gs.area {
             let area = match mesh.sphere {
-                Some((_, r)) => 4.0 * std::f32::consts::PI * r * r,
-                None => (0..mesh.indices.len() as u32).map(|t| mesh.area(t)).sum(),
+                Some((_, r)) => 4.0 * std::f64::consts::PI * (r as f64).powi(2),
+                None => (0..mesh.indices.len() as u32)
+                    .map(|t| mesh.area_f64(t))
+                    .sum(),
             };
             let l = spec.radiance(area).map_err(|m| SceneError::at(&at, m))?;
             mesh.area_light = Some(self.lights.len() as u32);
@@ -436,6 +479,7 @@ impl Builder {
             });
         }
         self.meshes.push(mesh);
+        self.mesh_locs.push(at);
         Ok(())
     }
 
@@ -453,27 +497,95 @@ impl Builder {
     }
 }
 
+/// The directives this parser reads.
+const DIRECTIVES: [&str; 27] = [
+    "Identity",
+    "Translate",
+    "Scale",
+    "Rotate",
+    "LookAt",
+    "Transform",
+    "ConcatTransform",
+    "CoordinateSystem",
+    "CoordSysTransform",
+    "TransformBegin",
+    "TransformEnd",
+    "AttributeBegin",
+    "AttributeEnd",
+    "ReverseOrientation",
+    "WorldBegin",
+    "Camera",
+    "Film",
+    "Sampler",
+    "Integrator",
+    "PixelFilter",
+    "Material",
+    "MakeNamedMaterial",
+    "NamedMaterial",
+    "Shape",
+    "AreaLightSource",
+    "LightSource",
+    "Include",
+];
+
+/// pbrt-v4 directives photon knows but does not render.
+const PBRT_V4_UNSUPPORTED: [&str; 11] = [
+    "Attribute",
+    "Texture",
+    "ObjectBegin",
+    "ObjectEnd",
+    "ObjectInstance",
+    "MakeNamedMedium",
+    "MediumInterface",
+    "ColorSpace",
+    "Option",
+    "ActiveTransform",
+    "TransformTimes",
+];
+
+/// Whether `name` is a pbrt directive (read or not): how a scene file starts.
+fn is_directive(name: &str) -> bool {
+    DIRECTIVES.contains(&name)
+        || PBRT_V4_UNSUPPORTED.contains(&name)
+        || matches!(name, "Import" | "WorldEnd")
+}
+
+/// The error for a file that is not UTF-8: the location of the first bad byte.
+fn not_utf8(file: &Arc<PathBuf>, e: std::string::FromUtf8Error) -> SceneError {
+    let bytes = e.as_bytes();
+    let good = e.utf8_error().valid_up_to();
+    let line = 1 + bytes[..good].iter().filter(|&&b| b == b'\n').count();
+    let line_start = bytes[..good]
+        .iter()
+        .rposition(|&b| b == b'\n')
+        .map_or(0, |i| i + 1);
+    // Columns count characters, as the tokenizer's do for ASCII text.
+    let col = 1 + String::from_utf8_lossy(&bytes[line_start..good])
+        .chars()
+        .count();
+    let loc = Loc {
+        file: file.clone(),
+        line: line as u32,
+        col: col as u32,
+    };
+    SceneError::at(
+        &loc,
+        format!(
+            "invalid UTF-8 (byte 0x{:02x}): scene files are UTF-8 text",
+            bytes[good]
+        ),
+    )
+}
+
 /// The message for a directive we do not read.
 fn unsupported(name: &str) -> String {
-    const PBRT_V4: [&str; 11] = [
-        "Attribute",
-        "Texture",
-        "ObjectBegin",
-        "ObjectEnd",
-        "ObjectInstance",
-        "MakeNamedMedium",
-        "MediumInterface",
-        "ColorSpace",
-        "Option",
-        "ActiveTransform",
-        "TransformTimes",
-    ];
     if name == "WorldEnd" {
         "unsupported directive \"WorldEnd\" (pbrt-v4 has no WorldEnd: is this a pbrt-v3 file?)"
             .to_string()
-    } else if PBRT_V4.contains(&name) {
+    } else if PBRT_V4_UNSUPPORTED.contains(&name) {
         format!("unsupported directive \"{name}\"")
     } else {
+        let name = crate::scene::clip_for_message(name, crate::scene::MAX_TOKEN);
         format!("unknown directive \"{name}\"")
     }
 }
@@ -489,18 +601,19 @@ fn rotate(deg: f32, axis: Vec3, loc: &Loc) -> Result<Mat4, SceneError> {
 
 /// pbrt's `LookAt eye look up`: the camera-from-world matrix.
 fn look_at(v: &[f32], loc: &Loc) -> Result<Mat4, SceneError> {
+    // Directions in f64: at coordinates near 1e20 an f32 length squared overflows.
     let eye = Vec3::new(v[0], v[1], v[2]);
-    let look = Vec3::new(v[3], v[4], v[5]);
-    let up = Vec3::new(v[6], v[7], v[8]);
-    let dir = (look - eye).normalize_or_zero();
-    if dir == Vec3::ZERO {
+    let look = glam::DVec3::new(v[3] as f64, v[4] as f64, v[5] as f64);
+    let up = glam::DVec3::new(v[6] as f64, v[7] as f64, v[8] as f64);
+    let dir = (look - eye.as_dvec3()).normalize_or_zero();
+    if dir == glam::DVec3::ZERO {
         return Err(SceneError::at(
             loc,
             "LookAt: the eye and the look-at point coincide",
         ));
     }
     let right = up.normalize_or_zero().cross(dir).normalize_or_zero();
-    if right == Vec3::ZERO {
+    if right == glam::DVec3::ZERO {
         return Err(SceneError::at(
             loc,
             "LookAt: the up vector is zero or along the view direction",
@@ -508,9 +621,9 @@ fn look_at(v: &[f32], loc: &Loc) -> Result<Mat4, SceneError> {
     }
     let new_up = dir.cross(right);
     let world_from_camera = Mat4::from_cols(
-        right.extend(0.0),
-        new_up.extend(0.0),
-        dir.extend(0.0),
+        right.as_vec3().extend(0.0),
+        new_up.as_vec3().extend(0.0),
+        dir.as_vec3().extend(0.0),
         eye.extend(1.0),
     );
     Ok(world_from_camera.inverse())
@@ -569,7 +682,7 @@ fn parse_float(tok: &Tokenizer, t: &Token) -> Result<f32, SceneError> {
     }
     match t.text.parse::<f32>() {
         Ok(v) if v.is_finite() => Ok(v),
-        _ => Err(tok.err(t, format!("\"{}\" is not a finite number", t.text))),
+        _ => Err(tok.err(t, format!("\"{}\" is not a finite number", t.clipped()))),
     }
 }
 
@@ -594,14 +707,18 @@ fn read_param(tok: &mut Tokenizer, decl: &Token) -> Result<Param, SceneError> {
             decl,
             format!(
                 "expected a parameter declaration \"type name\", found \"{}\"",
-                decl.text
+                decl.clipped()
             ),
         ));
     };
     let Some(ty) = ParamType::from_name(ty_name) else {
         return Err(tok.err(
             decl,
-            format!("unknown parameter type \"{ty_name}\" in \"{}\"", decl.text),
+            format!(
+                "unknown parameter type \"{}\" in \"{}\"",
+                crate::scene::clip_for_message(ty_name, crate::scene::MAX_TOKEN),
+                decl.clipped()
+            ),
         ));
     };
     let values = read_values(tok, ty, decl)?;
@@ -660,7 +777,7 @@ impl Values {
                 t,
                 format!(
                     "parameter \"{}\": expected {what}, found {}",
-                    decl.text,
+                    decl.clipped(),
                     t.describe()
                 ),
             )
@@ -724,9 +841,18 @@ fn camera(ty: &str, params: &mut ParamSet, at: &Loc, ctm: &Mat4) -> Result<Camer
         let p = params.peek("lensradius").expect("given");
         return Err(p.err("depth of field is not supported (lensradius must be 0)"));
     }
-    let world_from_camera = ctm.inverse();
+    // Inverted in f64: a camera-from-world scale near 1e-20 has a determinant below f32's range.
+    let world_from_camera = ctm.as_dmat4().inverse().as_mat4();
     if !world_from_camera.is_finite() {
         return Err(SceneError::at(at, "the camera transform is singular"));
+    }
+    let eye = world_from_camera.transform_point3(Vec3::ZERO);
+    let max = super::extent::MAX_COORDINATE;
+    if eye.abs().max_element() > max {
+        return Err(SceneError::at(
+            at,
+            format!("the camera is at {eye}, beyond the supported coordinates (up to {max:e})"),
+        ));
     }
     Ok(CameraDesc {
         world_from_camera,
@@ -748,8 +874,10 @@ fn film(ty: &str, params: &mut ParamSet, at: &Loc) -> Result<FilmDesc, SceneErro
         .zip([("xresolution", 1280), ("yresolution", 720)])
     {
         let v = params.get_int(name, default)?;
-        if v <= 0 {
-            return Err(params.peek(name).expect("given").err("must be positive"));
+        let max = crate::resources::MAX_RESOLUTION as i32;
+        if v <= 0 || v > max {
+            let msg = format!("must be positive and at most {max}, got {v}");
+            return Err(params.peek(name).expect("given").err(msg));
         }
         *r = v as u32;
     }
@@ -783,7 +911,16 @@ fn sampler(ty: &str, params: &mut ParamSet, at: &Loc) -> Result<SamplerDesc, Sce
         let x = positive_int(params, "xsamples", 4)?;
         let y = positive_int(params, "ysamples", 4)?;
         x.checked_mul(y)
-            .ok_or_else(|| SceneError::at(at, "xsamples * ysamples is too large"))?
+            .filter(|&n| n <= crate::resources::MAX_SPP)
+            .ok_or_else(|| {
+                SceneError::at(
+                    at,
+                    format!(
+                        "xsamples * ysamples is larger than {}",
+                        crate::resources::MAX_SPP
+                    ),
+                )
+            })?
     } else {
         positive_int(params, "pixelsamples", 16)?
     };
@@ -796,8 +933,10 @@ fn sampler(ty: &str, params: &mut ParamSet, at: &Loc) -> Result<SamplerDesc, Sce
 /// An `integer` parameter that must be positive.
 fn positive_int(params: &mut ParamSet, name: &str, default: i32) -> Result<u32, SceneError> {
     let v = params.get_int(name, default)?;
-    if v <= 0 {
-        return Err(params.peek(name).expect("given").err("must be positive"));
+    let max = crate::resources::MAX_SPP as i32;
+    if v <= 0 || v > max {
+        let msg = format!("must be positive and at most {max}, got {v}");
+        return Err(params.peek(name).expect("given").err(msg));
     }
     Ok(v as u32)
 }

@@ -11,14 +11,16 @@
 //!
 //! Errors (missing file, malformed header, truncated payload, bad numbers, indices out of
 //! range, polygons that are neither triangles nor quads) are returned as one-line messages;
-//! the caller prefixes the Shape's location and the file name.
+//! the caller prefixes the Shape's location and the file name. Stricter than the crate
+//! ([`strict`]): only `format ... 1.0`, no property declared twice in an element, no extra
+//! values on an ASCII line, and no data after the last element (a face count smaller than the
+//! data is an error, not silently dropped faces).
 
 use super::shapes::ObjMesh;
 use crate::math::{Vec2, Vec3};
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{ElementDef, Encoding, PropertyAccess, PropertyAccessResult};
-use std::fs::File;
-use std::io::BufReader;
+use std::io::Cursor;
 use std::path::Path;
 
 /// One element of the payload: the fields a vertex or a face may have.
@@ -130,10 +132,27 @@ fn one_line(s: &str) -> String {
     }
 }
 
-/// Reads the PLY file at `path`.
+/// Reads the PLY file at `path` (at most [`crate::resources::MAX_PLY_FILE`] bytes).
 pub fn read_ply(path: &Path) -> Result<ObjMesh, String> {
-    let file = File::open(path).map_err(|e| format!("cannot open: {e}"))?;
-    let mut reader = Reader::new(BufReader::new(file));
+    let bytes = super::read_capped(path, crate::resources::MAX_PLY_FILE)
+        .map_err(|e| format!("cannot open: {e}"))?;
+    let mut cursor = Cursor::new(&bytes[..]);
+    let mesh = parse(&mut cursor)?;
+    let payload = strict::check_header(&bytes)?;
+    if bytes.starts_with(b"ply\nformat ascii") || bytes.starts_with(b"ply\r\nformat ascii") {
+        strict::check_ascii(&bytes[payload.offset..], &payload.elements)?;
+    } else if (cursor.position() as usize) < bytes.len() {
+        return Err(format!(
+            "{} bytes after the last element: the header's element counts are smaller than the data",
+            bytes.len() - cursor.position() as usize
+        ));
+    }
+    Ok(mesh)
+}
+
+/// Parses the header and payload through `ply-rs-bw`.
+fn parse(input: &mut Cursor<&[u8]>) -> Result<ObjMesh, String> {
+    let mut reader = Reader::new(input);
     let parser = Parser::<Elem>::new();
     let header = parser
         .read_header(&mut reader)
@@ -262,4 +281,111 @@ fn check_indices(mesh: &ObjMesh) -> Result<(), String> {
         }
     }
     Ok(())
+}
+
+/// Checks the crate lets pass: the header's version and duplicate properties, extra values on
+/// ASCII lines, and data beyond the elements the header declares.
+mod strict {
+    /// An element of the header: name, count and its properties (name, is a list).
+    pub struct ElementDecl {
+        name: String,
+        count: usize,
+        props: Vec<(String, bool)>,
+    }
+
+    /// The header's elements and where the payload starts.
+    pub struct Payload {
+        pub elements: Vec<ElementDecl>,
+        pub offset: usize,
+    }
+
+    /// Reads the (already validated by the crate) header again: version 1.0 only, and no
+    /// property declared twice in one element.
+    pub fn check_header(bytes: &[u8]) -> Result<Payload, String> {
+        let end = bytes
+            .windows(10)
+            .position(|w| w == b"end_header")
+            .ok_or("no end_header")?;
+        let offset = bytes[end..]
+            .iter()
+            .position(|&b| b == b'\n')
+            .map_or(bytes.len(), |i| end + i + 1);
+        let text = String::from_utf8_lossy(&bytes[..end]);
+        let mut elements: Vec<ElementDecl> = Vec::new();
+        for line in text.lines() {
+            let words: Vec<&str> = line.split_whitespace().collect();
+            match words.as_slice() {
+                ["format", _, version] if *version != "1.0" => {
+                    return Err(format!(
+                        "unsupported PLY version {} (only 1.0)",
+                        crate::scene::clip_for_message(version, crate::scene::MAX_TOKEN)
+                    ))
+                }
+                ["element", name, count] => elements.push(ElementDecl {
+                    name: name.to_string(),
+                    count: count.parse().unwrap_or(0),
+                    props: Vec::new(),
+                }),
+                ["property", .., name] => {
+                    let Some(e) = elements.last_mut() else {
+                        continue;
+                    };
+                    if e.props.iter().any(|(n, _)| n == name) {
+                        return Err(format!(
+                            "element \"{}\" declares property \"{}\" twice",
+                            e.name,
+                            crate::scene::clip_for_message(name, crate::scene::MAX_TOKEN)
+                        ));
+                    }
+                    e.props.push((name.to_string(), words[1] == "list"));
+                }
+                _ => {}
+            }
+        }
+        Ok(Payload { elements, offset })
+    }
+
+    /// Every ASCII payload line holds exactly the values its element declares, and nothing
+    /// follows the last element.
+    pub fn check_ascii(payload: &[u8], elements: &[ElementDecl]) -> Result<(), String> {
+        let text = String::from_utf8_lossy(payload);
+        let mut lines = text.lines().filter(|l| !l.trim().is_empty());
+        for e in elements {
+            for i in 0..e.count {
+                let Some(line) = lines.next() else {
+                    return Ok(()); // the crate reported truncation already
+                };
+                let values: Vec<&str> = line.split_whitespace().collect();
+                let want = expected_values(&e.props, &values);
+                if values.len() > want {
+                    return Err(format!(
+                        "element \"{}\" {i}: {} values on its line, the header declares {want}",
+                        e.name,
+                        values.len()
+                    ));
+                }
+            }
+        }
+        match lines.count() {
+            0 => Ok(()),
+            n => Err(format!(
+                "{n} lines after the last element: the header's element counts are smaller than the data"
+            )),
+        }
+    }
+
+    /// How many values a line with properties `props` holds (a list's length is its first
+    /// value); unreadable lengths count as 0 (the crate reports them).
+    fn expected_values(props: &[(String, bool)], values: &[&str]) -> usize {
+        let mut at = 0usize;
+        for (_, list) in props {
+            if *list {
+                let n: usize = values.get(at).and_then(|v| v.parse().ok()).unwrap_or(0);
+                at = at.saturating_add(1).saturating_add(n);
+            } else {
+                at += 1;
+            }
+        }
+        at
+    }
 }

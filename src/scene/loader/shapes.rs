@@ -10,11 +10,16 @@
 //! negated under `ReverseOrientation`, as pbrt-v4's `TriangleMesh` does. Every triangle is kept,
 //! even a degenerate one.
 //!
-//! Spheres become a latitude-longitude mesh of [`SPHERE_RINGS`] x [`SPHERE_SEGMENTS`] quads
-//! (triangles at the poles) whose vertices lie exactly on the sphere, with the analytic normals
-//! and pbrt's (u, v) = (phi / 2pi, (pi - theta) / pi). Its area falls short of 4 pi r^2 by
-//! 0.050%, inside the 0.1% budget. The CTM must be a similarity (uniform scale, rotation,
-//! mirror, translation); `Mesh::sphere` holds the world centre and radius.
+//! Spheres become a latitude-longitude mesh of `n` rings x `2n` segments of quads (triangles
+//! at the poles) whose vertices lie exactly on the sphere, with the analytic normals and pbrt's
+//! (u, v) = (phi / 2pi, (pi - theta) / pi). `n` is [`SPHERE_RINGS`] (16,128 triangles, area
+//! 0.050% short of 4 pi r^2, every point within 6.0e-4 r of the sphere) unless the sphere is
+//! not an emitter (whose power goes with its area), small (under 1% of the scene's radius) and
+//! far from the camera: then the fewest rings, down to [`MIN_SPHERE_RINGS`] (224 triangles),
+//! whose error ([`tessellation_error`]) projects to at most 0.1 pixel at 1024 pixels (see
+//! [`sphere_rings`]). Tessellation waits for the end of the file, when the scene's size is
+//! known. The CTM must be a similarity (uniform scale, rotation, mirror, translation);
+//! `Mesh::sphere` holds the world centre and radius.
 //!
 //! Sphere orientation follows pbrt-v4's sphere, whose normal is outward, inward under
 //! `ReverseOrientation`, and stays outward under a mirroring CTM (pbrt flips its
@@ -161,6 +166,21 @@ pub fn xform_point(m: &Mat4, p: Vec3) -> Vec3 {
     }
 }
 
+/// Every world-space vertex must be finite (a zero or projective `Transform`, or translations
+/// that overflow, make them infinite or NaN).
+fn check_finite(positions: &[Vec3], loc: &Loc) -> Result<(), SceneError> {
+    match positions.iter().position(|p| !p.is_finite()) {
+        None => Ok(()),
+        Some(i) => Err(SceneError::at(
+            loc,
+            format!(
+                "vertex {i} is not finite after the current transform ({}): check Transform, Scale and Translate",
+                positions[i]
+            ),
+        )),
+    }
+}
+
 /// Whether `m` swaps handedness (its linear part has a negative determinant).
 pub fn swaps_handedness(m: &Mat4) -> bool {
     Mat3::from_mat4(*m).determinant() < 0.0
@@ -169,10 +189,12 @@ pub fn swaps_handedness(m: &Mat4) -> bool {
 /// Moves an object-space mesh to world space through `ctm`; `reverse` is the
 /// `ReverseOrientation` state.
 pub fn to_world(obj: ObjMesh, ctm: &Mat4, reverse: bool, loc: &Loc) -> Result<Mesh, SceneError> {
-    let positions = obj.positions.iter().map(|&p| xform_point(ctm, p)).collect();
+    let positions: Vec<Vec3> = obj.positions.iter().map(|&p| xform_point(ctm, p)).collect();
+    check_finite(&positions, loc)?;
     let normals = match obj.normals {
         Some(nn) => {
-            let lin = Mat3::from_mat4(*ctm);
+            // In f64: the determinant of a 1e20 scale overflows f32.
+            let lin = Mat3::from_mat4(*ctm).as_dmat3();
             if lin.determinant() == 0.0 || !lin.determinant().is_finite() {
                 return Err(SceneError::at(
                     loc,
@@ -181,7 +203,11 @@ pub fn to_world(obj: ObjMesh, ctm: &Mat4, reverse: bool, loc: &Loc) -> Result<Me
             }
             let nm = lin.inverse().transpose();
             let sign = if reverse { -1.0 } else { 1.0 };
-            Some(nn.iter().map(|&n| sign * (nm * n).normalize()).collect())
+            Some(
+                nn.iter()
+                    .map(|&n| sign * (nm * n.as_dvec3()).normalize().as_vec3())
+                    .collect(),
+            )
         }
         None => None,
     };
@@ -215,14 +241,27 @@ pub fn similarity_scale(m: &Mat4) -> Option<f32> {
     Some(s2.sqrt())
 }
 
+/// A sphere as the scene gives it, waiting for its tessellation (which depends on the whole
+/// scene's size and the camera: see [`sphere_rings`]).
+#[derive(Clone, Debug)]
+pub struct SphereSpec {
+    pub centre: Vec3,
+    pub radius: f32,
+    /// The CTM's rotation (and mirror) without its scale.
+    rot: Mat3,
+    mirror: bool,
+    reverse: bool,
+}
+
 /// `Shape "sphere"`: `float radius` (default 1); `zmin`, `zmax`, `phimax` only at their
-/// full-sphere defaults. Returns the tessellated world-space mesh with `Mesh::sphere` set.
+/// full-sphere defaults. Returns the world-space sphere and an untessellated mesh with
+/// `Mesh::sphere` set ([`tessellate`] fills it in).
 pub fn sphere(
     params: &mut ParamSet,
     loc: &Loc,
     ctm: &Mat4,
     reverse: bool,
-) -> Result<Mesh, SceneError> {
+) -> Result<(SphereSpec, Mesh), SceneError> {
     let r = params.get_float("radius", 1.0)?;
     if r.is_nan() || r <= 0.0 {
         return Err(param_err(
@@ -251,31 +290,97 @@ pub fn sphere(
     };
     let centre = xform_point(ctm, Vec3::ZERO);
     let radius = r * s;
-    let rot = Mat3::from_mat4(*ctm) * (1.0 / (s * ctm.row(3).w));
-    let mut mesh = unit_sphere();
-    let sign = if reverse { -1.0 } else { 1.0 };
-    let mut normals = Vec::with_capacity(mesh.positions.len());
-    for p in mesh.positions.iter_mut() {
-        let n = (rot * *p).normalize();
-        *p = centre + radius * n;
+    if !centre.is_finite() || !radius.is_finite() {
+        return Err(SceneError::at(
+            loc,
+            "the sphere is not finite after the current transform: check Transform, Scale and Translate",
+        ));
+    }
+    let spec = SphereSpec {
+        centre,
+        radius,
+        rot: Mat3::from_mat4(*ctm) * (1.0 / (s * ctm.row(3).w)),
+        mirror: swaps_handedness(ctm),
+        reverse,
+    };
+    let mesh = Mesh {
+        flip_normals: reverse,
+        sphere: Some((centre, radius)),
+        ..Mesh::default()
+    };
+    Ok((spec, mesh))
+}
+
+/// Largest distance between the tessellation of [`unit_sphere`]`(rings)` and the unit sphere
+/// (at the middle of the widest quads, whose corners lie on the sphere): `1 - cos^2(pi / 2n)`.
+/// 6.0e-4 at 64 rings, 3.8e-2 at 8.
+pub fn tessellation_error(rings: u32) -> f32 {
+    let h = (std::f64::consts::PI / (2.0 * rings as f64)).cos();
+    (1.0 - h * h) as f32
+}
+
+/// Fewest latitude rings of a sphere (segments are twice as many).
+pub const MIN_SPHERE_RINGS: u32 = 8;
+/// A sphere of at least this fraction of the scene's bounding radius always gets
+/// [`SPHERE_RINGS`] (its tessellation error stays below 6.0e-4 of its radius).
+pub const FULL_SPHERE_FRACTION: f32 = 0.01;
+/// Otherwise its tessellation error, seen from the camera, stays below this many pixels at
+/// [`REFERENCE_PIXELS`] across the shorter image side (or the Film's, if larger).
+pub const MAX_SCREEN_ERROR: f32 = 0.1;
+pub const REFERENCE_PIXELS: u32 = 1024;
+
+/// Rings for `spec` in a scene of bounding radius `scene_radius`, seen by `camera` on `film`:
+/// [`SPHERE_RINGS`] for a sphere that is not small in the scene or that the camera is close
+/// to; for a small distant one the fewest (down to [`MIN_SPHERE_RINGS`]) whose
+/// [`tessellation_error`] projects to at most [`MAX_SCREEN_ERROR`] pixels. So 10,000 tiny
+/// spheres cost 224 triangles each instead of 16,128.
+pub fn sphere_rings(
+    spec: &SphereSpec,
+    scene_radius: f32,
+    camera: &crate::scene::CameraDesc,
+    film: &crate::scene::FilmDesc,
+) -> u32 {
+    if spec.radius >= FULL_SPHERE_FRACTION * scene_radius {
+        return SPHERE_RINGS;
+    }
+    let eye = camera.world_from_camera.transform_point3(Vec3::ZERO);
+    let dist = (spec.centre - eye).length() - spec.radius;
+    if !(dist > spec.radius) {
+        return SPHERE_RINGS;
+    }
+    let pixels = film.xres.min(film.yres).max(REFERENCE_PIXELS) as f32;
+    let focal = 0.5 * pixels / (0.5 * camera.fov_deg.to_radians()).tan();
+    let projected = spec.radius / dist * focal;
+    (MIN_SPHERE_RINGS..SPHERE_RINGS)
+        .find(|&n| projected * tessellation_error(n) <= MAX_SCREEN_ERROR)
+        .unwrap_or(SPHERE_RINGS)
+}
+
+/// Fills `mesh` (made by [`sphere`]) with the world-space tessellation of `spec` at `rings`
+/// latitude rings and `2 rings` segments.
+pub fn tessellate(spec: &SphereSpec, rings: u32, mesh: &mut Mesh) {
+    let mut m = unit_sphere(rings, 2 * rings);
+    let sign = if spec.reverse { -1.0 } else { 1.0 };
+    let mut normals = Vec::with_capacity(m.positions.len());
+    for p in m.positions.iter_mut() {
+        let n = (spec.rot * *p).normalize();
+        *p = spec.centre + spec.radius * n;
         normals.push(sign * n);
     }
     // Object-space outward winding becomes inward in world space under a mirror: swap.
-    let mirror = swaps_handedness(ctm);
-    if mirror {
-        for t in mesh.indices.iter_mut() {
+    if spec.mirror {
+        for t in m.indices.iter_mut() {
             t.swap(1, 2);
         }
     }
+    mesh.positions = m.positions;
     mesh.normals = Some(normals);
-    mesh.flip_normals = reverse;
-    mesh.sphere = Some((centre, radius));
-    Ok(mesh)
+    mesh.uvs = m.uvs;
+    mesh.indices = m.indices;
 }
 
 /// The unit sphere tessellated in object space: positions are the unit normals.
-fn unit_sphere() -> Mesh {
-    let (rings, segs) = (SPHERE_RINGS, SPHERE_SEGMENTS);
+fn unit_sphere(rings: u32, segs: u32) -> Mesh {
     let at = |theta: f32, phi: f32| {
         Vec3::new(
             theta.sin() * phi.cos(),
@@ -334,7 +439,7 @@ mod tests {
 
     #[test]
     fn unit_sphere_area_and_winding() {
-        let m = unit_sphere();
+        let m = unit_sphere(SPHERE_RINGS, SPHERE_SEGMENTS);
         let area: f64 = (0..m.indices.len() as u32).map(|t| m.area(t) as f64).sum();
         let deficit = 1.0 - area / (4.0 * std::f64::consts::PI);
         assert!(deficit > 0.0 && deficit < 1e-3, "deficit {deficit}");
@@ -343,6 +448,28 @@ mod tests {
             let c = (p1 - p0).cross(p2 - p0);
             assert!(c.dot(p0 + p1 + p2) > 0.0, "triangle {t} winds inward");
         }
+    }
+
+    /// Every point of every triangle (sampled on a barycentric grid) lies within
+    /// `tessellation_error(n)` of the unit sphere, and the bound is tight within 10%.
+    #[test]
+    fn tessellation_error_bounds_the_distance_to_the_sphere() {
+        for n in [MIN_SPHERE_RINGS, 12, 24, SPHERE_RINGS] {
+            let m = unit_sphere(n, 2 * n);
+            let bound = tessellation_error(n);
+            let mut worst = 0.0f32;
+            for t in 0..m.indices.len() as u32 {
+                for i in 0..=8 {
+                    for j in 0..=8 - i {
+                        let p = m.point(t, i as f32 / 8.0, j as f32 / 8.0);
+                        worst = worst.max(1.0 - p.length());
+                    }
+                }
+            }
+            assert!(worst <= bound * 1.0001, "{n} rings: {worst} > {bound}");
+            assert!(worst > 0.9 * bound, "{n} rings: {worst} much below {bound}");
+        }
+        assert!((tessellation_error(64) - 6.0e-4).abs() < 1e-5);
     }
 
     #[test]

@@ -44,13 +44,22 @@ pub struct Token<'a> {
 impl Token<'_> {
     /// A short description for error messages: `string "abc"`, `number 1.5`, `"["`.
     pub fn describe(&self) -> String {
+        let text = self.clipped();
         match self.kind {
-            TokKind::Str => format!("string \"{}\"", self.text),
-            TokKind::Word => format!("word {}", self.text),
-            TokKind::Num => format!("number {}", self.text),
+            TokKind::Str => format!("string \"{text}\""),
+            TokKind::Word => format!("word {text}"),
+            TokKind::Num => format!("number {text}"),
             TokKind::Open => "\"[\"".to_string(),
             TokKind::Close => "\"]\"".to_string(),
         }
+    }
+}
+
+impl Token<'_> {
+    /// The token's text for a message: control characters escaped, cut to
+    /// [`crate::scene::MAX_TOKEN`] characters with an ellipsis.
+    pub fn clipped(&self) -> String {
+        crate::scene::clip_for_message(self.text, crate::scene::MAX_TOKEN)
     }
 }
 

@@ -1,0 +1,397 @@
+//! Limits on every count and size a scene file or the command line gives, and a memory model
+//! of a render checked against a budget before anything large is allocated.
+//!
+//! ```text
+//! Film "rgb" "integer xresolution" [ 1024 ] "integer yresolution" [ 1024 ]   # 1..=32768 each
+//! Integrator "photonmap" "integer globalphotons" [ 200000 ]   # 0..=2^32-1, and the budget
+//!     "integer gathersamples" [ 2 ]  "integer globallookup" [ 100 ]   # see the constants below
+//!     "float globalradius" [ 0.1 ]   "integer maxdepth" [ 5 ]
+//! ```
+//! and on the command line `photon render ... --max-memory 8G` (default: [`DEFAULT_FRACTION`]
+//! of `MemTotal` in /proc/meminfo, or of what an address-space limit leaves, whichever is
+//! smaller).
+//!
+//! The model ([`estimate`]) adds up the film (every image the render and the writers keep per
+//! pixel), the photon maps (the measured peak per stored photon while tracing and building the
+//! kd-trees, times an upper estimate of the photons stored), the per-thread gather, shadow and
+//! k-nearest buffers (bounded: they are flushed in batches of [`BATCH`]) and the acceleration
+//! structure over the loaded triangles. [`check`] turns an estimate above the budget into one
+//! line: `needs ~110 GB (film 103 GB, ...) for 32768x32768 ...; the limit is 19 GB (...)`.
+use crate::accel::BackendKind;
+use crate::integrator::{IntegratorKind, RenderSettings};
+use crate::math::Vec3;
+use crate::scene::{Material, Scene};
+
+/// Largest image side, in pixels.
+pub const MAX_RESOLUTION: u32 = 32768;
+/// Largest samples per pixel.
+pub const MAX_SPP: u32 = 1 << 20;
+/// Largest final-gather rays per diffuse point.
+pub const MAX_GATHER_SAMPLES: u32 = 4096;
+/// Largest shadow rays per shading point.
+pub const MAX_LIGHT_SAMPLES: u32 = 4096;
+/// Largest photons per lookup.
+pub const MAX_LOOKUP: usize = 100_000;
+/// Largest photon count per map (sample streams index photons with 32 bits).
+pub const MAX_PHOTONS: u64 = u32::MAX as u64;
+/// Largest `maxdepth` and `maxphotonbounces`: a path that is still alive after this many
+/// bounces contributes nothing measurable, and time grows linearly with it.
+pub const MAX_DEPTH: u32 = 1000;
+/// Largest worker-thread count.
+pub const MAX_THREADS: usize = 1024;
+/// Largest lookup radius, as a fraction of the scene's bounding radius.
+pub const MAX_RADIUS: f32 = 4.0;
+/// Largest |PNG exposure| in stops.
+pub const MAX_EXPOSURE: f32 = 64.0;
+/// Largest scene or included file, in bytes.
+pub const MAX_SCENE_FILE: u64 = 1 << 30;
+/// Largest PLY file, in bytes.
+pub const MAX_PLY_FILE: u64 = 4 << 30;
+/// Largest input read from something that is not a regular file (a FIFO, a device such as
+/// /dev/zero that never ends): its size is not known before reading.
+pub const MAX_STREAM_FILE: u64 = 64 << 20;
+/// Pending gather or shadow rays per tile before they are traced (a batch); a point adds at most
+/// [`MAX_GATHER_SAMPLES`] or [`MAX_LIGHT_SAMPLES`] more before the next flush.
+pub const BATCH: usize = 1 << 14;
+/// Default budget: this fraction of physical memory.
+pub const DEFAULT_FRACTION: f64 = 0.8;
+
+/// Bytes per pixel: the combined image and four component images (12 bytes each) and the
+/// tiles' per-pixel `Radiance` (48) before assembly; the writers work by scanline. Measured
+/// (peak RSS, `--integrator direct`, EXR + PNG): 1024x1024 114 MiB, 2048x2048 434 MiB, so
+/// 107 bytes per pixel.
+pub const FILM_BYTES_PER_PIXEL: u64 = 12 * 5 + 48;
+/// Peak bytes per stored photon while tracing, building the kd-trees and the irradiance cache:
+/// the `Landing` (32) in its chunk and in the concatenated copy, the photon records (20), the
+/// tree's keys and nodes and the normals in tree order. Measured (peak RSS on cornell-box,
+/// 1.48M and 5.94M stored photons: 152 and 579 MiB): 100.5 bytes; the 20-byte record alone
+/// would say a fifth of that.
+pub const PHOTON_PEAK_BYTES: u64 = 104;
+/// Peak bytes per triangle for the loaded mesh plus building the acceleration structure.
+/// Measured (peak RSS, 50 and 150 tessellated spheres of 16,128 triangles): Embree 157,
+/// obvhs 406.
+pub fn triangle_bytes(backend: BackendKind) -> u64 {
+    match backend {
+        BackendKind::Embree => 160,
+        BackendKind::Obvhs => 410,
+    }
+}
+/// Per worker thread: gather and shadow batches, path states, k-nearest buffers, stack.
+pub const THREAD_BYTES: u64 = 16 << 20;
+
+/// The parts of an estimate, in bytes.
+#[derive(Clone, Debug, Default)]
+pub struct Estimate {
+    pub parts: Vec<(&'static str, u64)>,
+    /// What the estimate is for, for the message (`512x512, 400000 photons`).
+    pub what: String,
+}
+
+impl Estimate {
+    pub fn total(&self) -> u64 {
+        self.parts
+            .iter()
+            .fold(0u64, |a, (_, b)| a.saturating_add(*b))
+    }
+}
+
+/// Where a budget came from, for the message.
+#[derive(Clone, Debug)]
+pub struct Budget {
+    pub bytes: u64,
+    pub source: String,
+}
+
+/// `"integer NAME" v` must lie in `lo..=hi`: the message when it does not.
+pub fn check_range<T: PartialOrd + std::fmt::Display>(v: T, lo: T, hi: T) -> Result<T, String> {
+    if v >= lo && v <= hi {
+        Ok(v)
+    } else {
+        Err(format!("must be in {lo}..={hi}, got {v}"))
+    }
+}
+
+/// A float that must be finite and in `(lo, hi]` (`lo` excluded when `open`).
+pub fn check_float(v: f32, lo: f32, hi: f32, open: bool) -> Result<f32, String> {
+    let low_ok = if open { v > lo } else { v >= lo };
+    if v.is_finite() && low_ok && v <= hi {
+        Ok(v)
+    } else {
+        let l = if open { "(" } else { "[" };
+        Err(format!(
+            "must be a finite number in {l}{lo}, {hi}], got {v}"
+        ))
+    }
+}
+
+/// Bytes as a short human string: `512 B`, `3.2 MB`, `110 GB` (powers of 1000).
+pub fn human(bytes: u64) -> String {
+    let b = bytes as f64;
+    for (unit, scale) in [("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)] {
+        if b >= scale {
+            let v = b / scale;
+            return if v >= 100.0 {
+                format!("{v:.0} {unit}")
+            } else {
+                format!("{v:.1} {unit}")
+            };
+        }
+    }
+    format!("{bytes} B")
+}
+
+/// Parses a size: bytes, or with a suffix `k`, `M`, `G`, `T` (powers of 1024; `KiB`, `GB`, ...
+/// accepted alike).
+pub fn parse_size(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let digits = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
+    let (num, unit) = t.split_at(digits);
+    let shift = match unit
+        .trim()
+        .to_ascii_lowercase()
+        .trim_end_matches(['b', 'i'])
+    {
+        "" => 0,
+        "k" => 10,
+        "m" => 20,
+        "g" => 30,
+        "t" => 40,
+        _ => return Err(format!("expected a size such as 512M or 8G, got {s:?}")),
+    };
+    match num.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 && v * ((1u64 << shift) as f64) < 1.8e19 => {
+            Ok((v * (1u64 << shift) as f64) as u64)
+        }
+        _ => Err(format!(
+            "expected a positive size such as 512M or 8G, got {s:?}"
+        )),
+    }
+}
+
+/// A `kB` field of a /proc file (`MemTotal:  24576000 kB`), in bytes.
+fn proc_kb(text: &str, key: &str) -> Option<u64> {
+    let line = text.lines().find(|l| l.starts_with(key))?;
+    let kb: u64 = line[key.len()..]
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse()
+        .ok()?;
+    Some(kb.saturating_mul(1024))
+}
+
+/// The soft address-space limit of this process (`ulimit -v`, `prlimit --as`), if any.
+fn address_space_limit() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/self/limits").ok()?;
+    let line = text.lines().find(|l| l.starts_with("Max address space"))?;
+    line.split_whitespace().nth(3)?.parse().ok()
+}
+
+/// The default budget: [`DEFAULT_FRACTION`] of physical memory, or of what an address-space
+/// limit leaves beyond what is mapped now (libraries, thread stacks), whichever is smaller.
+pub fn default_budget() -> Budget {
+    let meminfo = std::fs::read_to_string("/proc/meminfo").unwrap_or_default();
+    let physical = proc_kb(&meminfo, "MemTotal:").unwrap_or(8 << 30);
+    let mut budget = Budget {
+        bytes: (physical as f64 * DEFAULT_FRACTION) as u64,
+        source: format!(
+            "{:.0}% of physical memory {}",
+            DEFAULT_FRACTION * 100.0,
+            human(physical)
+        ),
+    };
+    if let Some(limit) = address_space_limit() {
+        let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+        let mapped = proc_kb(&status, "VmSize:").unwrap_or(0);
+        let left = (limit.saturating_sub(mapped) as f64 * DEFAULT_FRACTION) as u64;
+        if left < budget.bytes {
+            budget = Budget {
+                bytes: left,
+                source: format!(
+                    "{:.0}% of what the address-space limit {} leaves",
+                    DEFAULT_FRACTION * 100.0,
+                    human(limit)
+                ),
+            };
+        }
+    }
+    budget
+}
+
+/// An upper estimate of photons stored per photon emitted: a diffuse bounce survives roulette
+/// with the surface's mean reflectance, so a photon lands `1 / (1 - rho)` times on surfaces of
+/// reflectance `rho` (the largest in the scene, at most 0.95), and never more than the bounce
+/// limit allows.
+fn landings_per_photon(scene: &Scene, max_bounces: u32) -> f64 {
+    let rho = scene
+        .materials
+        .iter()
+        .map(|m| match m {
+            Material::Diffuse { reflectance } => {
+                reflectance.clamp(Vec3::ZERO, Vec3::ONE).element_sum() / 3.0
+            }
+            _ => 0.0,
+        })
+        .fold(0.0f32, f32::max)
+        .min(0.95) as f64;
+    (1.0 / (1.0 - rho)).min(max_bounces.max(1) as f64)
+}
+
+/// The memory a render of `scene` with `settings` and `kind` on `threads` threads needs.
+pub fn estimate(
+    scene: &Scene,
+    settings: &RenderSettings,
+    kind: IntegratorKind,
+    backend: BackendKind,
+    threads: usize,
+) -> Estimate {
+    let pixels = settings.width as u64 * settings.height as u64;
+    let mut e = Estimate {
+        parts: vec![("film", pixels.saturating_mul(FILM_BYTES_PER_PIXEL))],
+        what: format!("{}x{}", settings.width, settings.height),
+    };
+    if kind == IntegratorKind::Photonmap {
+        let t = &settings.photon.trace;
+        let per = landings_per_photon(scene, t.max_bounces);
+        // The caustic map is built after the global one and kept with it.
+        let stored = (t.global_photons as f64 + t.caustic_photons as f64) * per;
+        let bytes = (stored * PHOTON_PEAK_BYTES as f64).min(u64::MAX as f64) as u64;
+        e.parts.push(("photon maps", bytes));
+        e.what += &format!(
+            " with {} + {} photons (~{:.1} stored per photon emitted, {PHOTON_PEAK_BYTES} bytes each at peak)",
+            t.global_photons, t.caustic_photons, per
+        );
+    }
+    let tris = scene.triangle_count() as u64;
+    e.parts
+        .push(("geometry", tris.saturating_mul(triangle_bytes(backend))));
+    e.parts.push((
+        "threads",
+        (threads.max(1) as u64).saturating_mul(THREAD_BYTES),
+    ));
+    e
+}
+
+/// Ok when `e` fits `budget`, else the one-line message.
+pub fn check(e: &Estimate, budget: &Budget) -> Result<(), String> {
+    let total = e.total();
+    if total <= budget.bytes {
+        return Ok(());
+    }
+    let parts: Vec<String> = e
+        .parts
+        .iter()
+        .filter(|(_, b)| *b > 0)
+        .map(|(n, b)| format!("{n} {}", human(*b)))
+        .collect();
+    Err(format!(
+        "the render needs ~{} ({}) for {}; the limit is {} ({}); lower the resolution or photon counts, or raise --max-memory",
+        human(total),
+        parts.join(", "),
+        e.what,
+        human(budget.bytes),
+        budget.source
+    ))
+}
+
+/// Which sizes the command line gave (the rest came from the scene file), to say where the
+/// largest part of an estimate comes from.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FromCli {
+    pub res: bool,
+    pub photons: bool,
+}
+
+/// Where the largest part of `e` was set: a flag, the photon-count parameter's
+/// `file:line:col`, or the scene file.
+fn blame(e: &Estimate, scene: &Scene, cli: FromCli) -> String {
+    let largest = e
+        .parts
+        .iter()
+        .max_by_key(|(_, b)| *b)
+        .map_or("", |(n, _)| *n);
+    let params = &scene.integrator.params;
+    let photon_loc = params
+        .loc("globalphotons")
+        .or_else(|| params.loc("causticphotons"));
+    match (largest, photon_loc) {
+        ("film", _) if cli.res => "--res".to_string(),
+        ("photon maps", _) if cli.photons => "--global-photons/--caustic-photons".to_string(),
+        ("photon maps", Some(loc)) => loc.to_string(),
+        _ => scene.path.display().to_string(),
+    }
+}
+
+/// Checks a render against `max_memory` (bytes; default [`default_budget`]) before it starts;
+/// `threads` 0 means all cores. The message starts with where the largest part was set.
+pub fn check_render(
+    scene: &Scene,
+    settings: &RenderSettings,
+    (kind, backend): (IntegratorKind, BackendKind),
+    threads: usize,
+    max_memory: Option<u64>,
+    cli: FromCli,
+) -> Result<(), String> {
+    let threads = match threads {
+        0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        n => n,
+    };
+    let budget = match max_memory {
+        Some(bytes) => Budget {
+            bytes,
+            source: "--max-memory".to_string(),
+        },
+        None => default_budget(),
+    };
+    let e = estimate(scene, settings, kind, backend, threads);
+    check(&e, &budget).map_err(|m| format!("{}: {m}", blame(&e, scene, cli)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_parse() {
+        assert_eq!(parse_size("512"), Ok(512));
+        assert_eq!(parse_size("4k"), Ok(4096));
+        assert_eq!(parse_size("1.5G"), Ok(3 << 29));
+        assert_eq!(parse_size("2GiB"), Ok(2 << 30));
+        assert_eq!(parse_size("8gb"), Ok(8 << 30));
+        assert!(parse_size("-1G").is_err());
+        assert!(parse_size("NaN").is_err());
+        assert!(parse_size("1e400").is_err());
+        assert!(parse_size("3 parsecs").is_err());
+        assert!(parse_size("99999999T").is_err());
+    }
+
+    #[test]
+    fn human_sizes() {
+        assert_eq!(human(512), "512 B");
+        assert_eq!(human(3_200_000), "3.2 MB");
+        assert_eq!(human(110_000_000_000), "110 GB");
+    }
+
+    #[test]
+    fn ranges() {
+        assert_eq!(check_range(5u32, 1, 10), Ok(5));
+        assert_eq!(
+            check_range(0u32, 1, 10),
+            Err("must be in 1..=10, got 0".into())
+        );
+        assert!(check_float(f32::NAN, 0.0, 1.0, true).is_err());
+        assert!(check_float(0.0, 0.0, 1.0, true).is_err());
+        assert!(check_float(0.0, 0.0, 1.0, false).is_ok());
+        assert!(check_float(-0.5, 0.0, 1.0, false).is_err());
+        assert!(check_float(f32::INFINITY, 0.0, f32::MAX, true).is_err());
+    }
+
+    #[test]
+    fn proc_fields() {
+        let text = "MemTotal:       24576000 kB\nMemFree: 1 kB\n";
+        assert_eq!(proc_kb(text, "MemTotal:"), Some(24576000 * 1024));
+        assert_eq!(proc_kb(text, "Nope:"), None);
+    }
+}

@@ -1,0 +1,235 @@
+//! Helpers for tests that run the `photon` binary on hostile input: a run under an
+//! address-space cap (`prlimit --as`) and a timeout, and the checks every such run must pass
+//! (exit 0 or 2; on 2 exactly one stderr line that says where the problem is; no panic, no
+//! signal death).
+#![allow(dead_code)]
+use std::ffi::OsString;
+use std::io::Read;
+use std::os::unix::process::ExitStatusExt;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// 1 GiB: the address-space cap of most runs (photon's own budget follows it).
+pub const GIB: u64 = 1 << 30;
+
+/// What a capped run did.
+#[derive(Debug)]
+pub struct Run {
+    pub code: Option<i32>,
+    pub signal: Option<i32>,
+    pub stdout: String,
+    pub stderr: String,
+    pub timed_out: bool,
+    pub seconds: f64,
+}
+
+impl Run {
+    /// The run's outcome in one line, for assertion messages.
+    pub fn describe(&self) -> String {
+        let err: String = self.stderr.chars().take(600).collect();
+        format!(
+            "exit {:?} signal {:?} timed out {} after {:.1} s; stderr: {err}",
+            self.code, self.signal, self.timed_out, self.seconds
+        )
+    }
+}
+
+/// A fresh directory under the target's temporary directory.
+pub fn tmp_dir(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join("hostile")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Runs `photon ARGS` with its address space capped at `mem` bytes, killed after `timeout`.
+pub fn run_capped<I, S>(args: I, mem: u64, timeout: Duration) -> Run
+where
+    I: IntoIterator<Item = S>,
+    S: Into<OsString>,
+{
+    let mut cmd = Command::new("prlimit");
+    cmd.arg(format!("--as={mem}"))
+        .arg("--")
+        .arg(env!("CARGO_BIN_EXE_photon"))
+        .args(args.into_iter().map(Into::into))
+        .env("RUST_BACKTRACE", "0")
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+    let start = Instant::now();
+    let mut child = cmd.spawn().expect("prlimit and photon run");
+    let mut out_pipe = child.stdout.take().unwrap();
+    let mut err_pipe = child.stderr.take().unwrap();
+    let out_t = std::thread::spawn(move || {
+        let mut s = Vec::new();
+        let _ = out_pipe.read_to_end(&mut s);
+        s
+    });
+    let err_t = std::thread::spawn(move || {
+        let mut s = Vec::new();
+        let _ = err_pipe.read_to_end(&mut s);
+        s
+    });
+    let mut timed_out = false;
+    let status = loop {
+        if let Some(st) = child.try_wait().unwrap() {
+            break st;
+        }
+        if start.elapsed() > timeout {
+            timed_out = true;
+            let _ = child.kill();
+            break child.wait().unwrap();
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    let text = |v: Vec<u8>| String::from_utf8_lossy(&v).into_owned();
+    Run {
+        code: status.code(),
+        signal: status.signal(),
+        stdout: text(out_t.join().unwrap()),
+        stderr: text(err_t.join().unwrap()),
+        timed_out,
+        seconds: start.elapsed().as_secs_f64(),
+    }
+}
+
+/// `photon render SCENE --res 8x8 --spp 1` with few photons, output in `out_dir`, plus `extra`.
+/// A default given in `extra` is left out.
+pub fn render_args(scene: &Path, out_dir: &Path, extra: &[&str]) -> Vec<OsString> {
+    let mut v: Vec<OsString> = vec!["render".into(), scene.into()];
+    for (flag, value) in [
+        ("--res", "8x8"),
+        ("--spp", "1"),
+        ("--global-photons", "2000"),
+        ("--caustic-photons", "2000"),
+        ("--threads", "1"),
+    ] {
+        if !extra.contains(&flag) {
+            v.push(flag.into());
+            v.push(value.into());
+        }
+    }
+    v.push("--no-png".into());
+    v.push("-o".into());
+    v.push(out_dir.join("out.exr").into());
+    v.extend(extra.iter().map(OsString::from));
+    v
+}
+
+/// Whether `line` says where the problem is: `file:line:col`, a command-line flag, or the
+/// file (the scene file, or a main file that cannot be read).
+pub fn has_location(line: &str) -> bool {
+    has_file_line_col(line)
+        || line.contains("'--")
+        || line.starts_with("photon: -o ")
+        || line.starts_with("photon: --")
+        || line.contains(".pbrt: ")
+        || line.contains("cannot read \"")
+}
+
+/// Whether `line` contains `:N:M:` (a `file:line:column`).
+pub fn has_file_line_col(line: &str) -> bool {
+    let b = line.as_bytes();
+    (0..b.len()).any(|i| {
+        let digits = |mut j: usize| {
+            let s = j;
+            while j < b.len() && b[j].is_ascii_digit() {
+                j += 1;
+            }
+            (j > s).then_some(j)
+        };
+        b[i] == b':'
+            && digits(i + 1)
+                .filter(|&j| b.get(j) == Some(&b':'))
+                .and_then(|j| digits(j + 1))
+                .is_some_and(|k| b.get(k) == Some(&b':'))
+    })
+}
+
+/// The checks of every hostile run: not killed by a signal, no timeout, no panic (101), exit
+/// 0 or 2, and on 2 exactly one stderr line, with a location, no control bytes.
+pub fn check_run(r: &Run) -> Result<(), String> {
+    if r.timed_out {
+        return Err(format!("timed out: {}", r.describe()));
+    }
+    if let Some(s) = r.signal {
+        return Err(format!("killed by signal {s}: {}", r.describe()));
+    }
+    match r.code {
+        Some(0) => Ok(()),
+        Some(2) => {
+            let lines: Vec<&str> = r.stderr.lines().collect();
+            if lines.len() != 1 {
+                return Err(format!("{} stderr lines: {}", lines.len(), r.describe()));
+            }
+            if lines[0].chars().any(|c| c.is_control()) {
+                return Err(format!("control characters: {}", r.describe()));
+            }
+            if !has_location(lines[0]) {
+                return Err(format!("no location: {}", r.describe()));
+            }
+            Ok(())
+        }
+        _ => Err(format!("bad exit: {}", r.describe())),
+    }
+}
+
+/// Asserts a run failed with exit 2 and one located line containing every one of `needles`.
+pub fn assert_error(r: &Run, needles: &[&str]) {
+    assert_eq!(r.code, Some(2), "{}", r.describe());
+    check_run(r).unwrap_or_else(|e| panic!("{e}"));
+    for n in needles {
+        assert!(r.stderr.contains(n), "missing {n:?}: {}", r.describe());
+    }
+}
+
+/// The repository's and the shared scenes (`scenes/*.pbrt`, `../shared/scenes/*/*.pbrt`).
+pub fn all_scenes() -> Vec<PathBuf> {
+    let mut v = Vec::new();
+    for pattern_dir in ["scenes", "../shared/scenes"] {
+        let Ok(rd) = std::fs::read_dir(pattern_dir) else {
+            continue;
+        };
+        let mut entries: Vec<PathBuf> = rd.filter_map(|e| e.ok()).map(|e| e.path()).collect();
+        entries.sort();
+        for p in entries {
+            if p.extension().is_some_and(|e| e == "pbrt") {
+                v.push(p);
+            } else if p.is_dir() {
+                let mut inner: Vec<PathBuf> = std::fs::read_dir(&p)
+                    .unwrap()
+                    .filter_map(|e| e.ok())
+                    .map(|e| e.path())
+                    .filter(|q| q.extension().is_some_and(|e| e == "pbrt"))
+                    .collect();
+                inner.sort();
+                v.extend(inner);
+            }
+        }
+    }
+    v
+}
+
+/// A Cornell-box-like scene text (camera looking down -z at a diffuse box lit by a quad), with
+/// `world` appended after WorldBegin.
+pub fn small_scene(world: &str) -> String {
+    format!(
+        r#"LookAt 0 1 3.5  0 1 0  0 1 0
+Camera "perspective" "float fov" [ 45 ]
+Film "rgb" "integer xresolution" [ 8 ] "integer yresolution" [ 8 ]
+WorldBegin
+Material "diffuse" "rgb reflectance" [ 0.5 0.5 0.5 ]
+Shape "trianglemesh" "point3 P" [ -1 0 -1  1 0 -1  1 0 1  -1 0 1 ] "integer indices" [ 0 1 2 0 2 3 ]
+Shape "trianglemesh" "point3 P" [ -1 0 -1  -1 2 -1  1 2 -1  1 0 -1 ] "integer indices" [ 0 1 2 0 2 3 ]
+AttributeBegin
+AreaLightSource "diffuse" "rgb L" [ 5 5 5 ]
+Shape "trianglemesh" "point3 P" [ -0.3 1.99 -0.3  0.3 1.99 -0.3  0.3 1.99 0.3  -0.3 1.99 0.3 ] "integer indices" [ 0 2 1 0 3 2 ]
+AttributeEnd
+{world}
+"#
+    )
+}
