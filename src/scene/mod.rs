@@ -236,6 +236,9 @@ pub struct Scene {
     pub integrator: IntegratorDesc,
     /// The file the scene was read from (outputs default next to the working directory).
     pub path: PathBuf,
+    /// What the loader accepted but ignores, one line each with its location (`Accelerator`,
+    /// another renderer's integrator parameters, `Option`s): printed before a render.
+    pub notes: Vec<String>,
 }
 
 impl Scene {
@@ -270,6 +273,7 @@ impl Scene {
                 loc: None,
             },
             path: PathBuf::from("generated.pbrt"),
+            notes: Vec::new(),
         }
     }
 

@@ -14,6 +14,13 @@
 //! Include "more.pbrt"                   # relative to the main file's directory
 //! ```
 //!
+//! Accepted and ignored, with a note line in [`Scene::notes`]: `Accelerator` (any type and
+//! parameters; photon builds its own BVH), the parameters of another renderer's `Integrator`
+//! that photon does not implement (`Integrator "sppm" "float radius" 0.01`: see
+//! [`FOREIGN_INTEGRATORS`]), the `Option`s that cannot change photon's image. `ColorSpace
+//! "srgb"` is photon's own space; other color spaces, participating media (`MakeNamedMedium`,
+//! a non-empty `MediumInterface`), `Texture`, curves and hair are errors.
+//!
 //! Transforms post-multiply the CTM (`CTM = CTM * M`); `Transform`/`ConcatTransform` read 16
 //! numbers column-major as pbrt does (`glam::Mat4::from_cols_array`). The CTM at `Camera` is
 //! camera-from-world; its inverse becomes `world_from_camera` and the named system "camera".
@@ -76,6 +83,12 @@ pub struct Builder {
     filter: FilterDesc,
     sampler: SamplerDesc,
     integrator: IntegratorDesc,
+    /// Record errors and read on ([`super::load_collecting`]) instead of stopping.
+    collect: bool,
+    errors: Vec<SceneError>,
+    notes: Vec<String>,
+    /// How many `Texture` directives were read.
+    textures: usize,
 }
 
 impl Builder {
@@ -124,13 +137,43 @@ impl Builder {
                 params: ParamSet::new(),
                 loc: None,
             },
+            collect: false,
+            errors: Vec::new(),
+            notes: Vec::new(),
+            textures: 0,
         }
+    }
+
+    /// Records every error and reads on (see [`super::load_collecting`]).
+    pub fn collecting(mut self) -> Self {
+        self.collect = true;
+        self
     }
 
     /// Reads the main file and everything it includes, and returns the scene.
     pub fn run(mut self) -> Result<Scene, SceneError> {
         let main = self.main_path.clone();
         let end = self.parse_file(&main, 0, None)?;
+        self.check_end(&end)?;
+        Ok(self.into_scene())
+    }
+
+    /// Reads everything, recording each error (the builder must be [`Self::collecting`]).
+    pub fn run_collecting(mut self) -> super::Collected {
+        let main = self.main_path.clone();
+        let end = self.parse_file(&main, 0, None);
+        if let Err(e) = end.and_then(|end| self.check_end(&end)) {
+            self.errors.push(e);
+        }
+        super::Collected {
+            errors: std::mem::take(&mut self.errors),
+            textures: self.textures,
+            scene: self.into_scene(),
+        }
+    }
+
+    /// The checks at the end of the main file: every block closed, a world block read.
+    fn check_end(&self, end: &Loc) -> Result<(), SceneError> {
         if let Some((saved, loc)) = self.stack.last() {
             let what = match saved {
                 Saved::Attribute(_) => "AttributeBegin without a matching AttributeEnd",
@@ -139,9 +182,23 @@ impl Builder {
             return Err(SceneError::at(loc, what));
         }
         if !self.world_begun {
-            return Err(SceneError::at(&end, "the scene has no WorldBegin"));
+            return Err(SceneError::at(end, "the scene has no WorldBegin"));
         }
-        Ok(Scene {
+        Ok(())
+    }
+
+    /// In collect mode records `e` and returns `Ok`; otherwise returns `Err(e)`.
+    fn recover(&mut self, e: SceneError) -> Result<(), SceneError> {
+        if !self.collect {
+            return Err(e);
+        }
+        self.errors.push(e);
+        Ok(())
+    }
+
+    /// The scene read so far.
+    fn into_scene(self) -> Scene {
+        Scene {
             meshes: self.meshes,
             materials: self.materials,
             lights: self.lights,
@@ -151,7 +208,8 @@ impl Builder {
             sampler: self.sampler,
             integrator: self.integrator,
             path: self.main_path,
-        })
+            notes: self.notes,
+        }
     }
 
     /// Parses one file; `from` is the `Include` that named it. Returns the end-of-file loc.
@@ -170,11 +228,28 @@ impl Builder {
         let text = String::from_utf8(bytes)
             .map_err(|_| fail(format!("\"{}\" is not UTF-8 text", path.display())))?;
         let mut tok = Tokenizer::new(&text, Arc::new(path.to_path_buf()));
-        while let Some(t) = tok.next()? {
-            if t.kind != TokKind::Word {
-                return Err(tok.err(&t, format!("expected a directive, found {}", t.describe())));
+        loop {
+            let t = match tok.next() {
+                Ok(Some(t)) => t,
+                Ok(None) => break,
+                Err(e) => {
+                    // The rest of the file cannot be tokenized.
+                    self.recover(e)?;
+                    break;
+                }
+            };
+            let done = if t.kind == TokKind::Word {
+                self.directive(&t, &mut tok, depth)
+            } else {
+                Err(tok.err(&t, format!("expected a directive, found {}", t.describe())))
+            };
+            if let Err(e) = done {
+                self.recover(e)?;
+                if let Err(e) = skip_arguments(&mut tok) {
+                    self.recover(e)?;
+                    break;
+                }
             }
-            self.directive(&t, &mut tok, depth)?;
         }
         Ok(tok.end_loc())
     }
@@ -241,8 +316,38 @@ impl Builder {
                 self.named_coords
                     .insert("world".to_string(), Mat4::IDENTITY);
             }
-            "Camera" | "Film" | "Sampler" | "Integrator" | "PixelFilter" => {
+            "Camera" | "Film" | "Sampler" | "Integrator" | "PixelFilter" | "Accelerator" => {
                 self.option(t.text, tok, &loc)?
+            }
+            "ColorSpace" => {
+                let (name, at) = string_arg(tok, "a color space name")?;
+                if name != "srgb" {
+                    return Err(SceneError::at(
+                        &at,
+                        format!("unsupported color space \"{name}\" (photon renders in linear sRGB)"),
+                    ));
+                }
+            }
+            "Option" => self.pbrt_option(tok)?,
+            "MakeNamedMedium" => {
+                string_arg(tok, "a medium name")?;
+                read_params(tok)?;
+                return Err(SceneError::at(
+                    &loc,
+                    "participating media are not supported (MakeNamedMedium)",
+                ));
+            }
+            "MediumInterface" => medium_interface(tok, &loc)?,
+            "Texture" => {
+                self.textures += 1;
+                for what in ["a texture name", "a texture type", "a texture class"] {
+                    string_arg(tok, what)?;
+                }
+                read_params(tok)?;
+                return Err(SceneError::at(
+                    &loc,
+                    "unsupported directive \"Texture\" (textures are not supported yet)",
+                ));
             }
             "Material" | "MakeNamedMaterial" | "NamedMaterial" => {
                 self.world_only(t.text, &loc)?;
@@ -335,8 +440,19 @@ impl Builder {
             "Film" => self.film = film(&ty, &mut params, &at)?,
             "Sampler" => self.sampler = sampler(&ty, &mut params, &at)?,
             "PixelFilter" => self.filter = filter(&ty, &mut params, &at)?,
+            "Accelerator" => {
+                let given = mark_all_used(&mut params);
+                self.notes.push(format!(
+                    "{loc}: Accelerator \"{ty}\"{given} ignored: photon builds its own BVH \
+                     (--backend embree|obvhs)"
+                ));
+            }
             _ => {
-                // Integrator: kept as written for the integrator to read.
+                // Integrator: kept as written for the integrator to read, less the parameters
+                // of another renderer's integrator that photon does not implement.
+                if let Some(note) = ignore_foreign_params(&ty, &mut params) {
+                    self.notes.push(format!("{loc}: {note}"));
+                }
                 self.integrator = IntegratorDesc {
                     name: ty,
                     params,
@@ -354,7 +470,7 @@ impl Builder {
         match what {
             "Material" => {
                 let mut params = read_params(tok)?;
-                let m = make_material(&name, &mut params, &at)?;
+                let m = self.or_default(make_material(&name, &mut params, &at))?;
                 self.materials.push(m);
                 self.gs.material = MatRef::Index(self.materials.len() as u32 - 1);
             }
@@ -366,14 +482,7 @@ impl Builder {
                         format!("named material \"{name}\" redefined"),
                     ));
                 }
-                let Some(ty) = params.get_string_opt("type")? else {
-                    return Err(SceneError::at(
-                        &at,
-                        "MakeNamedMaterial needs \"string type\"",
-                    ));
-                };
-                let ty_loc = params.loc("type").cloned().unwrap_or_else(|| at.clone());
-                let m = make_material(&ty, &mut params, &ty_loc)?;
+                let m = self.or_default(named_material(&mut params, &at))?;
                 self.materials.push(m);
                 self.named_materials
                     .insert(name, self.materials.len() as u32 - 1);
@@ -387,6 +496,48 @@ impl Builder {
                     ))
                 }
             },
+        }
+        Ok(())
+    }
+
+    /// A material that failed to build: in collect mode the error is recorded and the default
+    /// diffuse stands in, so that later references to the material do not fail too.
+    fn or_default(&mut self, m: Result<Material, SceneError>) -> Result<Material, SceneError> {
+        m.or_else(|e| {
+            self.recover(e)?;
+            Ok(Material::Diffuse {
+                reflectance: Vec3::splat(0.5),
+            })
+        })
+    }
+
+    /// `Option "type name" value`: the options that cannot change photon's image are accepted
+    /// with a note; the others are errors.
+    fn pbrt_option(&mut self, tok: &mut Tokenizer) -> Result<(), SceneError> {
+        const IGNORED: [&str; 8] = [
+            "disablewavelengthjitter",
+            "disabletexturefiltering",
+            "msereferenceimage",
+            "msereferenceout",
+            "pixelstats",
+            "rendercoordsys",
+            "seed",
+            "wavefront",
+        ];
+        let mut params = read_params(tok)?;
+        let names: Vec<String> = params.iter().map(|p| p.name.clone()).collect();
+        for name in &names {
+            if !IGNORED.contains(&name.as_str()) {
+                let p = params.peek(name).expect("listed");
+                return Err(p.err("unsupported Option"));
+            }
+            let p = params.get_param(name).expect("listed");
+            let note = format!(
+                "{}: Option {} ignored (it does not change photon's image)",
+                p.loc,
+                p.decl()
+            );
+            self.notes.push(note);
         }
         Ok(())
     }
@@ -413,6 +564,21 @@ impl Builder {
                 let m = shapes::sphere(&mut params, &at, &gs.ctm, gs.reverse)?;
                 params.check_unused()?;
                 m
+            }
+            "disk" | "cylinder" => {
+                let obj = if ty == "disk" {
+                    shapes::disk(&mut params, &at)?
+                } else {
+                    shapes::cylinder(&mut params, &at)?
+                };
+                params.check_unused()?;
+                shapes::to_world(obj, &gs.ctm, gs.reverse, &at)?
+            }
+            "curve" => {
+                return Err(SceneError::at(
+                    &at,
+                    "unsupported shape type \"curve\" (curves and hair are not supported)",
+                ))
             }
             other => {
                 return Err(SceneError::at(
@@ -453,18 +619,119 @@ impl Builder {
     }
 }
 
+/// `MakeNamedMaterial`'s material, from its `"string type"`.
+fn named_material(params: &mut ParamSet, at: &Loc) -> Result<Material, SceneError> {
+    let Some(ty) = params.get_string_opt("type")? else {
+        return Err(SceneError::at(at, "MakeNamedMaterial needs \"string type\""));
+    };
+    let ty_loc = params.loc("type").cloned().unwrap_or_else(|| at.clone());
+    make_material(&ty, params, &ty_loc)
+}
+
+/// Skips what is left of a directive that failed: everything up to the next directive word.
+fn skip_arguments(tok: &mut Tokenizer) -> Result<(), SceneError> {
+    while let Some(t) = tok.peek()? {
+        if t.kind == TokKind::Word && !matches!(t.text, "true" | "false") {
+            break;
+        }
+        tok.next()?;
+    }
+    Ok(())
+}
+
+/// `MediumInterface "inside" "outside"` (or one name for both): empty names (vacuum, pbrt-v4's
+/// default) are accepted, a named medium is an error.
+fn medium_interface(tok: &mut Tokenizer, loc: &Loc) -> Result<(), SceneError> {
+    let mut names = Vec::new();
+    while let Some(t) = tok.peek()? {
+        if t.kind != TokKind::Str || names.len() == 2 {
+            break;
+        }
+        tok.next()?;
+        names.push(unescape(t.text).into_owned());
+    }
+    if names.is_empty() {
+        return Err(SceneError::at(
+            loc,
+            "MediumInterface needs one or two medium names",
+        ));
+    }
+    if names.iter().all(String::is_empty) {
+        return Ok(());
+    }
+    Err(SceneError::at(
+        loc,
+        format!(
+            "participating media are not supported (MediumInterface \"{}\")",
+            names.join("\" \"")
+        ),
+    ))
+}
+
+/// Marks every parameter used and lists them for a note (` ("float x", ...)`, or nothing).
+fn mark_all_used(params: &mut ParamSet) -> String {
+    let names: Vec<String> = params.iter().map(|p| p.name.clone()).collect();
+    let decls: Vec<String> = names
+        .iter()
+        .filter_map(|n| params.get_param(n).map(|p| p.decl()))
+        .collect();
+    if decls.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", decls.join(", "))
+    }
+}
+
+/// pbrt-v4's integrators other than photon's own, with their parameters besides `maxdepth`
+/// (which photon reads whatever the integrator's name), from pbrt-v4's `integrators.cpp`.
+pub const FOREIGN_INTEGRATORS: [(&str, &[&str]); 10] = [
+    ("path", &["regularize", "lightsampler"]),
+    ("volpath", &["regularize", "lightsampler"]),
+    ("bdpt", &["regularize", "visualizestrategies", "visualizeweights"]),
+    (
+        "mlt",
+        &[
+            "regularize",
+            "bootstrapsamples",
+            "chains",
+            "mutationsperpixel",
+            "largestepprobability",
+            "sigma",
+        ],
+    ),
+    ("sppm", &["photonsperiteration", "radius", "seed"]),
+    ("simplepath", &["samplelights", "samplebsdf"]),
+    ("simplevolpath", &[]),
+    ("lightpath", &[]),
+    ("randomwalk", &[]),
+    ("ambientocclusion", &["cossample", "maxdistance"]),
+];
+
+/// Marks used the parameters of pbrt-v4 integrator `name` that photon does not implement and
+/// returns the note listing them (`None` when there were none). Other parameters stay unread,
+/// so they are still errors.
+fn ignore_foreign_params(name: &str, params: &mut ParamSet) -> Option<String> {
+    let (_, foreign) = FOREIGN_INTEGRATORS.iter().find(|(n, _)| *n == name)?;
+    let ignored: Vec<String> = foreign
+        .iter()
+        .filter_map(|p| params.get_param(p).map(|p| p.decl()))
+        .collect();
+    if ignored.is_empty() {
+        return None;
+    }
+    Some(format!(
+        "Integrator \"{name}\": photon renders with its own integrator and ignores {}",
+        ignored.join(", ")
+    ))
+}
+
 /// The message for a directive we do not read.
 fn unsupported(name: &str) -> String {
-    const PBRT_V4: [&str; 11] = [
+    const PBRT_V4: [&str; 6] = [
         "Attribute",
-        "Texture",
         "ObjectBegin",
         "ObjectEnd",
         "ObjectInstance",
-        "MakeNamedMedium",
-        "MediumInterface",
-        "ColorSpace",
-        "Option",
         "ActiveTransform",
         "TransformTimes",
     ];
@@ -615,17 +882,21 @@ fn read_values(
     decl: &Token,
 ) -> Result<ParamValues, SceneError> {
     let first = tok.next_required("a parameter value")?;
-    let mut vals = Values::new(ty, &first);
     if first.kind != TokKind::Open {
+        let mut vals = Values::new(ty, &first);
         vals.push(tok, &first, decl)?;
         return Ok(vals.finish());
     }
+    let mut vals: Option<Values> = None;
     loop {
         let t = tok.next_required("\"]\"")?;
         match t.kind {
-            TokKind::Close => return Ok(vals.finish()),
+            TokKind::Close => return Ok(vals.unwrap_or_else(|| Values::new(ty, &first)).finish()),
             TokKind::Open => return Err(tok.err(&t, "\"[\" inside a parameter list")),
-            _ => vals.push(tok, &t, decl)?,
+            // The storage is chosen by the first value, so a named spectrum may be bracketed.
+            _ => vals
+                .get_or_insert_with(|| Values::new(ty, &t))
+                .push(tok, &t, decl)?,
         }
     }
 }
@@ -637,7 +908,7 @@ struct Values {
 }
 
 impl Values {
-    /// Chooses the storage for `ty` (spectra: strings if the first value is quoted).
+    /// Chooses the storage for `ty` from its first value (spectra: strings if it is quoted).
     fn new(ty: ParamType, first: &Token) -> Self {
         let out = match ty {
             ParamType::Integer => ParamValues::Ints(Vec::new()),
