@@ -2,6 +2,7 @@
 //! is one function in `photon::tools`.
 use clap::{Parser, Subcommand};
 use photon::tools::bench::{self, BenchOptions};
+use photon::tools::check::{self, CheckOptions};
 use photon::tools::compare::{self, CompareOptions};
 use photon::tools::converge::{self, ConvergeOptions};
 use photon::tools::crosscheck::{self, CrosscheckOptions};
@@ -35,6 +36,10 @@ enum Command {
     /// Benchmark both backends (build, camera/secondary/shadow rays, packets, threads) and the
     /// photon side (tracing, kd-tree, k-nearest, radiance estimates); table, CSV, JSON.
     Bench(BenchOptions),
+    /// Load scenes without rendering: one line each (triangles, lights, materials, textures,
+    /// memory estimate), then every unsupported feature or error with its file:line:column
+    /// (exit 2 if any scene has one).
+    Check(CheckOptions),
 }
 
 fn main() -> ExitCode {
@@ -45,6 +50,7 @@ fn main() -> ExitCode {
         Command::Converge(opts) => converge::run(&opts),
         Command::Crosscheck(opts) => crosscheck::run(&opts),
         Command::Bench(opts) => bench::run(&opts).map(|()| true),
+        Command::Check(opts) => check::run(&opts).map(|()| true),
     };
     match result {
         Ok(true) => ExitCode::SUCCESS,

@@ -622,16 +622,26 @@ fn materials() {
         material_of(r#"Material "dielectric" "spectrum eta" [ 400 1.6 700 1.6 ]"#),
         Material::Dielectric { eta: 1.6 }
     );
-    // Default conductor: copper, smooth.
-    assert_eq!(
-        material_of(r#"Material "conductor""#),
-        Material::Conductor {
-            eta: Vec3::new(0.200438, 0.924033, 1.102212),
-            k: Vec3::new(3.912949, 2.452848, 2.142188),
-            alpha_u: 0.0,
-            alpha_v: 0.0
-        }
-    );
+    // Default conductor: copper, smooth (the published RGB of pbrt's copper; ours are computed
+    // from pbrt-v4's tables by the same method and agree to 1e-4).
+    let Material::Conductor {
+        eta,
+        k,
+        alpha_u: 0.0,
+        alpha_v: 0.0,
+    } = material_of(r#"Material "conductor""#)
+    else {
+        panic!("not a smooth conductor")
+    };
+    assert_vec(eta, Vec3::new(0.200438, 0.924033, 1.102212), 3e-4);
+    assert_vec(k, Vec3::new(3.912949, 2.452848, 2.142188), 3e-4);
+    // Named glasses: the index at 550 nm (BK7: 1.51852 from Schott's Sellmeier fit).
+    let Material::Dielectric { eta } =
+        material_of(r#"Material "dielectric" "spectrum eta" [ "glass-BK7" ]"#)
+    else {
+        panic!("not a dielectric")
+    };
+    assert!(close(eta, 1.51852, 1e-4), "{eta}");
     // reflectance 0.64: eta 1, k = 2 * 0.8 / 0.6; roughness 0.09 remapped to alpha 0.3.
     let Material::Conductor {
         eta,
@@ -647,19 +657,27 @@ fn materials() {
     assert_eq!(eta, Vec3::ONE);
     assert_vec(k, Vec3::new(2.0 * 0.8 / 0.6, 0.0, 2.0 * 0.6 / 0.8), 1e-5);
     assert!(close(alpha_u, 0.3, 1e-6) && close(alpha_v, 0.3, 1e-6));
-    // Anisotropic, not remapped; named gold spectra.
-    assert_eq!(
-        material_of(
-            r#"Material "conductor" "spectrum eta" "metal-Au-eta" "spectrum k" "metal-Au-k"
-               "float uroughness" 0.2 "float vroughness" 0.04 "bool remaproughness" false"#
-        ),
-        Material::Conductor {
-            eta: Vec3::new(0.143119, 0.374957, 1.44248),
-            k: Vec3::new(3.98316, 2.38572, 1.60322),
+    // Anisotropic, not remapped; named gold spectra, with and without brackets (published
+    // RGB of gold).
+    for src in [
+        r#""spectrum eta" "metal-Au-eta" "spectrum k" "metal-Au-k""#,
+        r#""spectrum eta" [ "metal-Au-eta" ] "spectrum k" ["metal-Au-k"]"#,
+    ] {
+        let Material::Conductor {
+            eta,
+            k,
             alpha_u: 0.2,
-            alpha_v: 0.04
-        }
-    );
+            alpha_v: 0.04,
+        } = material_of(&format!(
+            r#"Material "conductor" {src}
+               "float uroughness" 0.2 "float vroughness" 0.04 "bool remaproughness" false"#
+        ))
+        else {
+            panic!("not gold with alpha 0.2 x 0.04: {src}")
+        };
+        assert_vec(eta, Vec3::new(0.143119, 0.374957, 1.44248), 3e-4);
+        assert_vec(k, Vec3::new(3.98316, 2.38572, 1.60322), 3e-4);
+    }
     let Material::Conductor {
         eta,
         k,
@@ -671,13 +689,8 @@ fn materials() {
     else {
         panic!()
     };
-    assert_eq!(
-        (eta, k),
-        (
-            Vec3::new(1.65746, 0.880369, 0.521229),
-            Vec3::new(1.0, 2.0, 3.0)
-        )
-    );
+    assert_vec(eta, Vec3::new(1.65746, 0.880369, 0.521229), 3e-4);
+    assert_eq!(k, Vec3::new(1.0, 2.0, 3.0));
     assert!(close(alpha_u, 0.5, 1e-6) && alpha_v == 0.0);
     // Named materials keep their index; "color" is an alias of rgb.
     let s = ok(&format!(
@@ -698,7 +711,7 @@ Material "diffuse"
         .map(|m| &s.materials[m.material as usize])
         .collect();
     assert!(
-        matches!(mats[0], Material::Conductor { eta, .. } if *eta == Vec3::new(0.155265, 0.116723, 0.138342))
+        matches!(mats[0], Material::Conductor { eta, .. } if (*eta - Vec3::new(0.155265, 0.116723, 0.138342)).abs().max_element() < 1e-4)
     );
     assert_eq!(
         *mats[1],
@@ -1069,9 +1082,9 @@ fn error_unknown_and_unsupported_directives() {
     );
     assert_src_err("WorldBegin\nWorldEnd\n", 2, &["\"WorldEnd\""]);
     assert_src_err(
-        "WorldBegin\nShape \"disk\"\n",
+        "WorldBegin\nShape \"hyperboloid\"\n",
         2,
-        &["unsupported shape type \"disk\""],
+        &["unsupported shape type \"hyperboloid\""],
     );
     assert_src_err(
         "WorldBegin\nMaterial \"coateddiffuse\"\n",
@@ -1212,9 +1225,9 @@ fn error_parameter_types_and_values() {
         &["rough dielectrics"],
     );
     assert_src_err(
-        "WorldBegin\nMaterial \"dielectric\"\n \"spectrum eta\" \"glass-BK7\"\n",
+        "WorldBegin\nMaterial \"dielectric\"\n \"spectrum eta\" \"glass-XYZ\"\n",
         3,
-        &["glass-BK7"],
+        &["glass-XYZ"],
     );
     assert_src_err(
         "WorldBegin\nMaterial \"conductor\"\n \"spectrum eta\" \"metal-Pt-eta\"\n",
@@ -1269,7 +1282,7 @@ fn error_unused_parameters() {
     assert_src_err(
         "WorldBegin\nMaterial \"diffuse\" \"texture normalmap\" \"n\"\n",
         2,
-        &["unused parameter \"texture normalmap\""],
+        &["\"texture normalmap\": textures are not supported"],
     );
     assert_src_err("WorldBegin\nMaterial \"conductor\" \"float uroughness\" 0.1 \"float vroughness\" 0.1\n \"float roughness\" 0.2\n", 3, &["unused parameter \"float roughness\""]);
     assert_src_err(
@@ -1287,7 +1300,7 @@ fn error_unused_parameters() {
         2,
         &["unused parameter \"string filename\""],
     );
-    assert_src_err("WorldBegin\nShape \"plymesh\" \"string filename\" \"x.ply\"\n\"texture displacement\" \"d\"\n", 3, &["unused parameter \"texture displacement\""]);
+    assert_src_err("WorldBegin\nShape \"plymesh\" \"string filename\" \"x.ply\"\n\"texture displacement\" \"d\"\n", 3, &["\"texture displacement\": textures are not supported"]);
 }
 
 #[test]

@@ -227,9 +227,11 @@ impl ParamSet {
         self.peek(name).map(|p| &p.loc)
     }
 
-    /// The first parameter nobody read, as an error at its location.
+    /// The first parameter nobody read, as an error at its location (a texture-valued one says
+    /// that textures are not supported: `"texture displacement"`, `"texture alpha"`).
     pub fn check_unused(&self) -> Result<(), SceneError> {
         match self.params.iter().find(|p| !p.used) {
+            Some(p) if p.ty == ParamType::Texture => Err(p.err("textures are not supported")),
             Some(p) => Err(SceneError::at(
                 &p.loc,
                 format!("unused parameter {}", p.decl()),
