@@ -1592,3 +1592,239 @@ fn repo_scenes_load() {
     }
     assert!(n > 0, "no scenes in scenes/");
 }
+
+// ---------------------------------------------------------------------------------------------
+// disks and cylinders (analytic area, bounds and normals)
+
+/// Total triangle area and bounds of the only mesh.
+fn area_and_bounds(s: &Scene) -> (f64, Vec3, Vec3) {
+    let m = only_mesh(s);
+    let area = (0..m.indices.len() as u32)
+        .map(|t| m.area(t) as f64)
+        .sum();
+    let (lo, hi) = s.bounds();
+    (area, lo, hi)
+}
+
+/// `area` is short of `exact` by less than 0.1% (a polygon inscribed in the curve).
+#[track_caller]
+fn assert_area(area: f64, exact: f64) {
+    let deficit = 1.0 - area / exact;
+    assert!((0.0..1e-3).contains(&deficit), "area {area} against {exact}");
+}
+
+#[test]
+fn disk_area_bounds_and_normals() {
+    // Annulus r 2, inner 0.5 at height 1, moved up 3: area pi (4 - 0.25).
+    let s = ok(
+        r#"WorldBegin
+Translate 0 0 3
+Shape "disk" "float radius" 2 "float innerradius" 0.5 "float height" 1"#,
+    );
+    let (area, lo, hi) = area_and_bounds(&s);
+    assert_area(area, std::f64::consts::PI * 3.75);
+    assert_vec(lo, Vec3::new(-2.0, -2.0, 4.0), 1e-5);
+    assert_vec(hi, Vec3::new(2.0, 2.0, 4.0), 1e-5);
+    let m = only_mesh(&s);
+    for (i, p) in m.positions.iter().enumerate() {
+        let r = p.truncate().length();
+        assert!(close(r, 2.0, 1e-6) || close(r, 0.5, 1e-6), "vertex {i} at r {r}");
+        assert_eq!(m.normals.as_ref().unwrap()[i], Vec3::Z);
+    }
+    for t in 0..m.indices.len() as u32 {
+        assert_vec(m.geometric_normal(t, 0.3, 0.3), Vec3::Z, 1e-5);
+    }
+    // pbrt's uv: u = phi / phimax, v = (radius - r) / (radius - innerradius).
+    let uv = m.uvs.as_ref().unwrap();
+    for (p, uv) in m.positions.iter().zip(uv) {
+        let v = (2.0 - p.truncate().length()) / 1.5;
+        assert!(close(uv.y, v, 1e-5), "{uv} at {p}");
+        let phi = p.y.atan2(p.x).rem_euclid(2.0 * PI);
+        assert!(close(uv.x, phi / (2.0 * PI), 1e-5) || (uv.x == 1.0 && phi < 1e-5));
+    }
+    // A quarter disk without a hole, its normal turned by ReverseOrientation.
+    let s = ok(r#"WorldBegin
+ReverseOrientation
+Shape "disk" "float radius" 3 "float phimax" 90"#);
+    let (area, lo, hi) = area_and_bounds(&s);
+    assert_area(area, std::f64::consts::PI * 9.0 / 4.0);
+    assert_vec(lo, Vec3::ZERO, 1e-6);
+    assert_vec(hi, Vec3::new(3.0, 3.0, 0.0), 1e-5);
+    let m = only_mesh(&s);
+    assert!(m.normals.as_ref().unwrap().iter().all(|n| *n == -Vec3::Z));
+    assert_vec(m.geometric_normal(0, 0.2, 0.2), -Vec3::Z, 1e-6);
+}
+
+#[test]
+fn cylinder_area_bounds_and_normals() {
+    // Half a cylinder, zmin/zmax given the wrong way round (pbrt orders them), rotated so the
+    // axis is +x: area = height * radius * phimax = 3 * 0.5 * pi.
+    let s = ok(r#"WorldBegin
+Rotate 90 0 1 0
+Shape "cylinder" "float radius" 0.5 "float zmin" 2 "float zmax" -1 "float phimax" 180"#);
+    let (area, lo, hi) = area_and_bounds(&s);
+    assert_area(area, 1.5 * std::f64::consts::PI);
+    // Object (x, y, z) -> world (z, y, -x): x in [-1, 2], y in [0, 0.5], z in [-0.5, 0.5].
+    assert_vec(lo, Vec3::new(-1.0, 0.0, -0.5), 1e-5);
+    assert_vec(hi, Vec3::new(2.0, 0.5, 0.5), 1e-5);
+    let m = only_mesh(&s);
+    for (p, n) in m.positions.iter().zip(m.normals.as_ref().unwrap()) {
+        let radial = Vec3::new(0.0, p.y, p.z);
+        assert!(close(radial.length(), 0.5, 1e-6), "{p}");
+        assert_vec(*n, radial / 0.5, 1e-5);
+    }
+    for t in 0..m.indices.len() as u32 {
+        let c = m.point(t, 1.0 / 3.0, 1.0 / 3.0);
+        let outward = Vec3::new(0.0, c.y, c.z).normalize();
+        assert!(m.geometric_normal(t, 1.0 / 3.0, 1.0 / 3.0).dot(outward) > 0.99);
+    }
+    // The full default cylinder closes its seam exactly: 2 pi r h = 4 pi.
+    let s = ok("WorldBegin\nShape \"cylinder\"");
+    let (area, lo, hi) = area_and_bounds(&s);
+    assert_area(area, 4.0 * std::f64::consts::PI);
+    assert_vec(lo, Vec3::new(-1.0, -1.0, -1.0), 1e-5);
+    assert_vec(hi, Vec3::new(1.0, 1.0, 1.0), 1e-5);
+    let m = only_mesh(&s);
+    let ring = m.positions.len() / 2;
+    assert_eq!(m.positions[0], m.positions[ring - 1], "seam");
+}
+
+#[test]
+fn disk_and_cylinder_errors() {
+    assert_src_err(
+        "WorldBegin\nShape \"disk\" \"float radius\" 1\n \"float innerradius\" 1\n",
+        3,
+        &["innerradius must lie in [0, radius)"],
+    );
+    assert_src_err(
+        "WorldBegin\nShape \"disk\"\n \"float radius\" 0\n",
+        3,
+        &["radius must be positive"],
+    );
+    assert_src_err(
+        "WorldBegin\nShape \"cylinder\" \"float zmin\" 1\n \"float zmax\" 1\n",
+        3,
+        &["zmin and zmax must differ"],
+    );
+    assert_src_err(
+        "WorldBegin\nShape \"cylinder\"\n \"float phimax\" -5\n",
+        3,
+        &["phimax must be positive"],
+    );
+    assert_src_err(
+        "WorldBegin\nShape \"cylinder\"\n \"float height\" 1\n",
+        3,
+        &["unused parameter \"float height\""],
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// directives accepted and ignored, with notes; unsupported ones
+
+#[test]
+fn accelerator_option_colorspace_are_accepted_with_notes() {
+    let s = ok(r#"Accelerator "bvh" "integer maxnodeprims" 4 "string splitmethod" "sah"
+Option "bool wavefront" true
+ColorSpace "srgb"
+WorldBegin
+MediumInterface "" ""
+ColorSpace "srgb"
+"#);
+    assert_eq!(s.notes.len(), 2, "{:?}", s.notes);
+    assert!(s.notes[0].contains("scene.pbrt:1:1: Accelerator \"bvh\""));
+    assert!(s.notes[0].contains("\"integer maxnodeprims\", \"string splitmethod\""));
+    assert!(s.notes[1].contains(":2:8: Option \"bool wavefront\" ignored"));
+    assert_src_err(
+        "WorldBegin\nAccelerator \"bvh\"\n",
+        2,
+        &["Accelerator is not allowed after WorldBegin"],
+    );
+    assert_src_err("\nColorSpace \"aces2065-1\"\n", 2, &["\"aces2065-1\""]);
+    assert_src_err(
+        "Option \"bool forcediffuse\" true\n",
+        1,
+        &["\"bool forcediffuse\": unsupported Option"],
+    );
+}
+
+#[test]
+fn other_integrators_parameters_are_ignored_with_a_note() {
+    let s = ok(r#"Integrator "sppm" "float radius" 0.01 "integer maxdepth" 7
+    "integer photonsperiteration" 1000
+WorldBegin
+"#);
+    assert_eq!(s.notes.len(), 1, "{:?}", s.notes);
+    assert!(
+        s.notes[0].ends_with("ignores \"float radius\", \"integer photonsperiteration\""),
+        "{}",
+        s.notes[0]
+    );
+    // maxdepth stays for the render to read, and nothing else is left unread.
+    let mut p = s.integrator.params.clone();
+    assert!(p.check_unused().is_err());
+    assert_eq!(p.get_int("maxdepth", 5).unwrap(), 7);
+    p.check_unused().unwrap();
+    // "regularize" of volpath too; a parameter volpath does not have stays unread (an error
+    // when the render reads the settings).
+    let s = ok("Integrator \"volpath\" \"bool regularize\" true \"float radius\" 1\nWorldBegin\n");
+    assert!(s.notes[0].contains("\"bool regularize\""));
+    let e = photon::integrator::RenderSettings::from_scene(&s).unwrap_err();
+    assert!(e.to_string().contains("unused parameter \"float radius\""), "{e}");
+    // The photon mapper's own parameters are not "foreign".
+    let s = ok("Integrator \"photonmap\" \"integer globalphotons\" 10\nWorldBegin\n");
+    assert!(s.notes.is_empty());
+}
+
+#[test]
+fn media_textures_and_curves_are_clear_errors() {
+    assert_src_err(
+        "WorldBegin\n\nMakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n",
+        3,
+        &["participating media are not supported (MakeNamedMedium)"],
+    );
+    assert_src_err(
+        "WorldBegin\nMediumInterface \"\" \"fog\"\n",
+        2,
+        &["participating media are not supported (MediumInterface \"\" \"fog\")"],
+    );
+    assert_src_err(
+        "WorldBegin\nTexture \"t\" \"spectrum\" \"checkerboard\" \"float uscale\" 4\n",
+        2,
+        &["unsupported directive \"Texture\""],
+    );
+    assert_src_err(
+        "WorldBegin\nShape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n",
+        2,
+        &["curves and hair are not supported"],
+    );
+}
+
+#[test]
+fn every_named_metal_loads_with_and_without_brackets() {
+    for metal in ["Ag", "Al", "Au", "Cu", "CuZn", "MgO", "TiO2"] {
+        let plain = material_of(&format!(
+            r#"Material "conductor" "spectrum eta" "metal-{metal}-eta" "spectrum k" "metal-{metal}-k""#
+        ));
+        let bracketed = material_of(&format!(
+            r#"Material "conductor" "spectrum eta" [ "metal-{metal}-eta" ] "spectrum k" [ "metal-{metal}-k" ]"#
+        ));
+        assert_eq!(plain, bracketed, "{metal}");
+        let Material::Conductor { eta, k, .. } = plain else {
+            panic!("{metal}")
+        };
+        assert!(eta.min_element() > 0.1 && k.min_element() >= 0.0, "{metal}: {eta} {k}");
+    }
+    // Brass (CuZn) is yellow: its k falls from red to blue, as in the table (3.52 at 630 nm,
+    // 1.92 at 465 nm).
+    let Material::Conductor { k, .. } =
+        material_of(r#"Material "conductor" "spectrum k" "metal-CuZn-k" "spectrum eta" "metal-CuZn-eta""#)
+    else {
+        panic!()
+    };
+    assert!(k.x > 3.5 && k.z < 2.0, "{k}");
+    assert_src_err(
+        "WorldBegin\nMaterial \"conductor\"\n \"spectrum eta\" [ \"metal-Cu-eta\" \"metal-Au-eta\" ]\n",
+        3,
+        &["expected one named spectrum"],
+    );
+}

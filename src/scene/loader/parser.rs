@@ -708,13 +708,18 @@ pub const FOREIGN_INTEGRATORS: [(&str, &[&str]); 10] = [
 ];
 
 /// Marks used the parameters of pbrt-v4 integrator `name` that photon does not implement and
-/// returns the note listing them (`None` when there were none). Other parameters stay unread,
+/// returns the note listing them in file order (`None` when there were none). Other parameters stay unread,
 /// so they are still errors.
 fn ignore_foreign_params(name: &str, params: &mut ParamSet) -> Option<String> {
     let (_, foreign) = FOREIGN_INTEGRATORS.iter().find(|(n, _)| *n == name)?;
-    let ignored: Vec<String> = foreign
+    let names: Vec<String> = params
         .iter()
-        .filter_map(|p| params.get_param(p).map(|p| p.decl()))
+        .map(|p| p.name.clone())
+        .filter(|n| foreign.contains(&n.as_str()))
+        .collect();
+    let ignored: Vec<String> = names
+        .iter()
+        .filter_map(|n| params.get_param(n).map(|p| p.decl()))
         .collect();
     if ignored.is_empty() {
         return None;
