@@ -56,9 +56,15 @@ def to_rgb(f):
     return [sum(XYZ_TO_SRGB[r][c] * xyz[c] for c in range(3)) for r in range(3)]
 
 
+def num(v):
+    """Six decimals without trailing zeros, as Rust source."""
+    s = ("%.6f" % v).rstrip("0")
+    return s + "0" if s.endswith(".") else s
+
+
 for metal in METALS:
     for part in ["eta", "k"]:
         r, g, b = (max(v, 0.0) for v in to_rgb(piecewise_linear(array("%s_%s" % (metal, part)))))
-        print('    ("metal-%s-%s", Vec3::new(%.6f, %.6f, %.6f)),' % (metal, part, r, g, b))
+        print('    ("metal-%s-%s", Vec3::new(%s, %s, %s)),' % (metal, part, num(r), num(g), num(b)))
 for name, table in GLASSES:
-    print('    ("glass-%s", %.6f),' % (name, piecewise_linear(array("Glass%s_eta" % table))(550.0)))
+    print('    ("glass-%s", %s),' % (name, num(piecewise_linear(array("Glass%s_eta" % table))(550.0))))

@@ -8,42 +8,16 @@ use photon::scene::loader::load;
 use photon::scene::{FilterDesc, Light, Material, Scene, SceneError};
 use std::f32::consts::PI;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU32, Ordering};
+
+mod common;
+use common::TempDir;
 
 // ---------------------------------------------------------------------------------------------
 // helpers
 
-/// A scratch directory removed when dropped.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new() -> TempDir {
-        static N: AtomicU32 = AtomicU32::new(0);
-        let n = N.fetch_add(1, Ordering::SeqCst);
-        let dir = std::env::temp_dir().join(format!("photon-parser-{}-{n}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        TempDir(dir)
-    }
-
-    /// Writes `contents` to `name` (creating subdirectories) and returns its path.
-    fn write(&self, name: &str, contents: impl AsRef<[u8]>) -> PathBuf {
-        let p = self.0.join(name);
-        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
-        std::fs::write(&p, contents).unwrap();
-        p
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
 /// Loads `src` written as `scene.pbrt` in a fresh directory.
 fn load_src(src: &str) -> Result<Scene, SceneError> {
-    let dir = TempDir::new();
+    let dir = TempDir::new("photon-parser");
     load(&dir.write("scene.pbrt", src))
 }
 
@@ -978,7 +952,7 @@ fn binary_ply(big_endian: bool, verts: &[[f64; 3]], faces: &[Vec<u16>]) -> Vec<u
 
 #[test]
 fn ply_meshes() {
-    let dir = TempDir::new();
+    let dir = TempDir::new("photon-parser");
     dir.write("meshes/quad.ply", ASCII_PLY);
     let verts = [
         [0.0, 0.0, 0.0],
@@ -1018,7 +992,7 @@ Shape "plymesh" "string filename" "le.ply"
 fn syntax_details() {
     // Comments, bare and quoted bools, single values without brackets, strings with escapes,
     // include and import relative to the main file's directory (also from a subdirectory).
-    let dir = TempDir::new();
+    let dir = TempDir::new("photon-parser");
     dir.write(
         "sub/a.pbrt",
         "# included\nMakeNamedMaterial \"m\" \"string type\" \"diffuse\"\nImport \"sub/b.pbrt\"\n",
@@ -1381,7 +1355,7 @@ fn error_unterminated_string() {
 
 #[test]
 fn error_includes() {
-    let dir = TempDir::new();
+    let dir = TempDir::new("photon-parser");
     let main = dir.write("scene.pbrt", "WorldBegin\n\nInclude \"missing.pbrt\"\n");
     assert_err(
         load(&main),
@@ -1426,7 +1400,7 @@ fn ply_scene(dir: &TempDir, file: &str) -> PathBuf {
 
 #[test]
 fn error_ply_files() {
-    let dir = TempDir::new();
+    let dir = TempDir::new("photon-parser");
     let scene = ply_scene(&dir, "none.ply");
     assert_err(load(&scene), "scene.pbrt", 3, &["none.ply", "cannot open"]);
 
@@ -1507,7 +1481,7 @@ fn error_ply_files() {
 #[test]
 fn never_panics_on_cut_or_mangled_input() {
     let text = std::fs::read(shared("cornell-box/scene-v4.pbrt")).unwrap();
-    let dir = TempDir::new();
+    let dir = TempDir::new("photon-parser");
     let path = dir.0.join("fuzz.pbrt");
     let mut loaded = 0;
     for cut in (0..text.len()).step_by(37) {
@@ -1551,7 +1525,7 @@ fn multi_megabyte_scene_loads() {
         src.push_str(&format!("{i} {} {}\n", i + 1, i + 2));
     }
     src.push_str("]\n");
-    let dir = TempDir::new();
+    let dir = TempDir::new("photon-parser");
     let path = dir.write("big.pbrt", &src);
     let t = std::time::Instant::now();
     let s = load(&path).unwrap_or_else(|e| panic!("{e}"));
@@ -1599,9 +1573,7 @@ fn repo_scenes_load() {
 /// Total triangle area and bounds of the only mesh.
 fn area_and_bounds(s: &Scene) -> (f64, Vec3, Vec3) {
     let m = only_mesh(s);
-    let area = (0..m.indices.len() as u32)
-        .map(|t| m.area(t) as f64)
-        .sum();
+    let area = (0..m.indices.len() as u32).map(|t| m.area(t) as f64).sum();
     let (lo, hi) = s.bounds();
     (area, lo, hi)
 }
@@ -1610,17 +1582,18 @@ fn area_and_bounds(s: &Scene) -> (f64, Vec3, Vec3) {
 #[track_caller]
 fn assert_area(area: f64, exact: f64) {
     let deficit = 1.0 - area / exact;
-    assert!((0.0..1e-3).contains(&deficit), "area {area} against {exact}");
+    assert!(
+        (0.0..1e-3).contains(&deficit),
+        "area {area} against {exact}"
+    );
 }
 
 #[test]
 fn disk_area_bounds_and_normals() {
     // Annulus r 2, inner 0.5 at height 1, moved up 3: area pi (4 - 0.25).
-    let s = ok(
-        r#"WorldBegin
+    let s = ok(r#"WorldBegin
 Translate 0 0 3
-Shape "disk" "float radius" 2 "float innerradius" 0.5 "float height" 1"#,
-    );
+Shape "disk" "float radius" 2 "float innerradius" 0.5 "float height" 1"#);
     let (area, lo, hi) = area_and_bounds(&s);
     assert_area(area, std::f64::consts::PI * 3.75);
     assert_vec(lo, Vec3::new(-2.0, -2.0, 4.0), 1e-5);
@@ -1628,7 +1601,10 @@ Shape "disk" "float radius" 2 "float innerradius" 0.5 "float height" 1"#,
     let m = only_mesh(&s);
     for (i, p) in m.positions.iter().enumerate() {
         let r = p.truncate().length();
-        assert!(close(r, 2.0, 1e-6) || close(r, 0.5, 1e-6), "vertex {i} at r {r}");
+        assert!(
+            close(r, 2.0, 1e-6) || close(r, 0.5, 1e-6),
+            "vertex {i} at r {r}"
+        );
         assert_eq!(m.normals.as_ref().unwrap()[i], Vec3::Z);
     }
     for t in 0..m.indices.len() as u32 {
@@ -1723,13 +1699,15 @@ fn disk_and_cylinder_errors() {
 
 #[test]
 fn accelerator_option_colorspace_are_accepted_with_notes() {
-    let s = ok(r#"Accelerator "bvh" "integer maxnodeprims" 4 "string splitmethod" "sah"
+    let s = ok(
+        r#"Accelerator "bvh" "integer maxnodeprims" 4 "string splitmethod" "sah"
 Option "bool wavefront" true
 ColorSpace "srgb"
 WorldBegin
 MediumInterface "" ""
 ColorSpace "srgb"
-"#);
+"#,
+    );
     assert_eq!(s.notes.len(), 2, "{:?}", s.notes);
     assert!(s.notes[0].contains("scene.pbrt:1:1: Accelerator \"bvh\""));
     assert!(s.notes[0].contains("\"integer maxnodeprims\", \"string splitmethod\""));
@@ -1749,10 +1727,12 @@ ColorSpace "srgb"
 
 #[test]
 fn other_integrators_parameters_are_ignored_with_a_note() {
-    let s = ok(r#"Integrator "sppm" "float radius" 0.01 "integer maxdepth" 7
+    let s = ok(
+        r#"Integrator "sppm" "float radius" 0.01 "integer maxdepth" 7
     "integer photonsperiteration" 1000
 WorldBegin
-"#);
+"#,
+    );
     assert_eq!(s.notes.len(), 1, "{:?}", s.notes);
     assert!(
         s.notes[0].ends_with("ignores \"float radius\", \"integer photonsperiteration\""),
@@ -1769,7 +1749,10 @@ WorldBegin
     let s = ok("Integrator \"volpath\" \"bool regularize\" true \"float radius\" 1\nWorldBegin\n");
     assert!(s.notes[0].contains("\"bool regularize\""));
     let e = photon::integrator::RenderSettings::from_scene(&s).unwrap_err();
-    assert!(e.to_string().contains("unused parameter \"float radius\""), "{e}");
+    assert!(
+        e.to_string().contains("unused parameter \"float radius\""),
+        "{e}"
+    );
     // The photon mapper's own parameters are not "foreign".
     let s = ok("Integrator \"photonmap\" \"integer globalphotons\" 10\nWorldBegin\n");
     assert!(s.notes.is_empty());
@@ -1812,13 +1795,16 @@ fn every_named_metal_loads_with_and_without_brackets() {
         let Material::Conductor { eta, k, .. } = plain else {
             panic!("{metal}")
         };
-        assert!(eta.min_element() > 0.1 && k.min_element() >= 0.0, "{metal}: {eta} {k}");
+        assert!(
+            eta.min_element() > 0.1 && k.min_element() >= 0.0,
+            "{metal}: {eta} {k}"
+        );
     }
     // Brass (CuZn) is yellow: its k falls from red to blue, as in the table (3.52 at 630 nm,
     // 1.92 at 465 nm).
-    let Material::Conductor { k, .. } =
-        material_of(r#"Material "conductor" "spectrum k" "metal-CuZn-k" "spectrum eta" "metal-CuZn-eta""#)
-    else {
+    let Material::Conductor { k, .. } = material_of(
+        r#"Material "conductor" "spectrum k" "metal-CuZn-k" "spectrum eta" "metal-CuZn-eta""#,
+    ) else {
         panic!()
     };
     assert!(k.x > 3.5 && k.z < 2.0, "{k}");

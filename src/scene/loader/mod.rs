@@ -35,7 +35,6 @@ pub mod shapes;
 pub mod spectra;
 pub mod tokenizer;
 
-
 use super::{Scene, SceneError};
 use std::path::Path;
 

@@ -246,7 +246,10 @@ impl Builder {
             if let Err(e) = done {
                 self.recover(e)?;
                 if let Err(e) = skip_arguments(&mut tok) {
-                    self.recover(e)?;
+                    // The rest of the file cannot be tokenized (often the error just recorded).
+                    if self.errors.last() != Some(&e) {
+                        self.recover(e)?;
+                    }
                     break;
                 }
             }
@@ -324,7 +327,9 @@ impl Builder {
                 if name != "srgb" {
                     return Err(SceneError::at(
                         &at,
-                        format!("unsupported color space \"{name}\" (photon renders in linear sRGB)"),
+                        format!(
+                            "unsupported color space \"{name}\" (photon renders in linear sRGB)"
+                        ),
                     ));
                 }
             }
@@ -622,7 +627,10 @@ impl Builder {
 /// `MakeNamedMaterial`'s material, from its `"string type"`.
 fn named_material(params: &mut ParamSet, at: &Loc) -> Result<Material, SceneError> {
     let Some(ty) = params.get_string_opt("type")? else {
-        return Err(SceneError::at(at, "MakeNamedMaterial needs \"string type\""));
+        return Err(SceneError::at(
+            at,
+            "MakeNamedMaterial needs \"string type\"",
+        ));
     };
     let ty_loc = params.loc("type").cloned().unwrap_or_else(|| at.clone());
     make_material(&ty, params, &ty_loc)
@@ -687,7 +695,10 @@ fn mark_all_used(params: &mut ParamSet) -> String {
 pub const FOREIGN_INTEGRATORS: [(&str, &[&str]); 10] = [
     ("path", &["regularize", "lightsampler"]),
     ("volpath", &["regularize", "lightsampler"]),
-    ("bdpt", &["regularize", "visualizestrategies", "visualizeweights"]),
+    (
+        "bdpt",
+        &["regularize", "visualizestrategies", "visualizeweights"],
+    ),
     (
         "mlt",
         &[

@@ -302,7 +302,12 @@ fn phi_max(params: &mut ParamSet, loc: &Loc) -> Result<f32, SceneError> {
 fn positive(params: &mut ParamSet, name: &str, default: f32, loc: &Loc) -> Result<f32, SceneError> {
     let v = params.get_float(name, default)?;
     if v.is_nan() || v <= 0.0 {
-        return Err(param_err(params, name, loc, format!("{name} must be positive")));
+        return Err(param_err(
+            params,
+            name,
+            loc,
+            format!("{name} must be positive"),
+        ));
     }
     Ok(v)
 }
@@ -333,7 +338,10 @@ pub fn disk(params: &mut ParamSet, loc: &Loc) -> Result<ObjMesh, SceneError> {
 /// object space (see the module docs). `zmin` and `zmax` are ordered as pbrt-v4 does.
 pub fn cylinder(params: &mut ParamSet, loc: &Loc) -> Result<ObjMesh, SceneError> {
     let radius = positive(params, "radius", 1.0, loc)?;
-    let (z0, z1) = (params.get_float("zmin", -1.0)?, params.get_float("zmax", 1.0)?);
+    let (z0, z1) = (
+        params.get_float("zmin", -1.0)?,
+        params.get_float("zmax", 1.0)?,
+    );
     if z0 == z1 {
         return Err(param_err(params, "zmax", loc, "zmin and zmax must differ"));
     }

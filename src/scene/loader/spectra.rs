@@ -23,11 +23,11 @@ use crate::math::Vec3;
 
 /// The RGB of pbrt-v4's named metal spectra (`metal-{Ag,Al,Au,Cu,CuZn,MgO,TiO2}-{eta,k}`).
 pub const METALS: [(&str, Vec3); 14] = [
-    ("metal-Ag-eta", Vec3::new(0.155263, 0.116724, 0.138370)),
-    ("metal-Ag-k", Vec3::new(4.828310, 3.122276, 2.146786)),
+    ("metal-Ag-eta", Vec3::new(0.155263, 0.116724, 0.13837)),
+    ("metal-Ag-k", Vec3::new(4.82831, 3.122276, 2.146786)),
     ("metal-Al-eta", Vec3::new(1.657447, 0.880376, 0.521188)),
     ("metal-Al-k", Vec3::new(9.223812, 6.269582, 4.836629)),
-    ("metal-Au-eta", Vec3::new(0.143123, 0.374943, 1.442390)),
+    ("metal-Au-eta", Vec3::new(0.143123, 0.374943, 1.44239)),
     ("metal-Au-k", Vec3::new(3.983146, 2.385749, 1.603085)),
     ("metal-Cu-eta", CU_ETA),
     ("metal-Cu-k", CU_K),
@@ -123,8 +123,14 @@ mod tests {
             [1.73759695, 0.313747346, 1.89878101],
             [0.013188707, 0.0623068142, 155.23629],
         );
-        assert!((glass("glass-BK7").unwrap() as f64 - bk7).abs() < 2e-4, "{bk7}");
-        assert!((glass("glass-F11").unwrap() as f64 - sf11).abs() < 2e-4, "{sf11}");
+        assert!(
+            (glass("glass-BK7").unwrap() as f64 - bk7).abs() < 2e-4,
+            "{bk7}"
+        );
+        assert!(
+            (glass("glass-F11").unwrap() as f64 - sf11).abs() < 2e-4,
+            "{sf11}"
+        );
         assert_eq!(glass("glass-XYZ"), None);
     }
 }
