@@ -236,6 +236,8 @@ pub struct Scene {
     pub integrator: IntegratorDesc,
     /// The file the scene was read from (outputs default next to the working directory).
     pub path: PathBuf,
+    /// The `Texture`s the file defines (parsed; the integrators do not read them yet).
+    pub textures: crate::texture::Textures,
     /// What the loader accepted but ignores, one line each with its location (`Accelerator`,
     /// another renderer's integrator parameters, `Option`s): printed before a render.
     pub notes: Vec<String>,
@@ -274,6 +276,7 @@ impl Scene {
             },
             path: PathBuf::from("generated.pbrt"),
             notes: Vec::new(),
+            textures: Default::default(),
         }
     }
 

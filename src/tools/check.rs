@@ -7,8 +7,8 @@
 //! $ photon check scenes/cornell-glass.pbrt bathroom/scene-v4.pbrt
 //! scenes/cornell-glass.pbrt: ok | 2,076 triangles, 1 lights, 4 materials, 0 textures | ~15.9 MB (geometry 0.1, film 3.9, photon maps 14.8)
 //! bathroom/scene-v4.pbrt: 2 problems | 1,016,052 triangles, ...
-//!   bathroom/scene-v4.pbrt:10:1: unsupported directive "Texture" (textures are not supported yet)
-//!   bathroom/scene-v4.pbrt:52:5: parameter "texture reflectance": textures are not supported
+//!   bathroom/scene-v4.pbrt:20:26: imagemap "bathroom/textures/wood.tga": No such file or directory (os error 2)
+//!   bathroom/scene-v4.pbrt:52:5: parameter "texture reflectance": textures are parsed but not yet applied
 //! ```
 //!
 //! The loader runs in its collect mode ([`crate::scene::loader::load_collecting`]): a directive
@@ -99,7 +99,7 @@ pub struct SceneReport {
     pub triangles: usize,
     pub lights: usize,
     pub materials: usize,
-    /// `Texture` directives read (textures are not supported yet, so each is also a problem).
+    /// `Texture` directives read (parsed, but a material that uses one is still a problem).
     pub textures: usize,
     pub memory: MemoryEstimate,
     /// Every error, in file order.

@@ -16,8 +16,8 @@
 //!
 //! Modules: [`tokenizer`] (tokens with line and column), [`params`] (parameter lists with
 //! used-tracking), [`parser`] (directives and graphics state), [`materials`], [`spectra`]
-//! (pbrt-v4's named spectra as RGB), [`lights`], [`shapes`] (meshes, spheres, disks,
-//! cylinders) and [`ply`] (PLY files).
+//! (pbrt-v4's named spectra as RGB), [`textures`] (`Texture` directives, image files),
+//! [`lights`], [`shapes`] (meshes, spheres, disks, cylinders) and [`ply`] (PLY files).
 //!
 //! Whatever the scene says that photon would not render as written is an error, one line,
 //! `file:line:column: what is wrong`: an unknown or unsupported directive or type, a parameter
@@ -33,6 +33,7 @@ pub mod parser;
 pub mod ply;
 pub mod shapes;
 pub mod spectra;
+pub mod textures;
 pub mod tokenizer;
 
 use super::{Scene, SceneError};

@@ -19,7 +19,9 @@
 //! that photon does not implement (`Integrator "sppm" "float radius" 0.01`: see
 //! [`FOREIGN_INTEGRATORS`]), the `Option`s that cannot change photon's image. `ColorSpace
 //! "srgb"` is photon's own space; other color spaces, participating media (`MakeNamedMedium`,
-//! a non-empty `MediumInterface`), `Texture`, curves and hair are errors.
+//! a non-empty `MediumInterface`), curves and hair are errors. `Texture`s are parsed and
+//! stored ([`super::textures`]), but a material or shape that names one is an error until the
+//! integrators apply them.
 //!
 //! Transforms post-multiply the CTM (`CTM = CTM * M`); `Transform`/`ConcatTransform` read 16
 //! numbers column-major as pbrt does (`glam::Mat4::from_cols_array`). The CTM at `Camera` is
@@ -88,7 +90,9 @@ pub struct Builder {
     errors: Vec<SceneError>,
     notes: Vec<String>,
     /// How many `Texture` directives were read.
-    textures: usize,
+    texture_count: usize,
+    textures: crate::texture::Textures,
+    images: super::textures::ImageCache,
 }
 
 impl Builder {
@@ -140,7 +144,9 @@ impl Builder {
             collect: false,
             errors: Vec::new(),
             notes: Vec::new(),
-            textures: 0,
+            texture_count: 0,
+            textures: Default::default(),
+            images: Default::default(),
         }
     }
 
@@ -167,7 +173,7 @@ impl Builder {
         }
         super::Collected {
             errors: std::mem::take(&mut self.errors),
-            textures: self.textures,
+            textures: self.texture_count,
             scene: self.into_scene(),
         }
     }
@@ -209,6 +215,7 @@ impl Builder {
             integrator: self.integrator,
             path: self.main_path,
             notes: self.notes,
+            textures: self.textures,
         }
     }
 
@@ -344,15 +351,9 @@ impl Builder {
             }
             "MediumInterface" => medium_interface(tok, &loc)?,
             "Texture" => {
-                self.textures += 1;
-                for what in ["a texture name", "a texture type", "a texture class"] {
-                    string_arg(tok, what)?;
-                }
-                read_params(tok)?;
-                return Err(SceneError::at(
-                    &loc,
-                    "unsupported directive \"Texture\" (textures are not supported yet)",
-                ));
+                self.world_only(t.text, &loc)?;
+                self.texture_count += 1;
+                self.texture(tok)?;
             }
             "Material" | "MakeNamedMaterial" | "NamedMaterial" => {
                 self.world_only(t.text, &loc)?;
@@ -502,6 +503,34 @@ impl Builder {
                 }
             },
         }
+        Ok(())
+    }
+
+    /// `Texture "name" "spectrum"|"float" CLASS params`: builds and names the texture.
+    fn texture(&mut self, tok: &mut Tokenizer) -> Result<(), SceneError> {
+        let (name, name_at) = string_arg(tok, "a texture name")?;
+        let (kind, _) = string_arg(tok, "a texture type")?;
+        let (class, class_at) = string_arg(tok, "a texture class")?;
+        let mut params = read_params(tok)?;
+        let mut cx = super::textures::TextureContext {
+            textures: &self.textures,
+            images: &mut self.images,
+            base_dir: &self.base_dir,
+        };
+        let tex = super::textures::make_texture(&kind, &class, &mut params, &class_at, &mut cx)?;
+        params.check_unused()?;
+        let map = if kind == "float" {
+            &mut self.textures.float
+        } else {
+            &mut self.textures.spectrum
+        };
+        if map.contains_key(&name) {
+            return Err(SceneError::at(
+                &name_at,
+                format!("{kind} texture \"{name}\" redefined"),
+            ));
+        }
+        map.insert(name, Arc::new(tex));
         Ok(())
     }
 
