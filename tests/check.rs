@@ -94,30 +94,38 @@ AttributeEnd
 Material "conductor"
 {TRI}
 LightSource "point" "rgb I" [ 1 1 1 ]
+Texture "a" "spectrum" "imagemap" "string filename" "t.png"
+Texture "b" "float" "imagemap" "string filename" "t.png" "string encoding" "linear"
+Texture "c" "spectrum" "imagemap" "string filename" "t.png" "float uscale" 2
 "#
         ),
     );
+    image::RgbImage::new(4, 3)
+        .save(dir.0.join("t.png"))
+        .unwrap();
     let r = check_scene(&path);
     assert!(r.problems.is_empty(), "{:?}", r.problems);
     assert_eq!(
         (r.triangles, r.lights, r.materials, r.textures),
-        (2, 2, 2, 0)
+        (2, 2, 2, 3)
     );
     // By hand from the documented sizes: 2 meshes of 3 vertices (32 B each) and 1 triangle
-    // (12 B); 20 x 10 pixels of 5 RGB f32 images; 1500 photons at 37 B.
+    // (12 B); 20 x 10 pixels of 5 RGB f32 images; 1500 photons at 37 B; the 4x3 image decoded
+    // twice (sRGB for "a" and "c", linear for "b") at 12 B per texel.
     assert_eq!(
         r.memory,
         MemoryEstimate {
             geometry: 2 * (3 * 32 + 12),
             film: 200 * 60,
             photons: 1500 * 37,
+            textures: 2 * 12 * 12,
         }
     );
     let line = r.to_string();
     assert!(
         line.ends_with(
-            "ok.pbrt: ok | 2 triangles, 2 lights, 2 materials, 0 textures | \
-             ~0.1 MB (geometry 0.0, film 0.0, photon maps 0.1)"
+            "ok.pbrt: ok | 2 triangles, 2 lights, 2 materials, 3 textures | \
+             ~0.1 MB (geometry 0.0, film 0.0, photon maps 0.1, textures 0.0)"
         ),
         "{line}"
     );

@@ -23,8 +23,8 @@
 //!   fractional distances, each texel address wrapped by `wrap`: `repeat` (modulo), `clamp`
 //!   (to the edge), `black` (0 outside).
 //! - `encoding` decodes 8- and 16-bit images: `sRGB` (the IEC 61966-2-1 curve; the default for
-//!   PNG files), `linear` (the default for other files), `gamma G` (v^G). Float images (EXR) are
-//!   linear.
+//!   PNG files), `linear` (the default for other files), `gamma G` (v^G). Float images (EXR,
+//!   PFM) are linear.
 //! - `imagemap`: scale times the lookup, then `invert` gives max(0, 1 - v); a float imagemap
 //!   reads the mean of the three channels.
 //! - `checkerboard` (2D): `tex1` where floor(s) + floor(t) is even, else `tex2` (pbrt-v4's

@@ -5,8 +5,8 @@
 //!
 //! ```text
 //! $ photon check scenes/cornell-glass.pbrt bathroom/scene-v4.pbrt
-//! scenes/cornell-glass.pbrt: ok | 2,076 triangles, 1 lights, 4 materials, 0 textures | ~15.9 MB (geometry 0.1, film 3.9, photon maps 14.8)
-//! bathroom/scene-v4.pbrt: 2 problems | 1,016,052 triangles, ...
+//! scenes/cornell-glass.pbrt: ok | 16140 triangles, 1 lights, 5 materials, 0 textures | ~19.2 MB (geometry 0.5, film 3.9, photon maps 14.8, textures 0.0)
+//! bathroom/scene-v4.pbrt: 2 problems | 517308 triangles, ...
 //!   bathroom/scene-v4.pbrt:20:26: imagemap "bathroom/textures/wood.tga": No such file or directory (os error 2)
 //!   bathroom/scene-v4.pbrt:52:5: parameter "texture reflectance": textures are parsed but not yet applied
 //! ```
@@ -19,9 +19,11 @@ use super::ToolError;
 use crate::integrator::RenderSettings;
 use crate::scene::loader::load_collecting;
 use crate::scene::{Scene, SceneError};
+use crate::texture::{Image, Texture};
 use clap::Args;
 use std::fmt;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// `photon check` options.
 #[derive(Args, Debug, Clone)]
@@ -42,6 +44,9 @@ const PIXEL_BYTES: u64 = 5 * 12;
 /// (leaves of 32), rounded up.
 const PHOTON_BYTES: u64 = 20 + 12 + 4 + 1;
 
+/// Bytes per decoded texture texel (linear RGB f32).
+const TEXEL_BYTES: u64 = 12;
+
 /// A rough memory estimate of a render, in bytes. It leaves out the ray-tracing BVH (which
 /// depends on the backend), the irradiance cache and per-thread buffers, and counts one stored
 /// photon per emitted photon (the global map stores one per diffuse bounce, so it can be a
@@ -54,6 +59,8 @@ pub struct MemoryEstimate {
     pub film: u64,
     /// The global and caustic maps at the photon counts the file asks for (or the defaults).
     pub photons: u64,
+    /// The decoded texture images, each counted once however many textures share it.
+    pub textures: u64,
 }
 
 impl MemoryEstimate {
@@ -66,15 +73,28 @@ impl MemoryEstimate {
                 m.positions.len() as u64 * VERTEX_BYTES + m.indices.len() as u64 * TRIANGLE_BYTES
             })
             .sum();
+        let t = &scene.textures;
+        let mut images: Vec<&Arc<Image>> = t
+            .spectrum
+            .values()
+            .chain(t.float.values())
+            .filter_map(|t| match t.as_ref() {
+                Texture::Image(m) => Some(&m.image),
+                _ => None,
+            })
+            .collect();
+        images.sort_by_key(|im| Arc::as_ptr(im));
+        images.dedup_by_key(|im| Arc::as_ptr(im));
         MemoryEstimate {
             geometry,
             film: scene.film.xres as u64 * scene.film.yres as u64 * PIXEL_BYTES,
             photons: photons * PHOTON_BYTES,
+            textures: images.iter().map(|im| im.texels.len() as u64).sum::<u64>() * TEXEL_BYTES,
         }
     }
 
     pub fn total(&self) -> u64 {
-        self.geometry + self.film + self.photons
+        self.geometry + self.film + self.photons + self.textures
     }
 }
 
@@ -83,11 +103,12 @@ impl fmt::Display for MemoryEstimate {
         let mb = |b: u64| b as f64 / 1e6;
         write!(
             f,
-            "~{:.1} MB (geometry {:.1}, film {:.1}, photon maps {:.1})",
+            "~{:.1} MB (geometry {:.1}, film {:.1}, photon maps {:.1}, textures {:.1})",
             mb(self.total()),
             mb(self.geometry),
             mb(self.film),
-            mb(self.photons)
+            mb(self.photons),
+            mb(self.textures)
         )
     }
 }

@@ -14,8 +14,8 @@
 //! Spectrum and float textures are separate namespaces, as in pbrt-v4; a texture-valued
 //! parameter (`tex`, `tex1`, `tex2`, `scale`, `amount`) takes a `"texture"` name defined earlier
 //! or a value (`rgb` for spectrum textures, `float` for float ones and for `scale`/`amount`).
-//! Image files are PNG, TGA, JPEG (through the `image` crate) and EXR (through
-//! [`crate::imageio`]), paths relative to the main file's directory; each (file, encoding) is
+//! Image files are PNG, TGA, JPEG (through the `image` crate), EXR (through
+//! [`crate::imageio`]) and PFM ([`read_pfm`]), paths relative to the main file's directory; each (file, encoding) is
 //! decoded once. Only the `uv` mapping and 2D checkerboards are supported.
 
 use super::params::{ParamSet, ParamType};
@@ -230,13 +230,16 @@ fn image_map(
     })
 }
 
-/// Reads an image file into linear RGB: EXR through [`crate::imageio`], others through the
-/// `image` crate; integer images are decoded with `encoding`, float ones are taken as linear.
+/// Reads an image file into linear RGB: EXR through [`crate::imageio`], PFM here, others
+/// through the `image` crate; integer images are decoded with `encoding`, float ones (EXR,
+/// PFM, float TIFF...) are taken as linear.
 pub fn read_image(path: &Path, encoding: Encoding) -> Result<Image, String> {
-    let exr = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-    if exr {
+    let ext = |x: &str| path.extension().is_some_and(|e| e.eq_ignore_ascii_case(x));
+    if ext("pfm") {
+        let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+        return read_pfm(&bytes);
+    }
+    if ext("exr") {
         let im = crate::imageio::read_exr(path).map_err(|e| e.to_string())?;
         return Ok(Image {
             width: im.width,
@@ -259,4 +262,106 @@ pub fn read_image(path: &Path, encoding: Encoding) -> Result<Image, String> {
             .map(|p| Vec3::new(decode(p[0]), decode(p[1]), decode(p[2])))
             .collect(),
     })
+}
+
+/// Decodes a PFM image (`PF` colour or `Pf` grey; width height; scale, negative for
+/// little-endian; rows of f32 from the bottom up) into rows from the top down.
+pub fn read_pfm(bytes: &[u8]) -> Result<Image, String> {
+    // The header is three whitespace-separated lines: magic, "width height", scale.
+    let mut fields = Vec::new();
+    let mut pos = 0;
+    while fields.len() < 4 {
+        while pos < bytes.len() && bytes[pos].is_ascii_whitespace() {
+            pos += 1;
+        }
+        let start = pos;
+        while pos < bytes.len() && !bytes[pos].is_ascii_whitespace() {
+            pos += 1;
+        }
+        if start == pos {
+            return Err("truncated PFM header".to_string());
+        }
+        fields.push(String::from_utf8_lossy(&bytes[start..pos]).into_owned());
+    }
+    let pixels = &bytes[(pos + 1).min(bytes.len())..];
+    let channels = match fields[0].as_str() {
+        "PF" => 3,
+        "Pf" => 1,
+        other => return Err(format!("not a PFM file (magic \"{other}\")")),
+    };
+    let dim = |s: &str| s.parse::<usize>().ok().filter(|&v| v > 0);
+    let (Some(w), Some(h)) = (dim(&fields[1]), dim(&fields[2])) else {
+        return Err(format!("bad PFM size \"{} {}\"", fields[1], fields[2]));
+    };
+    let scale: f32 = fields[3]
+        .parse()
+        .map_err(|_| format!("bad PFM scale \"{}\"", fields[3]))?;
+    let want = w.checked_mul(h).and_then(|n| n.checked_mul(4 * channels));
+    if want != Some(pixels.len()) {
+        return Err(format!(
+            "PFM of {w}x{h}x{channels} needs {} bytes of pixels, the file has {}",
+            w.saturating_mul(h).saturating_mul(4 * channels),
+            pixels.len()
+        ));
+    }
+    let value = |b: &[u8]| {
+        let b = [b[0], b[1], b[2], b[3]];
+        if scale < 0.0 {
+            f32::from_le_bytes(b)
+        } else {
+            f32::from_be_bytes(b)
+        }
+    };
+    let texels = (0..h)
+        .rev()
+        .flat_map(|row| (0..w).map(move |x| (row * w + x) * channels * 4))
+        .map(|at| {
+            let c = |i: usize| value(&pixels[at + 4 * i..]);
+            match channels {
+                3 => Vec3::new(c(0), c(1), c(2)),
+                _ => Vec3::splat(c(0)),
+            }
+        })
+        .collect();
+    Ok(Image {
+        width: w,
+        height: h,
+        texels,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pfm_rows_run_bottom_up_in_either_byte_order() {
+        // 1x2 colour image: bottom row (1, 2, 3), top row (4, 5, 6).
+        let values = [1.0f32, 2.0, 3.0, 4.0, 5.0, 6.0];
+        let mut le = b"PF\n1 2\n-1.0\n".to_vec();
+        le.extend(values.iter().flat_map(|v| v.to_le_bytes()));
+        let mut be = b"PF\n1 2\n1.0\n".to_vec();
+        be.extend(values.iter().flat_map(|v| v.to_be_bytes()));
+        for bytes in [le, be] {
+            let im = read_pfm(&bytes).unwrap();
+            assert_eq!((im.width, im.height), (1, 2));
+            assert_eq!(
+                im.texels,
+                vec![Vec3::new(4.0, 5.0, 6.0), Vec3::new(1.0, 2.0, 3.0)]
+            );
+        }
+        let mut grey = b"Pf 2 1 -1\n".to_vec();
+        grey.extend([0.5f32, 0.25].iter().flat_map(|v| v.to_le_bytes()));
+        assert_eq!(
+            read_pfm(&grey).unwrap().texels,
+            vec![Vec3::splat(0.5), Vec3::splat(0.25)]
+        );
+        assert!(read_pfm(b"PF\n100000 100000\n-1\n\0\0")
+            .unwrap_err()
+            .contains("needs"));
+        assert!(read_pfm(b"P6\n1 1\n255\n...")
+            .unwrap_err()
+            .contains("magic"));
+        assert!(read_pfm(b"PF\n1").unwrap_err().contains("truncated"));
+    }
 }
