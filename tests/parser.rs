@@ -1808,6 +1808,11 @@ fn every_named_metal_loads_with_and_without_brackets() {
         3,
         &["expected one named spectrum"],
     );
+    assert_src_err(
+        "WorldBegin\nMaterial \"conductor\"\n \"spectrum k\" [ \"spds/Au.k.spd\" ]\n",
+        3,
+        &["spectrum files are not supported (\"spds/Au.k.spd\")"],
+    );
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -146,9 +146,7 @@ fn metal(params: &mut ParamSet, name: &str, default: Vec3) -> Result<Vec3, Scene
     }
     let p = params.get_param(name).expect("just peeked");
     match p.strings() {
-        Some([s]) => {
-            spectra::metal(s).ok_or_else(|| p.err(format!("unsupported named spectrum \"{s}\"")))
-        }
+        Some([s]) => spectra::metal(s).ok_or_else(|| p.err(spectra::unsupported(s))),
         _ => Err(p.err(
             "expected one named spectrum metal-{Ag,Al,Au,Cu,CuZn,MgO,TiO2}-{eta,k} \
              (sampled spectra are not supported)",

@@ -64,6 +64,16 @@ pub fn glass(name: &str) -> Option<f32> {
     GLASSES.iter().find(|(n, _)| *n == name).map(|(_, v)| *v)
 }
 
+/// The error message for a spectrum name that is not in the tables: a spectrum file (pbrt-v4
+/// reads `"spectrum eta" "spds/Au.eta.spd"` from disk) or an unknown name.
+pub fn unsupported(name: &str) -> String {
+    if name.ends_with(".spd") {
+        format!("spectrum files are not supported (\"{name}\"); give RGB or a named spectrum")
+    } else {
+        format!("unsupported named spectrum \"{name}\"")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
