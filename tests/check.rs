@@ -135,6 +135,8 @@ Texture "c" "spectrum" "imagemap" "string filename" "t.png" "float uscale" 2
         "Integrator \"photonmap\" \"float radius\" 1\nWorldBegin\n",
     );
     let r = check_scene(&path);
+    // Nothing specular: no caustic map, the default 200k global photons only.
+    assert_eq!(r.memory.photons, 200_000 * 37);
     assert_eq!(r.problems.len(), 1);
     assert!(r.problems[0]
         .to_string()
