@@ -705,13 +705,23 @@ fn medium_interface(tok: &mut Tokenizer, loc: &Loc) -> Result<(), SceneError> {
     ))
 }
 
-/// Marks every parameter used and lists them for a note (` ("float x", ...)`, or nothing).
-fn mark_all_used(params: &mut ParamSet) -> String {
-    let names: Vec<String> = params.iter().map(|p| p.name.clone()).collect();
-    let decls: Vec<String> = names
+/// Marks used the parameters whose names `keep` accepts and returns their declarations in
+/// file order (for a note).
+fn mark_used(params: &mut ParamSet, keep: impl Fn(&str) -> bool) -> Vec<String> {
+    let names: Vec<String> = params
+        .iter()
+        .map(|p| p.name.clone())
+        .filter(|n| keep(n))
+        .collect();
+    names
         .iter()
         .filter_map(|n| params.get_param(n).map(|p| p.decl()))
-        .collect();
+        .collect()
+}
+
+/// Marks every parameter used and lists them for a note (` ("float x", ...)`, or nothing).
+fn mark_all_used(params: &mut ParamSet) -> String {
+    let decls = mark_used(params, |_| true);
     if decls.is_empty() {
         String::new()
     } else {
@@ -752,15 +762,7 @@ pub const FOREIGN_INTEGRATORS: [(&str, &[&str]); 10] = [
 /// so they are still errors.
 fn ignore_foreign_params(name: &str, params: &mut ParamSet) -> Option<String> {
     let (_, foreign) = FOREIGN_INTEGRATORS.iter().find(|(n, _)| *n == name)?;
-    let names: Vec<String> = params
-        .iter()
-        .map(|p| p.name.clone())
-        .filter(|n| foreign.contains(&n.as_str()))
-        .collect();
-    let ignored: Vec<String> = names
-        .iter()
-        .filter_map(|n| params.get_param(n).map(|p| p.decl()))
-        .collect();
+    let ignored = mark_used(params, |n| foreign.contains(&n));
     if ignored.is_empty() {
         return None;
     }
