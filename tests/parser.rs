@@ -1933,3 +1933,95 @@ fn texture_errors() {
         "{e}"
     );
 }
+
+// ---------------------------------------------------------------------------------------------
+// object instancing
+
+#[test]
+fn object_instances_compose_transforms_and_keep_materials() {
+    // Defined under Translate 0 0 1 with a red material; instanced plain and under Scale 2.
+    let s = ok(r#"WorldBegin
+AttributeBegin
+  Translate 0 0 1
+  ObjectBegin "thing"
+    Material "diffuse" "rgb reflectance" [ 0.8 0 0 ]
+    Shape "trianglemesh" "point3 P" [ 1 0 0  0 1 0  0 0 1 ] "normal N" [ 0 0 1  0 0 1  0 0 1 ]
+    AreaLightSource "diffuse" "rgb L" [ 1 1 1 ]
+    Shape "sphere" "float radius" 0.5
+  ObjectEnd
+AttributeEnd
+Material "diffuse" "rgb reflectance" [ 0 0 0.8 ]
+ObjectInstance "thing"
+Scale 2 2 -2
+ObjectInstance "thing"
+"#);
+    assert_eq!(s.meshes.len(), 4);
+    assert!(s.lights.is_empty(), "area lights in instances are ignored");
+    assert_eq!(s.notes.len(), 1);
+    assert!(s.notes[0].contains(":8:11: area light ignored inside object \"thing\""));
+    let red = Material::Diffuse {
+        reflectance: Vec3::new(0.8, 0.0, 0.0),
+    };
+    assert!(s
+        .meshes
+        .iter()
+        .all(|m| s.materials[m.material as usize] == red));
+    // Plain instance: the definition's transform.
+    assert_vec(s.meshes[0].positions[0], Vec3::new(1.0, 0.0, 1.0), 0.0);
+    assert_eq!(s.meshes[1].sphere, Some((Vec3::new(0.0, 0.0, 1.0), 0.5)));
+    // Scale 2 2 -2 times Translate 0 0 1: (1, 0, 1) -> (2, 0, -2); a mirror, so the triangle
+    // mesh flips its orientation and its normal follows the inverse transpose (0, 0, -1).
+    let tri = &s.meshes[2];
+    assert_vec(tri.positions[0], Vec3::new(2.0, 0.0, -2.0), 0.0);
+    assert_vec(tri.normals.as_ref().unwrap()[0], -Vec3::Z, 1e-6);
+    assert!(tri.flip_normals && !s.meshes[0].flip_normals);
+    // The sphere: centre (0, 0, -2), radius 1, still wound outward.
+    let sphere = &s.meshes[3];
+    assert_eq!(sphere.sphere, Some((Vec3::new(0.0, 0.0, -2.0), 1.0)));
+    for t in 0..sphere.indices.len() as u32 {
+        let [p0, p1, p2] = sphere.triangle(t);
+        let outward = (p0 + p1 + p2) / 3.0 - Vec3::new(0.0, 0.0, -2.0);
+        assert!((p1 - p0).cross(p2 - p0).dot(outward) > 0.0, "triangle {t}");
+    }
+}
+
+#[test]
+fn object_instancing_errors() {
+    assert_src_err(
+        "WorldBegin\n\nObjectInstance \"nope\"\n",
+        3,
+        &["unknown object \"nope\""],
+    );
+    assert_src_err(
+        "WorldBegin\nObjectEnd\n",
+        2,
+        &["ObjectEnd without ObjectBegin"],
+    );
+    assert_src_err(
+        "WorldBegin\nObjectBegin \"a\"\nObjectBegin \"b\"\n",
+        3,
+        &["ObjectBegin inside the definition of \"a\" (line 2)"],
+    );
+    assert_src_err(
+        "WorldBegin\nObjectBegin \"a\"\nObjectEnd\nObjectBegin \"b\"\nObjectInstance \"a\"\n",
+        5,
+        &["ObjectInstance inside the definition of \"b\""],
+    );
+    assert_src_err(
+        "WorldBegin\nObjectBegin \"a\"\nObjectEnd\nObjectBegin \"a\"\nObjectEnd\n",
+        5,
+        &["object \"a\" redefined"],
+    );
+    assert_src_err(
+        "WorldBegin\nObjectBegin \"a\"\n",
+        2,
+        &["ObjectBegin without a matching ObjectEnd"],
+    );
+    assert_src_err(
+        &format!(
+            "WorldBegin\nObjectBegin \"a\"\n{TRI}\nObjectEnd\nScale 1 0 1\nObjectInstance \"a\"\n"
+        ),
+        6,
+        &["object \"a\": the instance transform is singular"],
+    );
+}

@@ -23,6 +23,11 @@
 //! stored ([`super::textures`]), but a material or shape that names one is an error until the
 //! integrators apply them.
 //!
+//! Object instancing (`ObjectBegin "tree"` ... `ObjectEnd`, `ObjectInstance "tree"`) copies
+//! the object's meshes per instance (photon's accelerators hold flat meshes), each moved by the
+//! CTM at `ObjectInstance`; area lights inside a definition are ignored with a note, as pbrt-v4
+//! ignores them.
+//!
 //! Transforms post-multiply the CTM (`CTM = CTM * M`); `Transform`/`ConcatTransform` read 16
 //! numbers column-major as pbrt does (`glam::Mat4::from_cols_array`). The CTM at `Camera` is
 //! camera-from-world; its inverse becomes `world_from_camera` and the named system "camera".
@@ -93,6 +98,10 @@ pub struct Builder {
     texture_count: usize,
     textures: crate::texture::Textures,
     images: super::textures::ImageCache,
+    /// `ObjectBegin` definitions: world-space meshes as defined (CTM at definition).
+    objects: HashMap<String, Vec<Mesh>>,
+    /// The definition being read: its name, meshes and where it began.
+    object: Option<(String, Vec<Mesh>, Loc)>,
 }
 
 impl Builder {
@@ -147,6 +156,8 @@ impl Builder {
             texture_count: 0,
             textures: Default::default(),
             images: Default::default(),
+            objects: HashMap::new(),
+            object: None,
         }
     }
 
@@ -180,6 +191,12 @@ impl Builder {
 
     /// The checks at the end of the main file: every block closed, a world block read.
     fn check_end(&self, end: &Loc) -> Result<(), SceneError> {
+        if let Some((_, _, loc)) = &self.object {
+            return Err(SceneError::at(
+                loc,
+                "ObjectBegin without a matching ObjectEnd",
+            ));
+        }
         if let Some((saved, loc)) = self.stack.last() {
             let what = match saved {
                 Saved::Attribute(_) => "AttributeBegin without a matching AttributeEnd",
@@ -312,6 +329,37 @@ impl Builder {
             "AttributeEnd" => {
                 self.world_only(t.text, &loc)?;
                 self.pop(Saved::Attribute(self.gs.clone()), t.text, &loc)?;
+            }
+            "ObjectBegin" => {
+                self.world_only(t.text, &loc)?;
+                let (name, _) = string_arg(tok, "an object name")?;
+                if let Some((open, _, at)) = &self.object {
+                    return Err(SceneError::at(
+                        &loc,
+                        format!(
+                            "ObjectBegin inside the definition of \"{open}\" (line {})",
+                            at.line
+                        ),
+                    ));
+                }
+                self.stack
+                    .push((Saved::Attribute(self.gs.clone()), loc.clone()));
+                self.object = Some((name, Vec::new(), loc));
+            }
+            "ObjectEnd" => {
+                self.world_only(t.text, &loc)?;
+                let Some((name, meshes, _)) = self.object.take() else {
+                    return Err(SceneError::at(&loc, "ObjectEnd without ObjectBegin"));
+                };
+                self.pop(Saved::Attribute(self.gs.clone()), t.text, &loc)?;
+                if self.objects.insert(name.clone(), meshes).is_some() {
+                    return Err(SceneError::at(&loc, format!("object \"{name}\" redefined")));
+                }
+            }
+            "ObjectInstance" => {
+                self.world_only(t.text, &loc)?;
+                let (name, at) = string_arg(tok, "an object name")?;
+                self.instance(&name, &at)?;
             }
             "ReverseOrientation" => {
                 self.world_only(t.text, &loc)?;
@@ -622,6 +670,16 @@ impl Builder {
             }
         };
         mesh.material = self.material_index();
+        if let Some((name, meshes, _)) = &mut self.object {
+            if self.gs.area.is_some() {
+                self.notes.push(format!(
+                    "{at}: area light ignored inside object \"{name}\" (pbrt-v4 ignores \
+                     area lights in instances)"
+                ));
+            }
+            meshes.push(mesh);
+            return Ok(());
+        }
         if let Some(spec) = &self.gs.area {
             let area = match mesh.sphere {
                 Some((_, r)) => 4.0 * std::f32::consts::PI * r * r,
@@ -636,6 +694,26 @@ impl Builder {
             });
         }
         self.meshes.push(mesh);
+        Ok(())
+    }
+
+    /// `ObjectInstance "name"`: a copy of each mesh of the object, moved by the CTM (so the
+    /// transform is the CTM here times the CTM where the shape was defined, as in pbrt-v4).
+    fn instance(&mut self, name: &str, at: &Loc) -> Result<(), SceneError> {
+        if let Some((open, _, _)) = &self.object {
+            return Err(SceneError::at(
+                at,
+                format!("ObjectInstance inside the definition of \"{open}\""),
+            ));
+        }
+        let Some(meshes) = self.objects.get(name) else {
+            return Err(SceneError::at(at, format!("unknown object \"{name}\"")));
+        };
+        for m in meshes {
+            let moved = shapes::transform_mesh(m, &self.gs.ctm)
+                .map_err(|e| SceneError::at(at, format!("object \"{name}\": {e}")))?;
+            self.meshes.push(moved);
+        }
         Ok(())
     }
 
@@ -774,14 +852,7 @@ fn ignore_foreign_params(name: &str, params: &mut ParamSet) -> Option<String> {
 
 /// The message for a directive we do not read.
 fn unsupported(name: &str) -> String {
-    const PBRT_V4: [&str; 6] = [
-        "Attribute",
-        "ObjectBegin",
-        "ObjectEnd",
-        "ObjectInstance",
-        "ActiveTransform",
-        "TransformTimes",
-    ];
+    const PBRT_V4: [&str; 3] = ["Attribute", "ActiveTransform", "TransformTimes"];
     if name == "WorldEnd" {
         "unsupported directive \"WorldEnd\" (pbrt-v4 has no WorldEnd: is this a pbrt-v3 file?)"
             .to_string()

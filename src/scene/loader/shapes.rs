@@ -210,6 +210,58 @@ pub fn to_world(obj: ObjMesh, ctm: &Mat4, reverse: bool, loc: &Loc) -> Result<Me
     })
 }
 
+/// A world-space mesh moved by `m` (an object instance): positions through `m`, normals
+/// through its inverse transpose; an analytic sphere stays one under a similarity and keeps
+/// its outward winding under a mirror (see the module docs), other meshes flip their
+/// orientation when `m` swaps handedness. The copy's arrays are reserved fallibly.
+pub fn transform_mesh(mesh: &Mesh, m: &Mat4) -> Result<Mesh, String> {
+    let lin = Mat3::from_mat4(*m);
+    if lin.determinant() == 0.0 || !lin.determinant().is_finite() {
+        return Err("the instance transform is singular".to_string());
+    }
+    let oom = |_| "out of memory copying the instance".to_string();
+    let mut positions = Vec::new();
+    positions
+        .try_reserve_exact(mesh.positions.len())
+        .map_err(oom)?;
+    positions.extend(mesh.positions.iter().map(|&p| xform_point(m, p)));
+    let mut indices = Vec::new();
+    indices.try_reserve_exact(mesh.indices.len()).map_err(oom)?;
+    indices.extend_from_slice(&mesh.indices);
+    let normals = match &mesh.normals {
+        Some(nn) => {
+            let nm = lin.inverse().transpose();
+            let mut out = Vec::new();
+            out.try_reserve_exact(nn.len()).map_err(oom)?;
+            out.extend(nn.iter().map(|&n| (nm * n).normalize()));
+            Some(out)
+        }
+        None => None,
+    };
+    let mirror = swaps_handedness(m);
+    let sphere = mesh
+        .sphere
+        .and_then(|(c, r)| similarity_scale(m).map(|s| (xform_point(m, c), r * s)));
+    let flip_normals = if mesh.sphere.is_some() {
+        if mirror {
+            indices.iter_mut().for_each(|t| t.swap(1, 2));
+        }
+        mesh.flip_normals
+    } else {
+        mesh.flip_normals ^ mirror
+    };
+    Ok(Mesh {
+        positions,
+        normals,
+        uvs: mesh.uvs.clone(),
+        indices,
+        material: mesh.material,
+        area_light: None,
+        flip_normals,
+        sphere,
+    })
+}
+
 /// The uniform scale of `m` if it is a similarity (orthogonal linear part times a scale, no
 /// projective row), else `None`.
 pub fn similarity_scale(m: &Mat4) -> Option<f32> {
