@@ -7,6 +7,8 @@
 //! - [`integrator`] renders: [`camera`] makes rays, [`sampling`] gives the sample streams,
 //!   [`bsdf`] and [`light`] do the shading, [`film`] accumulates pixels;
 //! - [`imageio`] writes EXR (OpenEXRCore) and PNG.
+//!
+//! [`texture`] holds the textures the loader parses (not yet used by the integrators).
 pub mod accel;
 pub mod bsdf;
 pub mod camera;
@@ -21,4 +23,5 @@ pub mod photon;
 pub mod resources;
 pub mod sampling;
 pub mod scene;
+pub mod texture;
 pub mod tools;

@@ -2,6 +2,7 @@
 //! is one function in `photon::tools`.
 use clap::{Parser, Subcommand};
 use photon::tools::bench::{self, BenchOptions};
+use photon::tools::check::{self, CheckOptions};
 use photon::tools::compare::{self, CompareOptions};
 use photon::tools::converge::{self, ConvergeOptions};
 use photon::tools::crosscheck::{self, CrosscheckOptions};
@@ -39,6 +40,10 @@ enum Command {
     /// Sum partial images of one render (`render --passes A..B`) into the final image, bit for
     /// bit the same whatever the split.
     Merge(MergeOptions),
+    /// Load scenes without rendering: one line each (triangles, lights, materials, textures,
+    /// memory estimate), then every unsupported feature or error with its file:line:column
+    /// (exit 2 if any scene has one).
+    Check(CheckOptions),
 }
 
 /// Parses the command line; a usage error becomes one line naming the flag (exit 2), help and
@@ -80,6 +85,7 @@ fn main() -> ExitCode {
         Command::Crosscheck(opts) => crosscheck::run(&opts),
         Command::Bench(opts) => bench::run(&opts).map(|()| true),
         Command::Merge(opts) => merge::run(&opts).map(|()| true),
+        Command::Check(opts) => check::run(&opts).map(|()| true),
     };
     // A render stopped by SIGINT/SIGTERM has saved what it finished; report the signal.
     if let Some(sig) = photon::interrupt::requested() {

@@ -270,6 +270,11 @@ pub struct Scene {
     pub integrator: IntegratorDesc,
     /// The file the scene was read from (outputs default next to the working directory).
     pub path: PathBuf,
+    /// The `Texture`s the file defines (parsed; the integrators do not read them yet).
+    pub textures: crate::texture::Textures,
+    /// What the loader accepted but ignores, one line each with its location (`Accelerator`,
+    /// another renderer's integrator parameters, `Option`s): printed before a render.
+    pub notes: Vec<String>,
 }
 
 impl Scene {
@@ -304,6 +309,8 @@ impl Scene {
                 loc: None,
             },
             path: PathBuf::from("generated.pbrt"),
+            notes: Vec::new(),
+            textures: Default::default(),
         }
     }
 

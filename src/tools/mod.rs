@@ -1,5 +1,6 @@
 //! The subcommands of the `photon` binary, one module each, callable from tests too.
 pub mod bench;
+pub mod check;
 pub mod compare;
 pub mod converge;
 pub mod crosscheck;

@@ -303,6 +303,9 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
         scene.materials.len(),
         load_s
     );
+    for note in &scene.notes {
+        println!("note: {note}");
+    }
     println!(
         "accel: {} build {:.3} s{}",
         opts.backend,

@@ -9,36 +9,24 @@
 //! Material "conductor" "rgb reflectance" [ 0.9 0.6 0.3 ]                 # eta 1, k from r
 //! ```
 //!
-//! - conductor `eta`/`k`: RGB, or pbrt's named spectra `metal-{Cu,Au,Ag,Al}-{eta,k}` through
-//!   fixed RGB approximations; default copper. `reflectance` r instead gives pbrt-v4's
+//! - conductor `eta`/`k`: RGB, or pbrt-v4's named spectra `metal-{Ag,Al,Au,Cu,CuZn,MgO,TiO2}-
+//!   {eta,k}` (with or without brackets) as the RGB values of [`super::spectra`]; default
+//!   copper. `reflectance` r instead gives pbrt-v4's
 //!   eta = 1, k = 2 sqrt(r) / sqrt(1 - r) (r clamped to 1 - 1e-7 so k stays finite); giving
 //!   both is an error, as in pbrt-v4.
 //! - conductor roughness: `uroughness`/`vroughness`, each defaulting to `roughness` (0);
 //!   `remaproughness` (default true) maps roughness to Trowbridge-Reitz alpha = sqrt(roughness)
 //!   as pbrt-v4's `RoughnessToAlpha` does.
 //! - dielectric `eta`: a float, or a `spectrum` that is constant (one number, or
-//!   wavelength-value pairs with one value); roughness other than 0 is unsupported.
+//!   wavelength-value pairs with one value) or a named glass (`glass-BK7`, `glass-BAF10`,
+//!   `glass-FK51A`, `glass-LASF9`, `glass-F5`, `glass-F10`, `glass-F11`: its index at 550 nm,
+//!   see [`super::spectra`]); roughness other than 0 is unsupported.
 //! - RGB reflectances must lie in [0, 1] (pbrt-v4 rejects others too).
 
 use super::params::{ParamSet, ParamType};
+use super::spectra::{self, CU_ETA, CU_K};
 use crate::math::Vec3;
 use crate::scene::{Loc, Material, SceneError};
-
-/// pbrt-v4's copper, the conductor default (RGB approximation of `metal-Cu-eta`/`-k`).
-pub const CU_ETA: Vec3 = Vec3::new(0.200438, 0.924033, 1.102212);
-pub const CU_K: Vec3 = Vec3::new(3.912949, 2.452848, 2.142188);
-
-/// RGB approximations of pbrt's named metal spectra.
-const NAMED_METALS: [(&str, Vec3); 8] = [
-    ("metal-Cu-eta", CU_ETA),
-    ("metal-Cu-k", CU_K),
-    ("metal-Au-eta", Vec3::new(0.143119, 0.374957, 1.44248)),
-    ("metal-Au-k", Vec3::new(3.98316, 2.38572, 1.60322)),
-    ("metal-Ag-eta", Vec3::new(0.155265, 0.116723, 0.138342)),
-    ("metal-Ag-k", Vec3::new(4.82835, 3.12225, 2.14696)),
-    ("metal-Al-eta", Vec3::new(1.65746, 0.880369, 0.521229)),
-    ("metal-Al-k", Vec3::new(9.22387, 6.26952, 4.837)),
-];
 
 /// Builds material `ty` from `params` (all of which must be used); `loc` is where the type is
 /// named.
@@ -94,16 +82,19 @@ fn dielectric(params: &mut ParamSet) -> Result<Material, SceneError> {
     Ok(Material::Dielectric { eta })
 }
 
-/// The value of a `spectrum` parameter that is one number or constant wavelength-value pairs.
+/// The value of a `spectrum` parameter that is one number, constant wavelength-value pairs or
+/// a named glass (its index at 550 nm).
 fn constant_spectrum(params: &mut ParamSet, name: &str) -> Result<f32, SceneError> {
     let p = params.get_param(name).expect("caller checked it exists");
     let Some(v) = p.floats() else {
-        let what = p
-            .strings()
-            .and_then(|s| s.first())
-            .cloned()
-            .unwrap_or_default();
-        return Err(p.err(format!("named spectrum \"{what}\" is not supported here")));
+        return match p.strings() {
+            Some([s]) => spectra::glass(s).ok_or_else(|| {
+                p.err(format!(
+                    "named spectrum \"{s}\" is not supported here (a glass-* name is)"
+                ))
+            }),
+            _ => Err(p.err("expected one named spectrum")),
+        };
     };
     match v {
         [x] => Ok(*x),
@@ -155,11 +146,11 @@ fn metal(params: &mut ParamSet, name: &str, default: Vec3) -> Result<Vec3, Scene
     }
     let p = params.get_param(name).expect("just peeked");
     match p.strings() {
-        Some([s]) => match NAMED_METALS.iter().find(|(n, _)| n == s) {
-            Some((_, rgb)) => Ok(*rgb),
-            None => Err(p.err(format!("unsupported named spectrum \"{s}\""))),
-        },
-        _ => Err(p.err("only the named spectra metal-{Cu,Au,Ag,Al}-{eta,k} are supported")),
+        Some([s]) => spectra::metal(s).ok_or_else(|| p.err(spectra::unsupported(s))),
+        _ => Err(p.err(
+            "expected one named spectrum metal-{Ag,Al,Au,Cu,CuZn,MgO,TiO2}-{eta,k} \
+             (sampled spectra are not supported)",
+        )),
     }
 }
 

@@ -15,13 +15,17 @@
 //! ```
 //!
 //! Modules: [`tokenizer`] (tokens with line and column), [`params`] (parameter lists with
-//! used-tracking), [`parser`] (directives and graphics state), [`materials`], [`lights`],
-//! [`shapes`] (meshes, spheres) and [`ply`] (PLY files).
+//! used-tracking), [`parser`] (directives and graphics state), [`materials`], [`spectra`]
+//! (pbrt-v4's named spectra as RGB), [`textures`] (`Texture` directives, image files),
+//! [`lights`], [`shapes`] (meshes, spheres, disks, cylinders) and [`ply`] (PLY files).
 //!
 //! Whatever the scene says that photon would not render as written is an error, one line,
 //! `file:line:column: what is wrong`: an unknown or unsupported directive or type, a parameter
 //! that is given but never read, a wrong type or count of values, a missing or malformed file.
 //! See the README for the supported subset.
+//!
+//! [`load`] stops at the first error; [`load_collecting`] (for `photon check`) records each
+//! error, skips the directive it is in and reads on, so one pass lists every problem.
 pub mod extent;
 pub mod lights;
 pub mod materials;
@@ -29,6 +33,8 @@ pub mod params;
 pub mod parser;
 pub mod ply;
 pub mod shapes;
+pub mod spectra;
+pub mod textures;
 pub mod tokenizer;
 
 use super::{Scene, SceneError};
@@ -73,4 +79,21 @@ pub fn read_capped(path: &Path, cap: u64) -> std::io::Result<Vec<u8>> {
 /// Loads a pbrt-v4 scene file (and everything it includes) into a [`Scene`].
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
     parser::Builder::new(path).run()
+}
+
+/// What [`load_collecting`] found: the scene as far as it could be read, every error in file
+/// order, and how many `Texture` directives there were.
+#[derive(Debug)]
+pub struct Collected {
+    pub scene: Scene,
+    pub errors: Vec<SceneError>,
+    pub textures: usize,
+}
+
+/// Loads a scene the way [`load`] does, but records every error and goes on past it: a
+/// directive with an error is skipped (a material that fails becomes the default diffuse so
+/// that later references to it do not fail too). An error that leaves the rest of a file
+/// unreadable (an unterminated string) ends that file.
+pub fn load_collecting(path: &Path) -> Collected {
+    parser::Builder::new(path).collecting().run_collecting()
 }

@@ -15,6 +15,10 @@
 use crate::math::{Vec2, Vec3};
 use crate::scene::{Loc, SceneError};
 
+/// What a texture-valued material or shape parameter is told: the texture was read, but the
+/// integrators cannot use it yet, so the scene would not render as written.
+pub const TEXTURES_NOT_APPLIED: &str = "textures are parsed but not yet applied";
+
 /// The type of a parameter, as declared by the first word of `"type name"` (aliases folded:
 /// `point` is `point3`, `vector` is `vector3`, `normal3` is `normal`, `color` is `rgb`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -227,9 +231,11 @@ impl ParamSet {
         self.peek(name).map(|p| &p.loc)
     }
 
-    /// The first parameter nobody read, as an error at its location.
+    /// The first parameter nobody read, as an error at its location (a texture-valued one says
+    /// that textures are not applied yet: `"texture displacement"`, `"texture alpha"`).
     pub fn check_unused(&self) -> Result<(), SceneError> {
         match self.params.iter().find(|p| !p.used) {
+            Some(p) if p.ty == ParamType::Texture => Err(p.err(TEXTURES_NOT_APPLIED)),
             Some(p) => Err(SceneError::at(
                 &p.loc,
                 format!("unused parameter {}", p.decl()),
@@ -248,7 +254,7 @@ impl ParamSet {
         }
         let want: Vec<&str> = types.iter().map(|t| t.name()).collect();
         let why = match p.ty {
-            ParamType::Texture => "textures are not supported".to_string(),
+            ParamType::Texture => TEXTURES_NOT_APPLIED.to_string(),
             ParamType::Blackbody => "blackbody spectra are not supported".to_string(),
             ParamType::Spectrum if types.contains(&ParamType::Rgb) => {
                 "spectrum values are not supported here (give an rgb)".to_string()

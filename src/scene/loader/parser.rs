@@ -14,6 +14,20 @@
 //! Include "more.pbrt"                   # relative to the main file's directory
 //! ```
 //!
+//! Accepted and ignored, with a note line in [`Scene::notes`]: `Accelerator` (any type and
+//! parameters; photon builds its own BVH), the parameters of another renderer's `Integrator`
+//! that photon does not implement (`Integrator "sppm" "float radius" 0.01`: see
+//! [`FOREIGN_INTEGRATORS`]), the `Option`s that cannot change photon's image. `ColorSpace
+//! "srgb"` is photon's own space; other color spaces, participating media (`MakeNamedMedium`,
+//! a non-empty `MediumInterface`), curves and hair are errors. `Texture`s are parsed and
+//! stored ([`super::textures`]), but a material or shape that names one is an error until the
+//! integrators apply them.
+//!
+//! Object instancing (`ObjectBegin "tree"` ... `ObjectEnd`, `ObjectInstance "tree"`) copies
+//! the object's meshes per instance (photon's accelerators hold flat meshes), each moved by the
+//! CTM at `ObjectInstance`; area lights inside a definition are ignored with a note, as pbrt-v4
+//! ignores them.
+//!
 //! Transforms post-multiply the CTM (`CTM = CTM * M`); `Transform`/`ConcatTransform` read 16
 //! numbers column-major as pbrt does (`glam::Mat4::from_cols_array`). The CTM at `Camera` is
 //! camera-from-world; its inverse becomes `world_from_camera` and the named system "camera".
@@ -80,6 +94,18 @@ pub struct Builder {
     filter: FilterDesc,
     sampler: SamplerDesc,
     integrator: IntegratorDesc,
+    /// Record errors and read on ([`super::load_collecting`]) instead of stopping.
+    collect: bool,
+    errors: Vec<SceneError>,
+    notes: Vec<String>,
+    /// How many `Texture` directives were read.
+    texture_count: usize,
+    textures: crate::texture::Textures,
+    images: super::textures::ImageCache,
+    /// `ObjectBegin` definitions: world-space meshes as defined (CTM at definition).
+    objects: HashMap<String, Vec<Mesh>>,
+    /// The definition being read: its name, meshes and where it began.
+    object: Option<(String, Vec<Mesh>, Loc)>,
 }
 
 impl Builder {
@@ -130,13 +156,53 @@ impl Builder {
                 params: ParamSet::new(),
                 loc: None,
             },
+            collect: false,
+            errors: Vec::new(),
+            notes: Vec::new(),
+            texture_count: 0,
+            textures: Default::default(),
+            images: Default::default(),
+            objects: HashMap::new(),
+            object: None,
         }
+    }
+
+    /// Records every error and reads on (see [`super::load_collecting`]).
+    pub fn collecting(mut self) -> Self {
+        self.collect = true;
+        self
     }
 
     /// Reads the main file and everything it includes, and returns the scene.
     pub fn run(mut self) -> Result<Scene, SceneError> {
         let main = self.main_path.clone();
         let end = self.parse_file(&main, 0, None)?;
+        self.check_end(&end)?;
+        Ok(self.into_scene())
+    }
+
+    /// Reads everything, recording each error (the builder must be [`Self::collecting`]).
+    pub fn run_collecting(mut self) -> super::Collected {
+        let main = self.main_path.clone();
+        let end = self.parse_file(&main, 0, None);
+        if let Err(e) = end.and_then(|end| self.check_end(&end)) {
+            self.errors.push(e);
+        }
+        super::Collected {
+            errors: std::mem::take(&mut self.errors),
+            textures: self.texture_count,
+            scene: self.into_scene(),
+        }
+    }
+
+    /// The checks at the end of the main file: every block closed, a world block read.
+    fn check_end(&mut self, end: &Loc) -> Result<(), SceneError> {
+        if let Some((_, _, loc)) = &self.object {
+            return Err(SceneError::at(
+                loc,
+                "ObjectBegin without a matching ObjectEnd",
+            ));
+        }
         if let Some((saved, loc)) = self.stack.last() {
             let what = match saved {
                 Saved::Attribute(_) => "AttributeBegin without a matching AttributeEnd",
@@ -145,11 +211,24 @@ impl Builder {
             return Err(SceneError::at(loc, what));
         }
         if !self.world_begun {
-            return Err(SceneError::at(&end, "the scene has no WorldBegin"));
+            return Err(SceneError::at(end, "the scene has no WorldBegin"));
         }
         self.tessellate_spheres();
-        super::extent::check(&self.meshes, &self.mesh_locs)?;
-        Ok(Scene {
+        super::extent::check(&self.meshes, &self.mesh_locs)
+    }
+
+    /// In collect mode records `e` and returns `Ok`; otherwise returns `Err(e)`.
+    fn recover(&mut self, e: SceneError) -> Result<(), SceneError> {
+        if !self.collect {
+            return Err(e);
+        }
+        self.errors.push(e);
+        Ok(())
+    }
+
+    /// The scene read so far.
+    fn into_scene(self) -> Scene {
+        Scene {
             meshes: self.meshes,
             materials: self.materials,
             lights: self.lights,
@@ -159,7 +238,9 @@ impl Builder {
             sampler: self.sampler,
             integrator: self.integrator,
             path: self.main_path,
-        })
+            notes: self.notes,
+            textures: self.textures,
+        }
     }
 
     /// Parses one file; `from` is the `Include` that named it. Returns the end-of-file loc.
@@ -179,7 +260,16 @@ impl Builder {
         let text = String::from_utf8(bytes).map_err(|e| not_utf8(&file, e))?;
         let mut tok = Tokenizer::new(&text, file);
         let mut first = true;
-        while let Some(t) = tok.next()? {
+        loop {
+            let t = match tok.next() {
+                Ok(Some(t)) => t,
+                Ok(None) => break,
+                Err(e) => {
+                    // The rest of the file cannot be tokenized.
+                    self.recover(e)?;
+                    break;
+                }
+            };
             if first && !(t.kind == TokKind::Word && is_directive(t.text)) {
                 // Do not quote a file that is not a scene (an Include of /etc/passwd).
                 return Err(tok.err(
@@ -188,10 +278,21 @@ impl Builder {
                 ));
             }
             first = false;
-            if t.kind != TokKind::Word {
-                return Err(tok.err(&t, format!("expected a directive, found {}", t.describe())));
+            let done = if t.kind == TokKind::Word {
+                self.directive(&t, &mut tok, depth)
+            } else {
+                Err(tok.err(&t, format!("expected a directive, found {}", t.describe())))
+            };
+            if let Err(e) = done {
+                self.recover(e)?;
+                if let Err(e) = skip_arguments(&mut tok) {
+                    // The rest of the file cannot be tokenized (often the error just recorded).
+                    if self.errors.last() != Some(&e) {
+                        self.recover(e)?;
+                    }
+                    break;
+                }
             }
-            self.directive(&t, &mut tok, depth)?;
         }
         Ok(tok.end_loc())
     }
@@ -267,6 +368,37 @@ impl Builder {
                 self.world_only(t.text, &loc)?;
                 self.pop(Saved::Attribute(self.gs.clone()), t.text, &loc)?;
             }
+            "ObjectBegin" => {
+                self.world_only(t.text, &loc)?;
+                let (name, _) = string_arg(tok, "an object name")?;
+                if let Some((open, _, at)) = &self.object {
+                    return Err(SceneError::at(
+                        &loc,
+                        format!(
+                            "ObjectBegin inside the definition of \"{open}\" (line {})",
+                            at.line
+                        ),
+                    ));
+                }
+                self.stack
+                    .push((Saved::Attribute(self.gs.clone()), loc.clone()));
+                self.object = Some((name, Vec::new(), loc));
+            }
+            "ObjectEnd" => {
+                self.world_only(t.text, &loc)?;
+                let Some((name, meshes, _)) = self.object.take() else {
+                    return Err(SceneError::at(&loc, "ObjectEnd without ObjectBegin"));
+                };
+                self.pop(Saved::Attribute(self.gs.clone()), t.text, &loc)?;
+                if self.objects.insert(name.clone(), meshes).is_some() {
+                    return Err(SceneError::at(&loc, format!("object \"{name}\" redefined")));
+                }
+            }
+            "ObjectInstance" => {
+                self.world_only(t.text, &loc)?;
+                let (name, at) = string_arg(tok, "an object name")?;
+                self.instance(&name, &at)?;
+            }
             "ReverseOrientation" => {
                 self.world_only(t.text, &loc)?;
                 self.gs.reverse = !self.gs.reverse;
@@ -280,8 +412,34 @@ impl Builder {
                 self.named_coords
                     .insert("world".to_string(), Mat4::IDENTITY);
             }
-            "Camera" | "Film" | "Sampler" | "Integrator" | "PixelFilter" => {
+            "Camera" | "Film" | "Sampler" | "Integrator" | "PixelFilter" | "Accelerator" => {
                 self.option(t.text, tok, &loc)?
+            }
+            "ColorSpace" => {
+                let (name, at) = string_arg(tok, "a color space name")?;
+                if name != "srgb" {
+                    return Err(SceneError::at(
+                        &at,
+                        format!(
+                            "unsupported color space \"{name}\" (photon renders in linear sRGB)"
+                        ),
+                    ));
+                }
+            }
+            "Option" => self.pbrt_option(tok)?,
+            "MakeNamedMedium" => {
+                string_arg(tok, "a medium name")?;
+                read_params(tok)?;
+                return Err(SceneError::at(
+                    &loc,
+                    "participating media are not supported (MakeNamedMedium)",
+                ));
+            }
+            "MediumInterface" => medium_interface(tok, &loc)?,
+            "Texture" => {
+                self.world_only(t.text, &loc)?;
+                self.texture_count += 1;
+                self.texture(tok)?;
             }
             "Material" | "MakeNamedMaterial" | "NamedMaterial" => {
                 self.world_only(t.text, &loc)?;
@@ -374,8 +532,19 @@ impl Builder {
             "Film" => self.film = film(&ty, &mut params, &at)?,
             "Sampler" => self.sampler = sampler(&ty, &mut params, &at)?,
             "PixelFilter" => self.filter = filter(&ty, &mut params, &at)?,
+            "Accelerator" => {
+                let given = mark_all_used(&mut params);
+                self.notes.push(format!(
+                    "{loc}: Accelerator \"{ty}\"{given} ignored: photon builds its own BVH \
+                     (--backend embree|obvhs)"
+                ));
+            }
             _ => {
-                // Integrator: kept as written for the integrator to read.
+                // Integrator: kept as written for the integrator to read, less the parameters
+                // of another renderer's integrator that photon does not implement.
+                if let Some(note) = ignore_foreign_params(&ty, &mut params) {
+                    self.notes.push(format!("{loc}: {note}"));
+                }
                 self.integrator = IntegratorDesc {
                     name: ty,
                     params,
@@ -393,7 +562,7 @@ impl Builder {
         match what {
             "Material" => {
                 let mut params = read_params(tok)?;
-                let m = make_material(&name, &mut params, &at)?;
+                let m = self.or_default(make_material(&name, &mut params, &at))?;
                 self.materials.push(m);
                 self.gs.material = MatRef::Index(self.materials.len() as u32 - 1);
             }
@@ -405,14 +574,7 @@ impl Builder {
                         format!("named material \"{name}\" redefined"),
                     ));
                 }
-                let Some(ty) = params.get_string_opt("type")? else {
-                    return Err(SceneError::at(
-                        &at,
-                        "MakeNamedMaterial needs \"string type\"",
-                    ));
-                };
-                let ty_loc = params.loc("type").cloned().unwrap_or_else(|| at.clone());
-                let m = make_material(&ty, &mut params, &ty_loc)?;
+                let m = self.or_default(named_material(&mut params, &at))?;
                 self.materials.push(m);
                 self.named_materials
                     .insert(name, self.materials.len() as u32 - 1);
@@ -426,6 +588,76 @@ impl Builder {
                     ))
                 }
             },
+        }
+        Ok(())
+    }
+
+    /// `Texture "name" "spectrum"|"float" CLASS params`: builds and names the texture.
+    fn texture(&mut self, tok: &mut Tokenizer) -> Result<(), SceneError> {
+        let (name, name_at) = string_arg(tok, "a texture name")?;
+        let (kind, _) = string_arg(tok, "a texture type")?;
+        let (class, class_at) = string_arg(tok, "a texture class")?;
+        let mut params = read_params(tok)?;
+        let mut cx = super::textures::TextureContext {
+            textures: &self.textures,
+            images: &mut self.images,
+            base_dir: &self.base_dir,
+        };
+        let tex = super::textures::make_texture(&kind, &class, &mut params, &class_at, &mut cx)?;
+        params.check_unused()?;
+        let map = if kind == "float" {
+            &mut self.textures.float
+        } else {
+            &mut self.textures.spectrum
+        };
+        if map.contains_key(&name) {
+            return Err(SceneError::at(
+                &name_at,
+                format!("{kind} texture \"{name}\" redefined"),
+            ));
+        }
+        map.insert(name, Arc::new(tex));
+        Ok(())
+    }
+
+    /// A material that failed to build: in collect mode the error is recorded and the default
+    /// diffuse stands in, so that later references to the material do not fail too.
+    fn or_default(&mut self, m: Result<Material, SceneError>) -> Result<Material, SceneError> {
+        m.or_else(|e| {
+            self.recover(e)?;
+            Ok(Material::Diffuse {
+                reflectance: Vec3::splat(0.5),
+            })
+        })
+    }
+
+    /// `Option "type name" value`: the options that cannot change photon's image are accepted
+    /// with a note; the others are errors.
+    fn pbrt_option(&mut self, tok: &mut Tokenizer) -> Result<(), SceneError> {
+        const IGNORED: [&str; 8] = [
+            "disablewavelengthjitter",
+            "disabletexturefiltering",
+            "msereferenceimage",
+            "msereferenceout",
+            "pixelstats",
+            "rendercoordsys",
+            "seed",
+            "wavefront",
+        ];
+        let mut params = read_params(tok)?;
+        let names: Vec<String> = params.iter().map(|p| p.name.clone()).collect();
+        for name in &names {
+            if !IGNORED.contains(&name.as_str()) {
+                let p = params.peek(name).expect("listed");
+                return Err(p.err("unsupported Option"));
+            }
+            let p = params.get_param(name).expect("listed");
+            let note = format!(
+                "{}: Option {} ignored (it does not change photon's image)",
+                p.loc,
+                p.decl()
+            );
+            self.notes.push(note);
         }
         Ok(())
     }
@@ -449,10 +681,30 @@ impl Builder {
                 shapes::to_world(obj, &gs.ctm, gs.reverse, &at)?
             }
             "sphere" => {
-                let (spec, m) = shapes::sphere(&mut params, &at, &gs.ctm, gs.reverse)?;
+                let (spec, mut m) = shapes::sphere(&mut params, &at, &gs.ctm, gs.reverse)?;
                 params.check_unused()?;
-                self.spheres.push((self.meshes.len(), spec));
+                if self.object.is_some() {
+                    // An object's sphere may be instanced anywhere: the full tessellation.
+                    shapes::tessellate(&spec, shapes::SPHERE_RINGS, &mut m);
+                } else {
+                    self.spheres.push((self.meshes.len(), spec));
+                }
                 m
+            }
+            "disk" | "cylinder" => {
+                let obj = if ty == "disk" {
+                    shapes::disk(&mut params, &at)?
+                } else {
+                    shapes::cylinder(&mut params, &at)?
+                };
+                params.check_unused()?;
+                shapes::to_world(obj, &gs.ctm, gs.reverse, &at)?
+            }
+            "curve" => {
+                return Err(SceneError::at(
+                    &at,
+                    "unsupported shape type \"curve\" (curves and hair are not supported)",
+                ))
             }
             other => {
                 return Err(SceneError::at(
@@ -463,6 +715,16 @@ impl Builder {
         };
         super::extent::check_shape(&mesh, &at)?;
         mesh.material = self.material_index();
+        if let Some((name, meshes, _)) = &mut self.object {
+            if self.gs.area.is_some() {
+                self.notes.push(format!(
+                    "{at}: area light ignored inside object \"{name}\" (pbrt-v4 ignores \
+                     area lights in instances)"
+                ));
+            }
+            meshes.push(mesh);
+            return Ok(());
+        }
         if let Some(spec) = &self.gs.area {
             let area = match mesh.sphere {
                 Some((_, r)) => 4.0 * std::f64::consts::PI * (r as f64).powi(2),
@@ -483,6 +745,27 @@ impl Builder {
         Ok(())
     }
 
+    /// `ObjectInstance "name"`: a copy of each mesh of the object, moved by the CTM (so the
+    /// transform is the CTM here times the CTM where the shape was defined, as in pbrt-v4).
+    fn instance(&mut self, name: &str, at: &Loc) -> Result<(), SceneError> {
+        if let Some((open, _, _)) = &self.object {
+            return Err(SceneError::at(
+                at,
+                format!("ObjectInstance inside the definition of \"{open}\""),
+            ));
+        }
+        let Some(meshes) = self.objects.get(name) else {
+            return Err(SceneError::at(at, format!("unknown object \"{name}\"")));
+        };
+        for m in meshes {
+            let moved = shapes::transform_mesh(m, &self.gs.ctm)
+                .map_err(|e| SceneError::at(at, format!("object \"{name}\": {e}")))?;
+            self.meshes.push(moved);
+            self.mesh_locs.push(at.clone());
+        }
+        Ok(())
+    }
+
     /// The current material's index, adding the default diffuse 0.5 on first use.
     fn material_index(&mut self) -> u32 {
         match self.gs.material {
@@ -498,7 +781,7 @@ impl Builder {
 }
 
 /// The directives this parser reads.
-const DIRECTIVES: [&str; 27] = [
+const DIRECTIVES: [&str; 37] = [
     "Identity",
     "Translate",
     "Scale",
@@ -526,11 +809,7 @@ const DIRECTIVES: [&str; 27] = [
     "AreaLightSource",
     "LightSource",
     "Include",
-];
-
-/// pbrt-v4 directives photon knows but does not render.
-const PBRT_V4_UNSUPPORTED: [&str; 11] = [
-    "Attribute",
+    "Import",
     "Texture",
     "ObjectBegin",
     "ObjectEnd",
@@ -539,15 +818,15 @@ const PBRT_V4_UNSUPPORTED: [&str; 11] = [
     "MediumInterface",
     "ColorSpace",
     "Option",
-    "ActiveTransform",
-    "TransformTimes",
+    "Accelerator",
 ];
+
+/// pbrt-v4 directives photon knows but does not render.
+const PBRT_V4_UNSUPPORTED: [&str; 3] = ["Attribute", "ActiveTransform", "TransformTimes"];
 
 /// Whether `name` is a pbrt directive (read or not): how a scene file starts.
 fn is_directive(name: &str) -> bool {
-    DIRECTIVES.contains(&name)
-        || PBRT_V4_UNSUPPORTED.contains(&name)
-        || matches!(name, "Import" | "WorldEnd")
+    DIRECTIVES.contains(&name) || PBRT_V4_UNSUPPORTED.contains(&name) || name == "WorldEnd"
 }
 
 /// The error for a file that is not UTF-8: the location of the first bad byte.
@@ -575,6 +854,125 @@ fn not_utf8(file: &Arc<PathBuf>, e: std::string::FromUtf8Error) -> SceneError {
             bytes[good]
         ),
     )
+}
+
+/// `MakeNamedMaterial`'s material, from its `"string type"`.
+fn named_material(params: &mut ParamSet, at: &Loc) -> Result<Material, SceneError> {
+    let Some(ty) = params.get_string_opt("type")? else {
+        return Err(SceneError::at(
+            at,
+            "MakeNamedMaterial needs \"string type\"",
+        ));
+    };
+    let ty_loc = params.loc("type").cloned().unwrap_or_else(|| at.clone());
+    make_material(&ty, params, &ty_loc)
+}
+
+/// Skips what is left of a directive that failed: everything up to the next directive word.
+fn skip_arguments(tok: &mut Tokenizer) -> Result<(), SceneError> {
+    while let Some(t) = tok.peek()? {
+        if t.kind == TokKind::Word && !matches!(t.text, "true" | "false") {
+            break;
+        }
+        tok.next()?;
+    }
+    Ok(())
+}
+
+/// `MediumInterface "inside" "outside"` (or one name for both): empty names (vacuum, pbrt-v4's
+/// default) are accepted, a named medium is an error.
+fn medium_interface(tok: &mut Tokenizer, loc: &Loc) -> Result<(), SceneError> {
+    let mut names = Vec::new();
+    while let Some(t) = tok.peek()? {
+        if t.kind != TokKind::Str || names.len() == 2 {
+            break;
+        }
+        tok.next()?;
+        names.push(unescape(t.text).into_owned());
+    }
+    if names.is_empty() {
+        return Err(SceneError::at(
+            loc,
+            "MediumInterface needs one or two medium names",
+        ));
+    }
+    if names.iter().all(String::is_empty) {
+        return Ok(());
+    }
+    Err(SceneError::at(
+        loc,
+        format!(
+            "participating media are not supported (MediumInterface \"{}\")",
+            names.join("\" \"")
+        ),
+    ))
+}
+
+/// Marks used the parameters whose names `keep` accepts and returns their declarations in
+/// file order (for a note).
+fn mark_used(params: &mut ParamSet, keep: impl Fn(&str) -> bool) -> Vec<String> {
+    let names: Vec<String> = params
+        .iter()
+        .map(|p| p.name.clone())
+        .filter(|n| keep(n))
+        .collect();
+    names
+        .iter()
+        .filter_map(|n| params.get_param(n).map(|p| p.decl()))
+        .collect()
+}
+
+/// Marks every parameter used and lists them for a note (` ("float x", ...)`, or nothing).
+fn mark_all_used(params: &mut ParamSet) -> String {
+    let decls = mark_used(params, |_| true);
+    if decls.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", decls.join(", "))
+    }
+}
+
+/// pbrt-v4's integrators other than photon's own, with their parameters besides `maxdepth`
+/// (which photon reads whatever the integrator's name), from pbrt-v4's `integrators.cpp`.
+pub const FOREIGN_INTEGRATORS: [(&str, &[&str]); 10] = [
+    ("path", &["regularize", "lightsampler"]),
+    ("volpath", &["regularize", "lightsampler"]),
+    (
+        "bdpt",
+        &["regularize", "visualizestrategies", "visualizeweights"],
+    ),
+    (
+        "mlt",
+        &[
+            "regularize",
+            "bootstrapsamples",
+            "chains",
+            "mutationsperpixel",
+            "largestepprobability",
+            "sigma",
+        ],
+    ),
+    ("sppm", &["photonsperiteration", "radius", "seed"]),
+    ("simplepath", &["samplelights", "samplebsdf"]),
+    ("simplevolpath", &[]),
+    ("lightpath", &[]),
+    ("randomwalk", &[]),
+    ("ambientocclusion", &["cossample", "maxdistance"]),
+];
+
+/// Marks used the parameters of pbrt-v4 integrator `name` that photon does not implement and
+/// returns the note listing them in file order (`None` when there were none). Other parameters stay unread,
+/// so they are still errors.
+fn ignore_foreign_params(name: &str, params: &mut ParamSet) -> Option<String> {
+    let (_, foreign) = FOREIGN_INTEGRATORS.iter().find(|(n, _)| *n == name)?;
+    let ignored = mark_used(params, |n| foreign.contains(&n));
+    if ignored.is_empty() {
+        return None;
+    }
+    Some(format!(
+        "Integrator \"{name}\": photon renders with its own integrator and ignores {}",
+        ignored.join(", ")
+    ))
 }
 
 /// The message for a directive we do not read.
@@ -732,17 +1130,21 @@ fn read_values(
     decl: &Token,
 ) -> Result<ParamValues, SceneError> {
     let first = tok.next_required("a parameter value")?;
-    let mut vals = Values::new(ty, &first);
     if first.kind != TokKind::Open {
+        let mut vals = Values::new(ty, &first);
         vals.push(tok, &first, decl)?;
         return Ok(vals.finish());
     }
+    let mut vals: Option<Values> = None;
     loop {
         let t = tok.next_required("\"]\"")?;
         match t.kind {
-            TokKind::Close => return Ok(vals.finish()),
+            TokKind::Close => return Ok(vals.unwrap_or_else(|| Values::new(ty, &first)).finish()),
             TokKind::Open => return Err(tok.err(&t, "\"[\" inside a parameter list")),
-            _ => vals.push(tok, &t, decl)?,
+            // The storage is chosen by the first value, so a named spectrum may be bracketed.
+            _ => vals
+                .get_or_insert_with(|| Values::new(ty, &t))
+                .push(tok, &t, decl)?,
         }
     }
 }
@@ -754,7 +1156,7 @@ struct Values {
 }
 
 impl Values {
-    /// Chooses the storage for `ty` (spectra: strings if the first value is quoted).
+    /// Chooses the storage for `ty` from its first value (spectra: strings if it is quoted).
     fn new(ty: ParamType, first: &Token) -> Self {
         let out = match ty {
             ParamType::Integer => ParamValues::Ints(Vec::new()),

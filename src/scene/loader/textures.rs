@@ -1,0 +1,367 @@
+//! `Texture "name" "spectrum"|"float" CLASS params`: builds a [`Texture`] (see
+//! [`crate::texture`] for the classes and lookup rules) and reads image files once each.
+//!
+//! ```text
+//! Texture "wood" "spectrum" "imagemap" "string filename" "textures/wood.png"
+//!     "string wrap" "clamp" "float uscale" 4 "float vscale" 4
+//! Texture "mask" "float" "imagemap" "string filename" "mask.tga" "string encoding" "gamma 2.2"
+//! Texture "checks" "spectrum" "checkerboard" "rgb tex1" [ 1 1 1 ] "texture tex2" "wood"
+//! Texture "dim" "spectrum" "scale" "texture tex" "wood" "texture scale" "mask"
+//! Texture "m" "spectrum" "mix" "texture tex1" "wood" "rgb tex2" [ 0 0 1 ] "float amount" 0.3
+//! Texture "one" "float" "constant" "float value" 1
+//! ```
+//!
+//! Spectrum and float textures are separate namespaces, as in pbrt-v4; a texture-valued
+//! parameter (`tex`, `tex1`, `tex2`, `scale`, `amount`) takes a `"texture"` name defined earlier
+//! or a value (`rgb` for spectrum textures, `float` for float ones and for `scale`/`amount`).
+//! Image files are PNG, TGA, JPEG (through the `image` crate), EXR (through
+//! [`crate::imageio`]) and PFM ([`read_pfm`]), paths relative to the main file's directory; each (file, encoding) is
+//! decoded once. Only the `uv` mapping and 2D checkerboards are supported.
+
+use super::params::{ParamSet, ParamType};
+use crate::math::{Vec2, Vec3};
+use crate::scene::{Loc, SceneError};
+use crate::texture::{Encoding, Filter, Image, ImageMap, Texture, Textures, UvMapping, Wrap};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Decoded images by file and encoding, shared by every texture that reads them.
+pub type ImageCache = HashMap<(PathBuf, String), Arc<Image>>;
+
+/// Everything building a texture needs besides its parameters.
+pub struct TextureContext<'a> {
+    pub textures: &'a Textures,
+    pub images: &'a mut ImageCache,
+    pub base_dir: &'a Path,
+}
+
+/// Builds texture `class` of kind `kind` (`spectrum` or `float`) from `params` (which the
+/// caller checks for unused ones); `at` is where the class is named.
+pub fn make_texture(
+    kind: &str,
+    class: &str,
+    params: &mut ParamSet,
+    at: &Loc,
+    cx: &mut TextureContext,
+) -> Result<Texture, SceneError> {
+    let spectrum = match kind {
+        "spectrum" => true,
+        "float" => false,
+        other => {
+            return Err(SceneError::at(
+                at,
+                format!("texture type must be \"spectrum\" or \"float\", not \"{other}\""),
+            ))
+        }
+    };
+    Ok(match class {
+        "constant" => Texture::Constant(value(params, "value", spectrum, 1.0)?),
+        "scale" => Texture::Scale {
+            tex: texture_param(params, "tex", spectrum, 1.0, cx.textures)?,
+            scale: texture_param(params, "scale", false, 1.0, cx.textures)?,
+        },
+        "mix" => Texture::Mix {
+            tex1: texture_param(params, "tex1", spectrum, 0.0, cx.textures)?,
+            tex2: texture_param(params, "tex2", spectrum, 1.0, cx.textures)?,
+            amount: texture_param(params, "amount", false, 0.5, cx.textures)?,
+        },
+        "checkerboard" => {
+            if params.get_int("dimension", 2)? != 2 {
+                let p = params.peek("dimension").expect("given");
+                return Err(p.err("only 2D checkerboards are supported"));
+            }
+            Texture::Checkerboard {
+                mapping: uv_mapping(params)?,
+                tex1: texture_param(params, "tex1", spectrum, 1.0, cx.textures)?,
+                tex2: texture_param(params, "tex2", spectrum, 0.0, cx.textures)?,
+            }
+        }
+        "imagemap" => Texture::Image(image_map(params, at, !spectrum, cx)?),
+        other => {
+            return Err(SceneError::at(
+                at,
+                format!("unsupported texture class \"{other}\""),
+            ))
+        }
+    })
+}
+
+/// A constant value: `rgb` for a spectrum texture, `float` otherwise (splatted).
+fn value(
+    params: &mut ParamSet,
+    name: &str,
+    spectrum: bool,
+    default: f32,
+) -> Result<Vec3, SceneError> {
+    if spectrum {
+        params.get_rgb(name, Vec3::splat(default))
+    } else {
+        Ok(Vec3::splat(params.get_float(name, default)?))
+    }
+}
+
+/// A texture-valued parameter: a `"texture"` name of the right namespace, or a value.
+fn texture_param(
+    params: &mut ParamSet,
+    name: &str,
+    spectrum: bool,
+    default: f32,
+    textures: &Textures,
+) -> Result<Arc<Texture>, SceneError> {
+    if params.peek(name).map(|p| p.ty) != Some(ParamType::Texture) {
+        return Ok(Arc::new(Texture::Constant(value(
+            params, name, spectrum, default,
+        )?)));
+    }
+    let p = params.get_param(name).expect("just peeked");
+    let Some([tex]) = p.strings() else {
+        return Err(p.err("expected one texture name"));
+    };
+    let (map, kind) = if spectrum {
+        (&textures.spectrum, "spectrum")
+    } else {
+        (&textures.float, "float")
+    };
+    map.get(tex)
+        .cloned()
+        .ok_or_else(|| p.err(format!("unknown {kind} texture \"{tex}\"")))
+}
+
+/// `mapping "uv"` with `uscale`, `vscale`, `udelta`, `vdelta`.
+fn uv_mapping(params: &mut ParamSet) -> Result<UvMapping, SceneError> {
+    let mapping = params.get_string("mapping", "uv")?;
+    if mapping != "uv" {
+        let p = params.peek("mapping").expect("given");
+        return Err(p.err(format!("unsupported texture mapping \"{mapping}\"")));
+    }
+    Ok(UvMapping {
+        scale: Vec2::new(
+            params.get_float("uscale", 1.0)?,
+            params.get_float("vscale", 1.0)?,
+        ),
+        delta: Vec2::new(
+            params.get_float("udelta", 0.0)?,
+            params.get_float("vdelta", 0.0)?,
+        ),
+    })
+}
+
+/// A string parameter parsed by `parse`, with `what` naming the accepted values on error.
+fn choice<T>(
+    params: &mut ParamSet,
+    name: &str,
+    default: &str,
+    parse: impl Fn(&str) -> Option<T>,
+    what: &str,
+) -> Result<T, SceneError> {
+    let s = params.get_string(name, default)?;
+    parse(&s).ok_or_else(|| {
+        let p = params.peek(name).expect("a bad value came from the file");
+        p.err(format!("\"{s}\" is not {what}"))
+    })
+}
+
+/// `imagemap`: the image (read once per file and encoding), mapping, wrap, filter, scale,
+/// invert.
+fn image_map(
+    params: &mut ParamSet,
+    at: &Loc,
+    float: bool,
+    cx: &mut TextureContext,
+) -> Result<ImageMap, SceneError> {
+    let Some(name) = params.get_string_opt("filename")? else {
+        return Err(SceneError::at(at, "imagemap needs \"string filename\""));
+    };
+    let path = cx.base_dir.join(&name);
+    let png = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    let encoding_name = params.get_string("encoding", if png { "sRGB" } else { "linear" })?;
+    let Some(encoding) = Encoding::from_name(&encoding_name) else {
+        let p = params
+            .peek("encoding")
+            .expect("a bad encoding came from the file");
+        return Err(p.err(format!(
+            "\"{encoding_name}\" is not an encoding (sRGB, linear, gamma G)"
+        )));
+    };
+    let wrap = choice(
+        params,
+        "wrap",
+        "repeat",
+        Wrap::from_name,
+        "repeat, clamp or black",
+    )?;
+    let filter = choice(
+        params,
+        "filter",
+        "bilinear",
+        |s| match s {
+            "point" => Some(Filter::Point),
+            "bilinear" | "trilinear" | "ewa" => Some(Filter::Bilinear),
+            _ => None,
+        },
+        "point, bilinear, trilinear or ewa",
+    )?;
+    params.get_float("maxanisotropy", 8.0)?;
+    let mapping = uv_mapping(params)?;
+    let scale = params.get_float("scale", 1.0)?;
+    let invert = params.get_bool("invert", false)?;
+    let key = (path.clone(), encoding_name);
+    let image = match cx.images.get(&key) {
+        Some(im) => im.clone(),
+        None => {
+            let im = Arc::new(read_image(&path, encoding).map_err(|m| {
+                SceneError::at(at, format!("imagemap \"{}\": {m}", path.display()))
+            })?);
+            cx.images.insert(key, im.clone());
+            im
+        }
+    };
+    Ok(ImageMap {
+        image,
+        mapping,
+        wrap,
+        filter,
+        scale,
+        invert,
+        float,
+    })
+}
+
+/// Reads an image file into linear RGB: EXR through [`crate::imageio`], PFM here, others
+/// through the `image` crate; integer images are decoded with `encoding`, float ones (EXR,
+/// PFM, float TIFF...) are taken as linear.
+pub fn read_image(path: &Path, encoding: Encoding) -> Result<Image, String> {
+    let ext = |x: &str| path.extension().is_some_and(|e| e.eq_ignore_ascii_case(x));
+    if ext("pfm") {
+        let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+        return read_pfm(&bytes);
+    }
+    if ext("exr") {
+        let im = crate::imageio::read_exr(path).map_err(|e| e.to_string())?;
+        return Ok(Image {
+            width: im.width,
+            height: im.height,
+            texels: im.pixels.into_iter().map(Vec3::from_array).collect(),
+        });
+    }
+    let dynamic = image::open(path).map_err(|e| e.to_string())?;
+    let linear = matches!(
+        dynamic,
+        image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_)
+    );
+    let rgb = dynamic.to_rgb32f();
+    let decode = |v: f32| if linear { v } else { encoding.decode(v) };
+    Ok(Image {
+        width: rgb.width() as usize,
+        height: rgb.height() as usize,
+        texels: rgb
+            .pixels()
+            .map(|p| Vec3::new(decode(p[0]), decode(p[1]), decode(p[2])))
+            .collect(),
+    })
+}
+
+/// Decodes a PFM image (`PF` colour or `Pf` grey; width height; scale, negative for
+/// little-endian; rows of f32 from the bottom up) into rows from the top down.
+pub fn read_pfm(bytes: &[u8]) -> Result<Image, String> {
+    // The header is three whitespace-separated lines: magic, "width height", scale.
+    let mut fields = Vec::new();
+    let mut pos = 0;
+    while fields.len() < 4 {
+        while pos < bytes.len() && bytes[pos].is_ascii_whitespace() {
+            pos += 1;
+        }
+        let start = pos;
+        while pos < bytes.len() && !bytes[pos].is_ascii_whitespace() {
+            pos += 1;
+        }
+        if start == pos {
+            return Err("truncated PFM header".to_string());
+        }
+        fields.push(String::from_utf8_lossy(&bytes[start..pos]).into_owned());
+    }
+    let pixels = &bytes[(pos + 1).min(bytes.len())..];
+    let channels = match fields[0].as_str() {
+        "PF" => 3,
+        "Pf" => 1,
+        other => return Err(format!("not a PFM file (magic \"{other}\")")),
+    };
+    let dim = |s: &str| s.parse::<usize>().ok().filter(|&v| v > 0);
+    let (Some(w), Some(h)) = (dim(&fields[1]), dim(&fields[2])) else {
+        return Err(format!("bad PFM size \"{} {}\"", fields[1], fields[2]));
+    };
+    let scale: f32 = fields[3]
+        .parse()
+        .map_err(|_| format!("bad PFM scale \"{}\"", fields[3]))?;
+    let want = w.checked_mul(h).and_then(|n| n.checked_mul(4 * channels));
+    if want != Some(pixels.len()) {
+        return Err(format!(
+            "PFM of {w}x{h}x{channels} needs {} bytes of pixels, the file has {}",
+            w.saturating_mul(h).saturating_mul(4 * channels),
+            pixels.len()
+        ));
+    }
+    let value = |b: &[u8]| {
+        let b = [b[0], b[1], b[2], b[3]];
+        if scale < 0.0 {
+            f32::from_le_bytes(b)
+        } else {
+            f32::from_be_bytes(b)
+        }
+    };
+    let texels = (0..h)
+        .rev()
+        .flat_map(|row| (0..w).map(move |x| (row * w + x) * channels * 4))
+        .map(|at| {
+            let c = |i: usize| value(&pixels[at + 4 * i..]);
+            match channels {
+                3 => Vec3::new(c(0), c(1), c(2)),
+                _ => Vec3::splat(c(0)),
+            }
+        })
+        .collect();
+    Ok(Image {
+        width: w,
+        height: h,
+        texels,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pfm_rows_run_bottom_up_in_either_byte_order() {
+        // 1x2 colour image: bottom row (1, 2, 3), top row (4, 5, 6).
+        let values = [1.0f32, 2.0, 3.0, 4.0, 5.0, 6.0];
+        let mut le = b"PF\n1 2\n-1.0\n".to_vec();
+        le.extend(values.iter().flat_map(|v| v.to_le_bytes()));
+        let mut be = b"PF\n1 2\n1.0\n".to_vec();
+        be.extend(values.iter().flat_map(|v| v.to_be_bytes()));
+        for bytes in [le, be] {
+            let im = read_pfm(&bytes).unwrap();
+            assert_eq!((im.width, im.height), (1, 2));
+            assert_eq!(
+                im.texels,
+                vec![Vec3::new(4.0, 5.0, 6.0), Vec3::new(1.0, 2.0, 3.0)]
+            );
+        }
+        let mut grey = b"Pf 2 1 -1\n".to_vec();
+        grey.extend([0.5f32, 0.25].iter().flat_map(|v| v.to_le_bytes()));
+        assert_eq!(
+            read_pfm(&grey).unwrap().texels,
+            vec![Vec3::splat(0.5), Vec3::splat(0.25)]
+        );
+        assert!(read_pfm(b"PF\n100000 100000\n-1\n\0\0")
+            .unwrap_err()
+            .contains("needs"));
+        assert!(read_pfm(b"P6\n1 1\n255\n...")
+            .unwrap_err()
+            .contains("magic"));
+        assert!(read_pfm(b"PF\n1").unwrap_err().contains("truncated"));
+    }
+}
