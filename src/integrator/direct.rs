@@ -10,44 +10,16 @@
 //! Components: light reaching the camera after at most one non-delta scattering event is
 //! `direct`; light arriving through further specular/glossy bounces is `specular`.
 use super::photonmap::{self, Gather};
-use super::{charge, power_heuristic, tile_pixels, RenderContext};
-use crate::accel::{Hit, RayQuery};
+use super::wavefront::{self, add, Component, PathState, Shade, Shadow, Wave, CAMERA_DIMS};
+use super::{charge, power_heuristic, RenderContext};
+use crate::accel::Hit;
 use crate::bsdf::TransportMode;
 use crate::film::Radiance;
 use crate::interaction::SurfaceInteraction;
 use crate::math::{Ray, Vec3};
 use crate::photon::KnnResult;
-use crate::resources::BATCH;
-use crate::sampling::Sampler;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
-
-/// Dimensions used by the camera sample (pixel filter offset).
-const CAMERA_DIMS: u32 = 2;
-
-/// One path in flight.
-struct PathState {
-    /// Index of the pixel within the tile.
-    pixel: usize,
-    ray: Ray,
-    beta: Vec3,
-    /// Number of scattering events so far.
-    depth: u32,
-    /// BSDF density of the last (non-delta) bounce, for MIS at an emitter; 0 after the camera
-    /// or a delta bounce.
-    prev_pdf: f32,
-    /// Whether all bounces so far were delta (specular).
-    prev_delta: bool,
-    sampler: Sampler,
-}
-
-/// A shadow ray and the radiance it carries if unoccluded.
-struct Shadow {
-    pixel: usize,
-    ray: Ray,
-    contrib: Vec3,
-    direct: bool,
-}
 
 fn dims_per_vertex(light_samples: u32) -> u32 {
     3 * light_samples + 3
@@ -55,112 +27,49 @@ fn dims_per_vertex(light_samples: u32) -> u32 {
 
 /// Renders the pixels `[x0, x1) x [y0, y1)`; returns per-pixel means in row-major order.
 pub fn render_tile(ctx: &RenderContext, x0: u32, y0: u32, x1: u32, y1: u32) -> Vec<Radiance> {
-    let s = &ctx.settings;
-    let tw = (x1 - x0) as usize;
-    let n = tw * (y1 - y0) as usize;
-    let mut acc = vec![Radiance::default(); n];
-    let mut paths: Vec<PathState> = Vec::with_capacity(n);
-    let mut next: Vec<PathState> = Vec::with_capacity(n);
-    let mut rays: Vec<Ray> = Vec::with_capacity(n);
-    let mut hits: Vec<Option<Hit>> = Vec::with_capacity(n);
-    let mut shadows: Vec<Shadow> = Vec::new();
-    let mut shadow_rays: Vec<Ray> = Vec::new();
-    let mut occluded: Vec<bool> = Vec::new();
-    let mut gathers = Gathers::default();
-
-    for sample in 0..s.spp {
-        // Camera rays of the whole tile for this sample index.
-        paths.clear();
-        for (i, (x, y)) in tile_pixels(x0, y0, x1, y1).enumerate() {
-            let (ray, sampler) = super::camera_sample(ctx, x, y, sample);
-            paths.push(PathState {
-                pixel: i,
-                ray,
-                beta: Vec3::ONE,
-                depth: 0,
-                prev_pdf: 0.0,
-                prev_delta: true,
-                sampler,
-            });
-        }
-        ctx.counters
-            .camera_rays
-            .fetch_add(paths.len() as u64, Ordering::Relaxed);
-
-        while !paths.is_empty() {
-            rays.clear();
-            rays.extend(paths.iter().map(|p| p.ray));
-            hits.clear();
-            hits.resize(rays.len(), None);
-            let t = Instant::now();
-            ctx.accel.intersect_batch(&rays, &mut hits);
-            charge(&ctx.counters.ray_ns, t);
-            shadows.clear();
-            next.clear();
-            for (path, hit) in paths.drain(..).zip(hits.iter()) {
-                if let Some(hit) = hit {
-                    shade(
-                        ctx,
-                        path,
-                        hit,
-                        &mut acc,
-                        &mut shadows,
-                        &mut next,
-                        &mut gathers,
-                    );
-                }
-                // Bounded batches: a point adds at most MAX_LIGHT_SAMPLES shadow rays and
-                // MAX_GATHER_SAMPLES gathers beyond BATCH before they are traced.
-                if shadows.len() >= BATCH {
-                    trace_shadows(ctx, &shadows, &mut shadow_rays, &mut occluded, &mut acc);
-                    shadows.clear();
-                }
-                if gathers.pending.len() >= BATCH {
-                    trace_gathers(ctx, &mut gathers, &mut acc);
-                }
-            }
-            trace_shadows(ctx, &shadows, &mut shadow_rays, &mut occluded, &mut acc);
-            trace_gathers(ctx, &mut gathers, &mut acc);
-            if !next.is_empty() {
-                ctx.counters
-                    .secondary_rays
-                    .fetch_add(next.len() as u64, Ordering::Relaxed);
-            }
-            std::mem::swap(&mut paths, &mut next);
-        }
-    }
-    let inv = 1.0 / s.spp as f32;
-    acc.into_iter().map(|r| r * inv).collect()
+    wavefront::render_tile(ctx, &Direct, x0, y0, x1, y1)
 }
 
-/// Adds `value` to the pixel's direct or specular component.
-fn add(acc: &mut [Radiance], pixel: usize, direct: bool, value: Vec3) {
+/// The direct + specular shading step (plus pass 2 of the photon mapper when the context has
+/// photon maps).
+pub struct Direct;
+
+/// Light seen directly or after one non-delta event is `direct`, the rest `specular`.
+fn component(direct: bool) -> Component {
     if direct {
-        acc[pixel].direct += value;
+        Component::Direct
     } else {
-        acc[pixel].specular += value;
+        Component::Specular
     }
 }
 
 /// The final-gather rays of a tile pass, and reusable buffers.
 #[derive(Default)]
-struct Gathers {
+pub struct Gathers {
     pending: Vec<Gather>,
     rays: Vec<Ray>,
     hits: Vec<Option<Hit>>,
     buf: KnnResult,
 }
 
+impl Shade for Direct {
+    type Extra = Gathers;
+
+    fn shade(&self, ctx: &RenderContext, path: PathState, hit: &Hit, wave: &mut Wave<Gathers>) {
+        shade(ctx, path, hit, wave)
+    }
+
+    fn pending(&self, g: &Gathers) -> usize {
+        g.pending.len()
+    }
+
+    fn flush(&self, ctx: &RenderContext, g: &mut Gathers, acc: &mut [Radiance]) {
+        trace_gathers(ctx, g, acc)
+    }
+}
+
 /// Shades one hit: emission, shadow rays, photon-map components, continuation.
-fn shade(
-    ctx: &RenderContext,
-    mut path: PathState,
-    hit: &Hit,
-    acc: &mut [Radiance],
-    shadows: &mut Vec<Shadow>,
-    next: &mut Vec<PathState>,
-    gathers: &mut Gathers,
-) {
+fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<Gathers>) {
     let scene = ctx.scene;
     let si = SurfaceInteraction::new(scene, hit, &path.ray);
 
@@ -175,7 +84,7 @@ fn shade(
                 1.0
             };
             let direct = path.depth == 0 || (path.depth == 1 && !path.prev_delta);
-            add(acc, path.pixel, direct, path.beta * le * w);
+            add(wave.acc, path.pixel, component(direct), path.beta * le * w);
         }
     }
     if path.depth >= ctx.settings.max_depth {
@@ -220,11 +129,11 @@ fn shade(
                 1.0
             };
             let contrib = path.beta * f * s.li * (w / (s.pdf * ls as f32));
-            shadows.push(Shadow {
+            wave.shadows.push(Shadow {
                 pixel: path.pixel,
                 ray: si.shadow_ray(&s),
                 contrib,
-                direct: path.depth == 0,
+                component: component(path.depth == 0),
             });
         }
     } else {
@@ -254,15 +163,19 @@ fn shade(
             path.pixel,
             primary,
             &mut path.sampler,
-            &mut gathers.buf,
-            &mut gathers.pending,
+            &mut wave.extra.buf,
+            &mut wave.extra.pending,
         );
-        let px = &mut acc[path.pixel];
         if primary {
-            px.caustic += got.caustic;
-            px.indirect += got.indirect;
+            add(wave.acc, path.pixel, Component::Caustic, got.caustic);
+            add(wave.acc, path.pixel, Component::Indirect, got.indirect);
         } else {
-            px.specular += got.caustic + got.indirect;
+            add(
+                wave.acc,
+                path.pixel,
+                Component::Specular,
+                got.caustic + got.indirect,
+            );
         }
     }
 
@@ -282,43 +195,15 @@ fn shade(
     if beta.max_element() <= 0.0 || !beta.is_finite() {
         return;
     }
-    next.push(PathState {
-        pixel: path.pixel,
+    wave.next.push(PathState {
         ray: si.spawn_ray(si.frame.to_world(bs.wi)),
         beta,
         depth: path.depth + 1,
         prev_pdf: if bs.specular { 0.0 } else { bs.pdf },
+        prev_p: si.p,
         prev_delta: path.prev_delta && bs.specular,
-        sampler: path.sampler,
+        ..path
     });
-}
-
-/// Traces a batch of shadow rays and adds the unoccluded contributions.
-fn trace_shadows(
-    ctx: &RenderContext,
-    shadows: &[Shadow],
-    rays: &mut Vec<Ray>,
-    occluded: &mut Vec<bool>,
-    acc: &mut [Radiance],
-) {
-    if shadows.is_empty() {
-        return;
-    }
-    rays.clear();
-    rays.extend(shadows.iter().map(|s| s.ray));
-    occluded.clear();
-    occluded.resize(rays.len(), false);
-    let t = Instant::now();
-    ctx.accel.occluded_batch(rays, occluded);
-    charge(&ctx.counters.ray_ns, t);
-    ctx.counters
-        .shadow_rays
-        .fetch_add(rays.len() as u64, Ordering::Relaxed);
-    for (s, &blocked) in shadows.iter().zip(occluded.iter()) {
-        if !blocked {
-            add(acc, s.pixel, s.direct, s.contrib);
-        }
-    }
 }
 
 /// Traces the pending gather rays as one batch and adds their radiance.
@@ -329,11 +214,7 @@ fn trace_gathers(ctx: &RenderContext, g: &mut Gathers, acc: &mut [Radiance]) {
     }
     g.rays.clear();
     g.rays.extend(g.pending.iter().map(|x| x.ray));
-    g.hits.clear();
-    g.hits.resize(g.rays.len(), None);
-    let t = Instant::now();
-    ctx.accel.intersect_batch(&g.rays, &mut g.hits);
-    charge(&ctx.counters.ray_ns, t);
+    wavefront::intersect_batch(ctx, &g.rays, &mut g.hits);
     ctx.counters
         .secondary_rays
         .fetch_add(g.rays.len() as u64, Ordering::Relaxed);
@@ -344,10 +225,10 @@ fn trace_gathers(ctx: &RenderContext, g: &mut Gathers, acc: &mut [Radiance]) {
         let (direct, indirect) = photonmap::gather_radiance(ctx, pass, gather, *hit, &mut g.buf);
         let (direct, indirect) = (gather.weight * direct, gather.weight * indirect);
         if gather.primary {
-            acc[gather.pixel].direct += direct;
-            acc[gather.pixel].indirect += indirect;
+            add(acc, gather.pixel, Component::Direct, direct);
+            add(acc, gather.pixel, Component::Indirect, indirect);
         } else {
-            acc[gather.pixel].specular += direct + indirect;
+            add(acc, gather.pixel, Component::Specular, direct + indirect);
         }
     }
     charge(&ctx.counters.lookup_ns, t);

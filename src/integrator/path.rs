@@ -38,17 +38,13 @@
 //! choice, light point, lobe choice, direction, roulette), so an image depends only on the
 //! scene, seed and settings, never on thread scheduling. The path tracer always takes one light
 //! sample per vertex (it ignores `RenderSettings::light_samples`).
-use super::{power_heuristic, tile_pixels, RenderContext};
-use crate::accel::{Hit, RayQuery};
+use super::wavefront::{self, add, Component, PathState, Shade, Shadow, Wave, CAMERA_DIMS};
+use super::{power_heuristic, RenderContext};
+use crate::accel::Hit;
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::film::Radiance;
 use crate::interaction::SurfaceInteraction;
-use crate::math::{max_component, Ray, Vec3};
-use crate::sampling::Sampler;
-use std::sync::atomic::Ordering;
-
-/// Dimensions used by the camera sample (pixel filter offset).
-const CAMERA_DIMS: u32 = 2;
+use crate::math::{max_component, Vec3};
 
 /// Dimensions each vertex reads: light choice (1), light point (2), BSDF lobe (1), BSDF
 /// direction (2), Russian roulette (1).
@@ -58,146 +54,40 @@ pub const DIMS_PER_VERTEX: u32 = 7;
 /// `RR_MIN_BOUNCES + 1` on.
 pub const RR_MIN_BOUNCES: u32 = 3;
 
-/// One path in flight.
-struct PathState {
-    /// Index of the pixel within the tile.
-    pixel: usize,
-    ray: Ray,
-    /// Throughput: product of `f |cos| / pdf` (and roulette compensation) so far.
-    beta: Vec3,
-    /// Number of bounces (scattering events) so far.
-    depth: u32,
-    /// Solid-angle BSDF density of the last bounce if it was non-delta, else 0 (camera or
-    /// delta bounce: emission then counts with full weight).
-    prev_pdf: f32,
-    /// The last scattering point (not offset), for the light density of an emitter hit.
-    prev_p: Vec3,
-    /// Product of `eta^2` over the delta refractions so far (for roulette).
-    eta_scale: f32,
-    sampler: Sampler,
-}
-
-/// A shadow ray and the radiance it carries if unoccluded.
-struct Shadow {
-    pixel: usize,
-    ray: Ray,
-    contrib: Vec3,
-    direct: bool,
-}
-
-/// The per-bounce ray buffers of one tile, reused across bounces and samples.
-#[derive(Default)]
-struct Buffers {
-    paths: Vec<PathState>,
-    next: Vec<PathState>,
-    rays: Vec<Ray>,
-    hits: Vec<Option<Hit>>,
-    shadows: Vec<Shadow>,
-    shadow_rays: Vec<Ray>,
-    occluded: Vec<bool>,
-}
-
 /// Renders the pixels `[x0, x1) x [y0, y1)` (`x0 < x1 <= width`, `y0 < y1 <= height`);
 /// returns the per-pixel means over `ctx.settings.spp` samples in row-major order.
 pub fn render_tile(ctx: &RenderContext, x0: u32, y0: u32, x1: u32, y1: u32) -> Vec<Radiance> {
-    let s = &ctx.settings;
-    let n = ((x1 - x0) * (y1 - y0)) as usize;
-    let mut acc = vec![Radiance::default(); n];
-    let mut b = Buffers::default();
-    for sample in 0..s.spp {
-        camera_rays(ctx, x0, y0, x1, y1, sample, &mut b.paths);
-        while !b.paths.is_empty() {
-            trace_bounce(ctx, &mut b, &mut acc);
-        }
-    }
-    let inv = 1.0 / s.spp.max(1) as f32;
-    acc.into_iter().map(|r| r * inv).collect()
+    wavefront::render_tile(ctx, &PathTracer, x0, y0, x1, y1)
 }
 
-/// Fills `paths` with the camera rays of sample index `sample` for every pixel of the tile.
-fn camera_rays(
-    ctx: &RenderContext,
-    x0: u32,
-    y0: u32,
-    x1: u32,
-    y1: u32,
-    sample: u32,
-    paths: &mut Vec<PathState>,
-) {
-    paths.clear();
-    for (i, (x, y)) in tile_pixels(x0, y0, x1, y1).enumerate() {
-        let (ray, sampler) = super::camera_sample(ctx, x, y, sample);
-        paths.push(PathState {
-            pixel: i,
-            ray,
-            beta: Vec3::ONE,
-            depth: 0,
-            prev_pdf: 0.0,
-            prev_p: ray.o,
-            eta_scale: 1.0,
-            sampler,
-        });
+/// The path tracer's shading step.
+pub struct PathTracer;
+
+impl Shade for PathTracer {
+    type Extra = ();
+
+    fn shade(&self, ctx: &RenderContext, path: PathState, hit: &Hit, wave: &mut Wave<()>) {
+        shade(ctx, path, hit, wave)
     }
-    ctx.counters
-        .camera_rays
-        .fetch_add(paths.len() as u64, Ordering::Relaxed);
 }
 
-/// Traces the rays of `b.paths` as one batch, shades the hits, traces their shadow rays as one
-/// batch and leaves the continuing paths in `b.paths`.
-fn trace_bounce(ctx: &RenderContext, b: &mut Buffers, acc: &mut [Radiance]) {
-    b.rays.clear();
-    b.rays.extend(b.paths.iter().map(|p| p.ray));
-    b.hits.clear();
-    b.hits.resize(b.rays.len(), None);
-    ctx.accel.intersect_batch(&b.rays, &mut b.hits);
-    b.shadows.clear();
-    b.next.clear();
-    for (path, hit) in b.paths.drain(..).zip(b.hits.iter()) {
-        // No infinite lights exist in the light set: an escaping path carries nothing.
-        if let Some(hit) = hit {
-            shade(ctx, path, hit, acc, &mut b.shadows, &mut b.next);
-        }
-    }
-    trace_shadows(ctx, b, acc);
-    if !b.next.is_empty() {
-        ctx.counters
-            .secondary_rays
-            .fetch_add(b.next.len() as u64, Ordering::Relaxed);
-    }
-    std::mem::swap(&mut b.paths, &mut b.next);
-}
-
-/// Adds `value` to the pixel's direct or indirect component.
-fn add(acc: &mut [Radiance], pixel: usize, direct: bool, value: Vec3) {
-    if !value.is_finite() {
-        return;
-    }
+/// Light from an emitter straight away or after one non-delta bounce at the first hit is
+/// `direct`, the rest `indirect`.
+fn component(direct: bool) -> Component {
     if direct {
-        acc[pixel].direct += value;
+        Component::Direct
     } else {
-        acc[pixel].indirect += value;
+        Component::Indirect
     }
 }
 
 /// Shades one hit: emission, a light sample, and a BSDF-sampled continuation.
-///
-/// - `path`: the path whose ray produced `hit`;
-/// - `acc`: the tile's per-pixel sums;
-/// - `shadows`, `next`: where the light sample's shadow ray and the continuing path go.
-fn shade(
-    ctx: &RenderContext,
-    mut path: PathState,
-    hit: &Hit,
-    acc: &mut [Radiance],
-    shadows: &mut Vec<Shadow>,
-    next: &mut Vec<PathState>,
-) {
+fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<()>) {
     let si = SurfaceInteraction::new(ctx.scene, hit, &path.ray);
     if let Some(li) = si.area_light() {
         let le = emitted(ctx, &path, li, si.p, si.ng);
         let direct = path.depth == 0 || (path.depth == 1 && path.prev_pdf > 0.0);
-        add(acc, path.pixel, direct, le);
+        add(wave.acc, path.pixel, component(direct), le);
     }
     if path.depth >= ctx.settings.max_depth {
         return;
@@ -207,12 +97,12 @@ fn shade(
     path.sampler.set_dimension(base);
     if bsdf.flags().has_non_specular() {
         if let Some(s) = light_sample(ctx, &path, &bsdf, &si) {
-            shadows.push(s);
+            wave.shadows.push(s);
         }
     }
     path.sampler.set_dimension(base + 3);
     if let Some(cont) = continue_path(path, &bsdf, &si) {
-        next.push(cont);
+        wave.next.push(cont);
     }
 }
 
@@ -263,7 +153,7 @@ fn light_sample(
         pixel: path.pixel,
         ray: v.shadow_ray(&s),
         contrib,
-        direct: path.depth == 0,
+        component: component(path.depth == 0),
     })
 }
 
@@ -299,24 +189,4 @@ fn continue_path(mut path: PathState, bsdf: &Bsdf, v: &SurfaceInteraction) -> Op
     path.prev_p = v.p;
     path.eta_scale = eta_scale;
     Some(path)
-}
-
-/// Traces `b.shadows` as one batch and adds the unoccluded contributions.
-fn trace_shadows(ctx: &RenderContext, b: &mut Buffers, acc: &mut [Radiance]) {
-    if b.shadows.is_empty() {
-        return;
-    }
-    b.shadow_rays.clear();
-    b.shadow_rays.extend(b.shadows.iter().map(|s| s.ray));
-    b.occluded.clear();
-    b.occluded.resize(b.shadow_rays.len(), false);
-    ctx.accel.occluded_batch(&b.shadow_rays, &mut b.occluded);
-    ctx.counters
-        .shadow_rays
-        .fetch_add(b.shadow_rays.len() as u64, Ordering::Relaxed);
-    for (s, &blocked) in b.shadows.iter().zip(b.occluded.iter()) {
-        if !blocked {
-            add(acc, s.pixel, s.direct, s.contrib);
-        }
-    }
 }

@@ -1,0 +1,241 @@
+//! The tile wavefront every integrator renders through (pbrt-v4's `Render`/`Li` split): this
+//! module owns the tile's buffers, the camera rays, the batched and timed ray queries and the
+//! shadow-ray resolver; an integrator supplies only its shading step ([`Shade`]).
+//!
+//! Per sample index, all camera rays of the tile go to the backend as one batch (Embree's
+//! 8-wide packets for coherent rays); the integrator shades every hit, emitting shadow rays
+//! and continuation paths; the shadow rays are traced as batches of at most
+//! [`BATCH`](crate::resources::BATCH) (and whatever the integrator defers, such as final-gather
+//! rays, is flushed the same way); then the continuations form the next wave.
+use super::{charge, tile_pixels, RenderContext};
+use crate::accel::{Hit, RayQuery};
+use crate::film::Radiance;
+use crate::math::{Ray, Vec3};
+use crate::resources::BATCH;
+use crate::sampling::Sampler;
+use std::sync::atomic::Ordering;
+use std::time::Instant;
+
+/// Dimensions the camera sample uses (pixel filter offset).
+pub const CAMERA_DIMS: u32 = 2;
+
+/// One path in flight.
+#[derive(Clone, Debug)]
+pub struct PathState {
+    /// Index of the pixel within the tile.
+    pub pixel: usize,
+    pub ray: Ray,
+    /// Throughput: product of `f |cos| / pdf` (and roulette compensation) so far.
+    pub beta: Vec3,
+    /// Number of scattering events so far.
+    pub depth: u32,
+    /// Solid-angle BSDF density of the last bounce if it was non-delta, else 0 (camera or
+    /// delta bounce: emission then counts with full weight).
+    pub prev_pdf: f32,
+    /// The last scattering point (the camera at first), for the light density at an emitter.
+    pub prev_p: Vec3,
+    /// Whether every bounce so far was a delta (specular) one.
+    pub prev_delta: bool,
+    /// Product of `eta^2` over the delta refractions so far (for roulette).
+    pub eta_scale: f32,
+    pub sampler: Sampler,
+}
+
+impl PathState {
+    /// A path leaving the camera along `ray` for pixel `pixel` of the tile.
+    pub fn camera(pixel: usize, ray: Ray, sampler: Sampler) -> Self {
+        PathState {
+            pixel,
+            ray,
+            beta: Vec3::ONE,
+            depth: 0,
+            prev_pdf: 0.0,
+            prev_p: ray.o,
+            prev_delta: true,
+            eta_scale: 1.0,
+            sampler,
+        }
+    }
+}
+
+/// The image component a contribution belongs to (see [`Radiance`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Component {
+    Direct,
+    Specular,
+    Caustic,
+    Indirect,
+}
+
+/// Adds `value` to a pixel's component; a non-finite value is dropped (one bad sample must not
+/// poison a pixel).
+pub fn add(acc: &mut [Radiance], pixel: usize, c: Component, value: Vec3) {
+    if !value.is_finite() {
+        return;
+    }
+    let px = &mut acc[pixel];
+    match c {
+        Component::Direct => px.direct += value,
+        Component::Specular => px.specular += value,
+        Component::Caustic => px.caustic += value,
+        Component::Indirect => px.indirect += value,
+    }
+}
+
+/// A shadow ray and what it adds to its pixel if unoccluded.
+#[derive(Clone, Copy, Debug)]
+pub struct Shadow {
+    pub pixel: usize,
+    pub ray: Ray,
+    pub contrib: Vec3,
+    pub component: Component,
+}
+
+/// Where a shading step puts its results.
+pub struct Wave<'a, X> {
+    /// The tile's per-pixel sums.
+    pub acc: &'a mut [Radiance],
+    pub shadows: &'a mut Vec<Shadow>,
+    /// Paths continuing into the next wave.
+    pub next: &'a mut Vec<PathState>,
+    /// The integrator's own deferred work.
+    pub extra: &'a mut X,
+}
+
+/// An integrator's shading step.
+pub trait Shade: Sync {
+    /// Per-tile work the integrator defers and traces in batches (final-gather rays).
+    type Extra: Default;
+    /// Shades `path`'s `hit`.
+    fn shade(&self, ctx: &RenderContext, path: PathState, hit: &Hit, wave: &mut Wave<Self::Extra>);
+    /// Entries waiting in `extra` (flushed at [`BATCH`] and at the end of each wave).
+    fn pending(&self, _extra: &Self::Extra) -> usize {
+        0
+    }
+    /// Traces and resolves what `extra` holds.
+    fn flush(&self, _ctx: &RenderContext, _extra: &mut Self::Extra, _acc: &mut [Radiance]) {}
+}
+
+/// Closest hits of a batch, timed into `ray_ns`.
+pub fn intersect_batch(ctx: &RenderContext, rays: &[Ray], hits: &mut Vec<Option<Hit>>) {
+    hits.clear();
+    hits.resize(rays.len(), None);
+    let t = Instant::now();
+    ctx.accel.intersect_batch(rays, hits);
+    charge(&ctx.counters.ray_ns, t);
+}
+
+/// The reusable buffers of one tile.
+#[derive(Default)]
+struct Buffers {
+    paths: Vec<PathState>,
+    next: Vec<PathState>,
+    rays: Vec<Ray>,
+    hits: Vec<Option<Hit>>,
+    shadows: Vec<Shadow>,
+    shadow_rays: Vec<Ray>,
+    occluded: Vec<bool>,
+}
+
+/// Renders the pixels `[x0, x1) x [y0, y1)` with `shader`; returns the per-pixel means over
+/// `ctx.settings.spp` samples in row-major order.
+pub fn render_tile<S: Shade>(
+    ctx: &RenderContext,
+    shader: &S,
+    x0: u32,
+    y0: u32,
+    x1: u32,
+    y1: u32,
+) -> Vec<Radiance> {
+    let spp = ctx.settings.spp.max(1);
+    let n = ((x1 - x0) * (y1 - y0)) as usize;
+    let mut acc = vec![Radiance::default(); n];
+    let mut b = Buffers::default();
+    let mut extra = S::Extra::default();
+    for sample in 0..spp {
+        b.paths.clear();
+        for (i, (x, y)) in tile_pixels(x0, y0, x1, y1).enumerate() {
+            let (ray, sampler) = super::camera_sample(ctx, x, y, sample);
+            b.paths.push(PathState::camera(i, ray, sampler));
+        }
+        ctx.counters
+            .camera_rays
+            .fetch_add(b.paths.len() as u64, Ordering::Relaxed);
+        while !b.paths.is_empty() {
+            wave(ctx, shader, &mut b, &mut extra, &mut acc);
+        }
+    }
+    let inv = 1.0 / spp as f32;
+    acc.into_iter().map(|r| r * inv).collect()
+}
+
+/// Traces the rays of `b.paths` as one batch, shades the hits, resolves their shadow rays and
+/// deferred work in bounded batches, and leaves the continuing paths in `b.paths`.
+fn wave<S: Shade>(
+    ctx: &RenderContext,
+    shader: &S,
+    b: &mut Buffers,
+    extra: &mut S::Extra,
+    acc: &mut [Radiance],
+) {
+    b.rays.clear();
+    b.rays.extend(b.paths.iter().map(|p| p.ray));
+    intersect_batch(ctx, &b.rays, &mut b.hits);
+    b.shadows.clear();
+    b.next.clear();
+    for (path, hit) in b.paths.drain(..).zip(b.hits.iter()) {
+        // No infinite lights: an escaping path carries nothing.
+        if let Some(hit) = hit {
+            let mut w = Wave {
+                acc,
+                shadows: &mut b.shadows,
+                next: &mut b.next,
+                extra,
+            };
+            shader.shade(ctx, path, hit, &mut w);
+        }
+        // Bounded batches: a point adds a bounded number of shadow rays and deferred entries
+        // beyond BATCH before they are traced.
+        if b.shadows.len() >= BATCH {
+            resolve_shadows(ctx, &b.shadows, &mut b.shadow_rays, &mut b.occluded, acc);
+            b.shadows.clear();
+        }
+        if shader.pending(extra) >= BATCH {
+            shader.flush(ctx, extra, acc);
+        }
+    }
+    resolve_shadows(ctx, &b.shadows, &mut b.shadow_rays, &mut b.occluded, acc);
+    shader.flush(ctx, extra, acc);
+    ctx.counters
+        .secondary_rays
+        .fetch_add(b.next.len() as u64, Ordering::Relaxed);
+    std::mem::swap(&mut b.paths, &mut b.next);
+}
+
+/// Traces a batch of shadow rays and adds the unoccluded contributions.
+fn resolve_shadows(
+    ctx: &RenderContext,
+    shadows: &[Shadow],
+    rays: &mut Vec<Ray>,
+    occluded: &mut Vec<bool>,
+    acc: &mut [Radiance],
+) {
+    if shadows.is_empty() {
+        return;
+    }
+    rays.clear();
+    rays.extend(shadows.iter().map(|s| s.ray));
+    occluded.clear();
+    occluded.resize(rays.len(), false);
+    let t = Instant::now();
+    ctx.accel.occluded_batch(rays, occluded);
+    charge(&ctx.counters.ray_ns, t);
+    ctx.counters
+        .shadow_rays
+        .fetch_add(rays.len() as u64, Ordering::Relaxed);
+    for (s, &blocked) in shadows.iter().zip(occluded.iter()) {
+        if !blocked {
+            add(acc, s.pixel, s.component, s.contrib);
+        }
+    }
+}
