@@ -410,8 +410,20 @@ pub fn render_passes(
     }
 }
 
-/// Progressive passes until `budget_s` seconds are spent (stopping before a pass that would
-/// not fit, by the longest pass so far): the mean image and the samples per pixel it holds.
+/// `photon render --time` switches to progressive photon mapping from this budget on: the
+/// budget from which it reached a lower error than Jensen's fixed maps in the measured
+/// `converge` runs (BENCHMARKS.md).
+pub const PROGRESSIVE_FROM_SECONDS: f64 = 64.0;
+
+/// Photon work (tracing and building) is kept to at most this share of a pass in
+/// [`render_for_time`] by raising the pass's samples per pixel.
+const PHOTON_SHARE: f64 = 0.25;
+
+/// Progressive passes until `budget_s` seconds are spent, stopping before a pass that would
+/// not fit. Made for a wall-clock budget, not for merging: each pass traces the configured
+/// photon counts, and the samples per pixel of the next pass grow (at most 4x per pass) until
+/// photon work is at most [`PHOTON_SHARE`] of a pass; pass images are averaged weighted by
+/// their samples. Returns the image and the samples per pixel it holds.
 pub fn render_for_time(
     scene: &Scene,
     accel: &Accel,
@@ -420,33 +432,68 @@ pub fn render_for_time(
     budget_s: f64,
 ) -> (RenderOutput, u32) {
     let start = std::time::Instant::now();
-    let header = PartialHeader::new(scene, settings, kind, "");
-    let mut acc = Partial::new(header, 0);
+    let (w, h) = (settings.width as usize, settings.height as usize);
+    let mut sums = vec![[0f64; 12]; w * h];
     let mut totals = RenderOutput::empty();
-    let mut longest = 0f64;
-    let mut last = start.elapsed().as_secs_f64();
-    render_passes(
-        scene,
-        accel,
-        settings,
-        kind,
-        0..u64::MAX,
-        &mut acc,
-        &mut |_, out| {
-            totals.add_counts(out);
-            let now = start.elapsed().as_secs_f64();
-            longest = longest.max(now - last);
-            last = now;
-            now + longest <= budget_s && crate::interrupt::requested().is_none()
-        },
-    );
-    let (image, components) = acc.mean();
+    let (mut pass_spp, mut spp_done, mut k) = (settings.pass_spp.max(1), 0u32, 0u64);
+    let mut last_spp = pass_spp;
+    loop {
+        let mut s = pass_settings(settings, k);
+        s.spp = pass_spp;
+        let t = std::time::Instant::now();
+        let photons = super::prepare(scene, accel, &s, kind);
+        let out = super::render_prepared(scene, accel, &s, kind, photons.as_ref(), &|_, _| {});
+        if crate::interrupt::requested().is_some() && spp_done > 0 {
+            break; // cut short: not added
+        }
+        for (c, (_, img)) in out.components.iter().enumerate().take(COMPONENTS.len()) {
+            for (sum, px) in sums.iter_mut().zip(&img.pixels) {
+                for (k, v) in px.iter().enumerate() {
+                    sum[3 * c + k] += *v as f64 * pass_spp as f64;
+                }
+            }
+        }
+        totals.add_counts(&out);
+        spp_done += pass_spp;
+        last_spp = pass_spp;
+        k += 1;
+        // The next pass: enough samples that photon work is at most PHOTON_SHARE of it.
+        let pass_s = t.elapsed().as_secs_f64();
+        let photon_s = out.photon_seconds + out.map_build_seconds;
+        let per_spp = ((pass_s - photon_s) / pass_spp as f64).max(1e-9);
+        let want = photon_s * (1.0 - PHOTON_SHARE) / PHOTON_SHARE / per_spp;
+        pass_spp = (want.ceil() as u32).clamp(pass_spp, pass_spp.saturating_mul(4));
+        let next_s = photon_s + per_spp * pass_spp as f64;
+        let elapsed = start.elapsed().as_secs_f64();
+        if elapsed + next_s > budget_s || crate::interrupt::requested().is_some() {
+            break;
+        }
+    }
+    let n = spp_done.max(1) as f64;
+    let mut parts: Vec<(&'static str, RgbImage)> =
+        COMPONENTS.iter().map(|&c| (c, RgbImage::new(w, h))).collect();
+    let mut image = RgbImage::new(w, h);
+    for (i, s) in sums.iter().enumerate() {
+        for c in 0..3 {
+            let mut t = 0.0;
+            for (j, (_, img)) in parts.iter_mut().enumerate() {
+                img.pixels[i][c] = (s[3 * j + c] / n) as f32;
+                t += s[3 * j + c];
+            }
+            image.pixels[i][c] = (t / n) as f32;
+        }
+    }
     totals.image = image;
-    totals.components = components;
+    totals.components = parts;
     totals.seconds = start.elapsed().as_secs_f64();
-    let n = acc.passes.end - acc.passes.start;
-    totals.notes.push(progress_note(settings, &acc));
-    (totals, (n * settings.pass_spp.max(1) as u64) as u32)
+    let scale = radius_scale2(settings.photon.alpha as f64, k.saturating_sub(1)).sqrt();
+    totals.notes.push(format!(
+        "progressive: {k} passes, {spp_done} spp ({} spp in the last), {} + {} photons per pass, radii now x{scale:.3} of the k-nearest radius",
+        last_spp,
+        settings.photon.trace.global_photons,
+        settings.photon.trace.caustic_photons
+    ));
+    (totals, spp_done)
 }
 
 /// One statistics line: passes, samples, photons and the current radii.

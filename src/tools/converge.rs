@@ -92,7 +92,10 @@ pub fn methods() -> Vec<Method> {
         Method {
             name: "progressive",
             kind: IntegratorKind::Photonmap,
-            adjust: |s, _| s.photon.progressive = true,
+            adjust: |s, b| {
+                scale_photons(s, b, 200_000);
+                s.photon.progressive = true;
+            },
         },
         Method {
             name: "path",

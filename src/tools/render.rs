@@ -116,9 +116,10 @@ pub struct PassOptions {
 }
 
 impl PassOptions {
-    /// True when the render runs in passes.
-    pub fn active(&self) -> bool {
-        self.progressive
+    /// True when the render runs in deterministic passes and writes a partial image (with
+    /// `--time` and no other pass option, `--progressive` renders for the budget instead).
+    pub fn active(&self, timed: bool) -> bool {
+        (self.progressive && !timed)
             || self.passes.is_some()
             || self.checkpoint.is_some()
             || self.resume.is_some()
@@ -325,23 +326,23 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
         pool.current_num_threads()
     );
 
-    if opts.passes.active() {
-        if let Some(a) = opts.passes.alpha {
-            settings.photon.alpha = a;
+    if let Some(a) = opts.passes.alpha {
+        settings.photon.alpha = a;
+    }
+    if !(settings.photon.alpha > 0.0 && settings.photon.alpha < 1.0) {
+        return Err(ToolError(format!(
+            "--alpha must be in (0, 1), got {}",
+            settings.photon.alpha
+        )));
+    }
+    settings.photon.progressive |= opts.passes.progressive;
+    if let Some(n) = opts.passes.pass_spp {
+        if n == 0 {
+            return Err(ToolError("--pass-spp must be at least 1".into()));
         }
-        if !(settings.photon.alpha > 0.0 && settings.photon.alpha < 1.0) {
-            return Err(ToolError(format!(
-                "--alpha must be in (0, 1), got {}",
-                settings.photon.alpha
-            )));
-        }
-        settings.photon.progressive |= opts.passes.progressive;
-        if let Some(n) = opts.passes.pass_spp {
-            if n == 0 {
-                return Err(ToolError("--pass-spp must be at least 1".into()));
-            }
-            settings.pass_spp = n;
-        }
+        settings.pass_spp = n;
+    }
+    if opts.passes.active(opts.time.is_some()) {
         return super::passes::run(opts, &scene, &accel, &settings, &pool, &outputs);
     }
 
@@ -356,6 +357,16 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
         Some(budget) => {
             if opts.photon.global_photons.is_none() && opts.photon.caustic_photons.is_none() {
                 super::converge::scale_photons(&mut settings, budget, 200_000);
+            }
+            if opts.integrator == IntegratorKind::Photonmap
+                && budget >= integrator::passes::PROGRESSIVE_FROM_SECONDS
+                && !settings.photon.progressive
+            {
+                settings.photon.progressive = true;
+                println!(
+                    "time budget {budget:.0} s >= {:.0} s: progressive photon mapping (it reaches a lower error there)",
+                    integrator::passes::PROGRESSIVE_FROM_SECONDS
+                );
             }
             let (out, spp) = pool.install(|| {
                 integrator::render_for_time(&scene, &accel, &settings, opts.integrator, budget)
