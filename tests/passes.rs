@@ -309,3 +309,42 @@ fn progressive_falls_below_the_fixed_map_floor() {
         "progressive stopped falling: {prog16} -> {prog64}"
     );
 }
+
+/// `--progressive --time` renders passes for the budget (an ordinary image, not a partial
+/// one); the statistics give the passes and samples.
+#[test]
+fn progressive_time_budget_renders_an_ordinary_image() {
+    let dir = tmp("time");
+    let out = dir.join("t.exr");
+    let o = photon()
+        .args([
+            "render",
+            "scenes/cornell-glass.pbrt",
+            "--res",
+            "24x20",
+            "--progressive",
+        ])
+        .args([
+            "--time",
+            "1.5",
+            "--global-photons",
+            "4000",
+            "--caustic-photons",
+            "4000",
+        ])
+        .args(["--no-png", "-o"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(stdout.contains("progressive: "), "{stdout}");
+    let attrs = photon::imageio::read_exr_attributes(&out).unwrap();
+    assert!(
+        attrs.iter().all(|(k, _)| !k.starts_with("photon.")),
+        "{attrs:?}"
+    );
+    let img = photon::imageio::read_exr(&out).unwrap();
+    assert_eq!(img.count_nonfinite(), 0);
+    assert!(img.pixels.iter().any(|p| p[0] > 0.0));
+}

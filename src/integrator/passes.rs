@@ -470,8 +470,10 @@ pub fn render_for_time(
         }
     }
     let n = spp_done.max(1) as f64;
-    let mut parts: Vec<(&'static str, RgbImage)> =
-        COMPONENTS.iter().map(|&c| (c, RgbImage::new(w, h))).collect();
+    let mut parts: Vec<(&'static str, RgbImage)> = COMPONENTS
+        .iter()
+        .map(|&c| (c, RgbImage::new(w, h)))
+        .collect();
     let mut image = RgbImage::new(w, h);
     for (i, s) in sums.iter().enumerate() {
         for c in 0..3 {
