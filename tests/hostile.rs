@@ -505,11 +505,17 @@ Shape "trianglemesh" "point3 P" [ -3 -2 -3  3 -2 -3  3 -2 3 ] "integer indices" 
 "#;
     let r = render_text(&d, &text.replace("MAXDEPTH", "10000"), &[], GIB);
     assert_error(&r, &["scene.pbrt:4:", "maxdepth", "0..=1000"]);
-    let r = render_text(&d, &text.replace("MAXDEPTH", "1000"), &[], GIB);
-    assert_eq!(r.code, Some(0), "{}", r.describe());
-    let img = photon::imageio::read_exr(&d.join("out.exr")).unwrap();
-    let max = img.pixels.iter().flatten().fold(0.0f32, |a, &b| a.max(b));
-    assert_eq!(max, 0.0, "light leaked into the closed mirror sphere");
+    for integrator in ["photonmap", "path", "direct"] {
+        let args = ["--integrator", integrator];
+        let r = render_text(&d, &text.replace("MAXDEPTH", "1000"), &args, GIB);
+        assert_eq!(r.code, Some(0), "{}", r.describe());
+        let img = photon::imageio::read_exr(&d.join("out.exr")).unwrap();
+        let max = img.pixels.iter().flatten().fold(0.0f32, |a, &b| a.max(b));
+        assert_eq!(
+            max, 0.0,
+            "{integrator}: light leaked into the closed mirror sphere"
+        );
+    }
 }
 
 #[test]
