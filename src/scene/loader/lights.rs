@@ -45,7 +45,7 @@ impl AreaSpec {
         let sides = if self.two_sided { 2.0 } else { 1.0 };
         let l = match self.power {
             None => self.l,
-            Some(_) if !(area > 0.0) => {
+            Some(_) if area.is_nan() || area <= 0.0 => {
                 return Err("\"power\" given for an area light on a shape of zero area".to_string())
             }
             Some(power) => {
@@ -60,7 +60,7 @@ impl AreaSpec {
             }
         };
         let power = std::f64::consts::PI * sides * area * l.max_element() as f64;
-        if !(power <= MAX_LIGHT_POWER) {
+        if power.is_nan() || power > MAX_LIGHT_POWER {
             return Err(format!(
                 "the emitter's power {power:e} (area {area:e}) is above the limit {MAX_LIGHT_POWER:e}"
             ));
@@ -113,13 +113,13 @@ fn scaled(
 /// Reads `scale` (finite, >= 0) and `power` (finite and > 0 when given).
 fn scale_power(params: &mut ParamSet) -> Result<(f32, Option<f32>), SceneError> {
     let scale = params.get_float("scale", 1.0)?;
-    if !(scale >= 0.0) {
+    if scale.is_nan() || scale < 0.0 {
         let p = params.peek("scale").expect("given");
         return Err(p.err(format!("must be >= 0, got {scale}")));
     }
     let power = params.get_float_opt("power")?;
     if let Some(pw) = power {
-        if !(pw > 0.0) || pw as f64 > MAX_LIGHT_POWER {
+        if pw.is_nan() || pw <= 0.0 || pw as f64 > MAX_LIGHT_POWER {
             let p = params.peek("power").expect("given");
             return Err(p.err(format!("must be in (0, {MAX_LIGHT_POWER:e}], got {pw}")));
         }
@@ -194,7 +194,7 @@ fn position(params: &mut ParamSet, loc: &Loc, ctm: &Mat4) -> Result<Vec3, SceneE
     let from = params.get_point3("from", Vec3::ZERO)?;
     let p = xform_point(ctm, from);
     let max = super::extent::MAX_COORDINATE;
-    if !(p.abs().max_element() <= max) {
+    if !p.is_finite() || p.abs().max_element() > max {
         return Err(SceneError::at(
             loc,
             format!("the light is at {p} after the current transform, beyond the supported coordinates (up to {max:e})"),
@@ -242,7 +242,7 @@ fn spot(params: &mut ParamSet, loc: &Loc, ctm: &Mat4) -> Result<Light, SceneErro
 fn distant(params: &mut ParamSet, loc: &Loc, ctm: &Mat4) -> Result<Light, SceneError> {
     let l = light_rgb(params, "L")?;
     let scale = params.get_float("scale", 1.0)?;
-    if !(scale >= 0.0) {
+    if scale.is_nan() || scale < 0.0 {
         let p = params.peek("scale").expect("given");
         return Err(p.err(format!("must be >= 0, got {scale}")));
     }
