@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! Film "rgb" "integer xresolution" [ 1024 ] "integer yresolution" [ 1024 ]   # 1..=32768 each
-//! Integrator "photonmap" "integer globalphotons" [ 200000 ]   # 0..=2^32-1, and the budget
+//! Integrator "photonmap" "integer globalphotons" [ 200000 ]   # 0..=2^31-1, and the budget
 //!     "integer gathersamples" [ 2 ]  "integer globallookup" [ 100 ]   # see the constants below
 //!     "float globalradius" [ 0.1 ]   "integer maxdepth" [ 5 ]
 //! ```
@@ -16,7 +16,9 @@
 //! kd-trees, times an upper estimate of the photons stored), the per-thread gather, shadow and
 //! k-nearest buffers (bounded: they are flushed in batches of [`BATCH`]) and the acceleration
 //! structure over the loaded triangles. [`check`] turns an estimate above the budget into one
-//! line: `needs ~110 GB (film 103 GB, ...) for 32768x32768 ...; the limit is 19 GB (...)`.
+//! line: `--res: the render needs ~116 GB (film 116 GB, ...) for 32768x32768 ...; the limit is
+//! 20.2 GB (80% of physical memory 25.3 GB)`. A render prints its estimate and its peak
+//! resident memory (VmHWM) at the end, which `tests/hostile.rs` compares.
 use crate::accel::BackendKind;
 use crate::integrator::{IntegratorKind, RenderSettings};
 use crate::math::Vec3;
@@ -333,7 +335,7 @@ pub fn check_render(
     threads: usize,
     max_memory: Option<u64>,
     cli: FromCli,
-) -> Result<(), String> {
+) -> Result<Estimate, String> {
     let threads = match threads {
         0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
         n => n,
@@ -346,7 +348,28 @@ pub fn check_render(
         None => default_budget(),
     };
     let e = estimate(scene, settings, kind, backend, threads);
-    check(&e, &budget).map_err(|m| format!("{}: {m}", blame(&e, scene, cli)))
+    check(&e, &budget).map_err(|m| format!("{}: {m}", blame(&e, scene, cli)))?;
+    Ok(e)
+}
+
+/// This process's peak resident memory (`VmHWM` in /proc/self/status), in bytes.
+pub fn peak_resident() -> Option<u64> {
+    proc_kb(
+        &std::fs::read_to_string("/proc/self/status").ok()?,
+        "VmHWM:",
+    )
+}
+
+/// The line a render prints at the end: its estimate and its measured peak.
+pub fn report(e: &Estimate) -> String {
+    let peak = peak_resident().unwrap_or(0);
+    format!(
+        "memory: estimated {} bytes (~{}), peak resident {} bytes (~{})",
+        e.total(),
+        human(e.total()),
+        peak,
+        human(peak)
+    )
 }
 
 #[cfg(test)]

@@ -551,3 +551,52 @@ fn case_20_backends_agree_to_noise_level() {
     );
     assert!(m.overall.relmse < 2e-3, "relMSE {}", m.overall.relmse);
 }
+
+/// The numbers of the `memory:` line a render prints: (estimate, peak resident), in bytes.
+fn memory_line(stdout: &str) -> (u64, u64) {
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("memory: estimated "))
+        .expect("a memory line");
+    let nums: Vec<u64> = line
+        .split_whitespace()
+        .filter_map(|w| w.parse().ok())
+        .collect();
+    (nums[0], nums[1])
+}
+
+/// The resource model against the measured peak (VmHWM) of real renders: never below it, and
+/// for the film (measured constants) within a factor 1.5 above it. The photon-map part uses an
+/// upper bound of photons stored per photon emitted, so it may be loose, not low.
+#[test]
+fn resource_model_bounds_the_measured_peak() {
+    let d = tmp_dir("model");
+    let scene = Path::new("../shared/scenes/cornell-box/scene-v4.pbrt");
+    let run = |extra: &[&str]| {
+        let mut args: Vec<std::ffi::OsString> = vec![
+            "render".into(),
+            scene.into(),
+            "--spp".into(),
+            "1".into(),
+            "--threads".into(),
+            "2".into(),
+            "-o".into(),
+            d.join("m.exr").into(),
+            "--png".into(),
+            d.join("m.png").into(),
+        ];
+        args.extend(extra.iter().map(Into::into));
+        let r = run_capped(&args, 4 * GIB, T);
+        assert_eq!(r.code, Some(0), "{}", r.describe());
+        memory_line(&r.stdout)
+    };
+    let (est, peak) = run(&["--res", "2048x2048", "--integrator", "direct"]);
+    println!("film 2048x2048: estimate {est}, peak {peak}");
+    assert!(
+        peak <= est && (est as f64) < 1.5 * peak as f64,
+        "{est} vs {peak}"
+    );
+    let (est, peak) = run(&["--res", "16x16", "--global-photons", "3000000"]);
+    println!("3M photons: estimate {est}, peak {peak}");
+    assert!(peak <= est, "{est} vs {peak}");
+}

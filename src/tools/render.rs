@@ -210,7 +210,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
         res: opts.res.is_some(),
         photons: opts.photon.global_photons.is_some() || opts.photon.caustic_photons.is_some(),
     };
-    crate::resources::check_render(
+    let estimate = crate::resources::check_render(
         &scene,
         &settings,
         (opts.integrator, opts.backend),
@@ -327,6 +327,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     for f in &outputs.files {
         println!("wrote {}", f.shown.display());
     }
+    println!("{}", crate::resources::report(&estimate));
     Ok(())
 }
 
