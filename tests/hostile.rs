@@ -72,7 +72,9 @@ AreaLightSource "diffuse" "rgb L" [ 1 1 1 ]
 Shape "trianglemesh" "point3 P" [ -1e15 -1e15 0  1e15 -1e15 0  0 1e15 0 ]
 "#;
     let r = render_text(&d, text, &[], GIB);
-    assert_error(&r, &["scene.pbrt:5:7", "too large"]);
+    assert_error(&r, &["scene.pbrt:2:8", "too large", "camera"]);
+    let r = render_text(&d, &text.replace("5e15", "5"), &[], GIB);
+    assert_error(&r, &["scene.pbrt:5:7", "too large", "vertex"]);
     // Inside the supported range, an emitter whose power overflows is an error too.
     let text = text
         .replace("e15", "e9")
@@ -95,6 +97,14 @@ fn case_04_devices_fifos_and_symlinks_are_not_replaced() {
         .unwrap()
         .file_type()
         .is_char_device());
+    // With the PNG preview on, no `/dev/null.png` appears beside the device.
+    let _ = std::fs::remove_file("/dev/null.png"); // left by an older photon, if any
+    let no_png = args.iter().position(|a| a == "--no-png").unwrap();
+    let mut with_png = args.clone();
+    with_png.remove(no_png);
+    let r = run_capped(&with_png, GIB, T);
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    assert!(!Path::new("/dev/null.png").exists());
     // A FIFO gets the EXR's bytes; it is still a FIFO afterwards.
     let fifo = d.join("pipe.exr");
     assert!(std::process::Command::new("mkfifo")

@@ -200,11 +200,13 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
         .output
         .clone()
         .unwrap_or_else(|| default_output(scene.film.filename.as_deref(), &opts.scene));
-    let png = (!opts.no_png).then(|| {
-        opts.png
+    let png = match opts.no_png {
+        true => None,
+        false => opts
+            .png
             .clone()
-            .unwrap_or_else(|| exr.with_extension("png"))
-    });
+            .or_else(|| super::output::default_png(&exr)),
+    };
     let outputs = Outputs::plan(&exr, png.as_deref()).map_err(ToolError)?;
     let cli = crate::resources::FromCli {
         res: opts.res.is_some(),

@@ -197,7 +197,7 @@ fn position(params: &mut ParamSet, loc: &Loc, ctm: &Mat4) -> Result<Vec3, SceneE
     if !p.is_finite() || p.abs().max_element() > max {
         return Err(SceneError::at(
             loc,
-            format!("the light is at {p} after the current transform, beyond the supported coordinates (up to {max:e})"),
+            format!("the scene is too large: the light is at {p} after the current transform (photon supports coordinates up to {max:e}; scale the scene down)"),
         ));
     }
     Ok(p)
