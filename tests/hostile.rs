@@ -77,6 +77,7 @@ Shape "trianglemesh" "point3 P" [ -1e15 -1e15 0  1e15 -1e15 0  0 1e15 0 ]
     assert_error(&r, &["scene.pbrt:5:7", "too large", "vertex"]);
     // Inside the supported range, an emitter whose power overflows is an error too.
     let text = text
+        .replace("5e15", "5e8")
         .replace("e15", "e9")
         .replace("[ 1 1 1 ]", "[ 1e20 1e20 1e20 ]");
     let r = render_text(&d, &text, &[], GIB);
