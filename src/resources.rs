@@ -223,9 +223,9 @@ pub fn default_budget() -> Budget {
 }
 
 /// An upper estimate of photons stored per photon emitted: a diffuse bounce survives roulette
-/// with the surface's mean reflectance, so a photon lands `1 / (1 - rho)` times on surfaces of
-/// reflectance `rho` (the largest in the scene, at most 0.95), and never more than the bounce
-/// limit allows.
+/// with the surface's mean reflectance, so a photon lands at most `1 / (1 - rho)` times on
+/// average when `rho` is the largest mean diffuse reflectance in the scene (specular bounces
+/// store nothing), and never more than `max_bounces + 1` times.
 fn landings_per_photon(scene: &Scene, max_bounces: u32) -> f64 {
     let rho = scene
         .materials
@@ -236,9 +236,13 @@ fn landings_per_photon(scene: &Scene, max_bounces: u32) -> f64 {
             }
             _ => 0.0,
         })
-        .fold(0.0f32, f32::max)
-        .min(0.95) as f64;
-    (1.0 / (1.0 - rho)).min(max_bounces.max(1) as f64)
+        .fold(0.0f32, f32::max) as f64;
+    let most = max_bounces as f64 + 1.0;
+    if rho >= 1.0 {
+        most
+    } else {
+        (1.0 / (1.0 - rho)).min(most)
+    }
 }
 
 /// The memory a render of `scene` with `settings` and `kind` on `threads` threads needs.
@@ -409,6 +413,29 @@ mod tests {
         assert!(check_float(0.0, 0.0, 1.0, false).is_ok());
         assert!(check_float(-0.5, 0.0, 1.0, false).is_err());
         assert!(check_float(f32::INFINITY, 0.0, f32::MAX, true).is_err());
+    }
+
+    /// Photons stored per photon emitted: 1 / (1 - rho) for the brightest diffuse material,
+    /// at most `max_bounces + 1` (also for rho = 1, the furnace).
+    #[test]
+    fn landings_bound() {
+        let scene = |rho: f32| {
+            Scene::with_geometry(
+                vec![],
+                vec![
+                    Material::Diffuse {
+                        reflectance: Vec3::splat(0.2),
+                    },
+                    Material::Diffuse {
+                        reflectance: Vec3::splat(rho),
+                    },
+                ],
+                vec![],
+            )
+        };
+        assert!((landings_per_photon(&scene(0.5), 32) - 2.0).abs() < 1e-6);
+        assert!((landings_per_photon(&scene(0.9), 5) - 6.0).abs() < 1e-6);
+        assert_eq!(landings_per_photon(&scene(1.0), 32), 33.0);
     }
 
     #[test]
