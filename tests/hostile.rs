@@ -37,6 +37,24 @@ fn case_01_gather_samples_are_bounded() {
     // The largest allowed count renders in bounded batches under a 1 GiB cap.
     let r = render_text(&d, &small_scene(""), &["--gather-samples", "4096"], GIB);
     assert_eq!(r.code, Some(0), "{}", r.describe());
+    assert!(ray_count(&r.stdout, "secondary") > 100_000, "{}", r.stdout);
+}
+
+/// The number after `kind` in the "rendered in" line (`camera N, secondary N, shadow N`).
+fn ray_count(stdout: &str, kind: &str) -> u64 {
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("rendered in"))
+        .expect("a rendered line");
+    let after = line
+        .split(&format!("{kind} "))
+        .nth(1)
+        .expect("the ray kind");
+    after
+        .split(|c: char| !c.is_ascii_digit())
+        .next()
+        .and_then(|n| n.parse().ok())
+        .expect("a count")
 }
 
 #[test]
@@ -497,6 +515,8 @@ fn case_18_light_samples_and_threads_are_bounded() {
     assert_error(&r, &["--threads", "0..=1024"]);
     let r = render_text(&d, &small_scene(""), &["--light-samples", "4096"], GIB);
     assert_eq!(r.code, Some(0), "{}", r.describe());
+    // 8x8 pixels x 4096 shadow rays, traced in batches of 16384.
+    assert!(ray_count(&r.stdout, "shadow") > 100_000, "{}", r.stdout);
 }
 
 #[test]
