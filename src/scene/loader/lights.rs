@@ -19,6 +19,12 @@
 //! - spot: I *= power / (2 pi (1 - (cos_start + cos_end) / 2)), pbrt-v4's k_e, with
 //!   cos_end = cos(coneangle), cos_start = cos(coneangle - conedelta).
 //!
+//! Every `L`/`I` component and `scale` must be finite and >= 0 and `power` in (0, 1e30]; the
+//! value after `scale` and `power` at most [`MAX_LIGHT_VALUE`] (1e20) and a light's power,
+//! computed in f64 (an emitter's area can overflow f32), at most [`MAX_LIGHT_POWER`] (1e30 W):
+//! otherwise an error at the parameter (NaN/Inf pixels or a silently dropped light before).
+//! Point and spot lights must lie within the supported coordinates (see `extent`).
+//!
 //! `from`/`to` go through the CTM; a distant light's `dir` is the direction light travels
 //! (`to - from`, transformed as a vector). Distant `illuminance`, spectra and blackbodies, and
 //! other light types are unsupported.
