@@ -98,7 +98,8 @@ fn main() -> ExitCode {
         Ok(true) => ExitCode::SUCCESS,
         Ok(false) => ExitCode::from(1),
         Err(e) => {
-            eprintln!("photon: {e}");
+            let msg = photon::scene::clip_for_message(&e.to_string(), 1000);
+            eprintln!("photon: {msg}");
             match photon::interrupt::requested() {
                 Some(sig) => ExitCode::from(sig.exit_code()),
                 None => ExitCode::from(2),

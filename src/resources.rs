@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! Film "rgb" "integer xresolution" [ 1024 ] "integer yresolution" [ 1024 ]   # 1..=32768 each
-//! Integrator "photonmap" "integer globalphotons" [ 200000 ]   # 0..=2^32-1, and the budget
+//! Integrator "photonmap" "integer globalphotons" [ 200000 ]   # 0..=2^31-1, and the budget
 //!     "integer gathersamples" [ 2 ]  "integer globallookup" [ 100 ]   # see the constants below
 //!     "float globalradius" [ 0.1 ]   "integer maxdepth" [ 5 ]
 //! ```
@@ -16,7 +16,9 @@
 //! kd-trees, times an upper estimate of the photons stored), the per-thread gather, shadow and
 //! k-nearest buffers (bounded: they are flushed in batches of [`BATCH`]) and the acceleration
 //! structure over the loaded triangles. [`check`] turns an estimate above the budget into one
-//! line: `needs ~110 GB (film 103 GB, ...) for 32768x32768 ...; the limit is 19 GB (...)`.
+//! line: `--res: the render needs ~116 GB (film 116 GB, ...) for 32768x32768 ...; the limit is
+//! 20.2 GB (80% of physical memory 25.3 GB)`. A render prints its estimate and its peak
+//! resident memory (VmHWM) at the end, which `tests/hostile.rs` compares.
 use crate::accel::BackendKind;
 use crate::integrator::{IntegratorKind, RenderSettings};
 use crate::math::Vec3;
@@ -221,9 +223,9 @@ pub fn default_budget() -> Budget {
 }
 
 /// An upper estimate of photons stored per photon emitted: a diffuse bounce survives roulette
-/// with the surface's mean reflectance, so a photon lands `1 / (1 - rho)` times on surfaces of
-/// reflectance `rho` (the largest in the scene, at most 0.95), and never more than the bounce
-/// limit allows.
+/// with the surface's mean reflectance, so a photon lands at most `1 / (1 - rho)` times on
+/// average when `rho` is the largest mean diffuse reflectance in the scene (specular bounces
+/// store nothing), and never more than `max_bounces + 1` times.
 fn landings_per_photon(scene: &Scene, max_bounces: u32) -> f64 {
     let rho = scene
         .materials
@@ -234,9 +236,13 @@ fn landings_per_photon(scene: &Scene, max_bounces: u32) -> f64 {
             }
             _ => 0.0,
         })
-        .fold(0.0f32, f32::max)
-        .min(0.95) as f64;
-    (1.0 / (1.0 - rho)).min(max_bounces.max(1) as f64)
+        .fold(0.0f32, f32::max) as f64;
+    let most = max_bounces as f64 + 1.0;
+    if rho >= 1.0 {
+        most
+    } else {
+        (1.0 / (1.0 - rho)).min(most)
+    }
 }
 
 /// The memory a render of `scene` with `settings` and `kind` on `threads` threads needs.
@@ -333,7 +339,7 @@ pub fn check_render(
     threads: usize,
     max_memory: Option<u64>,
     cli: FromCli,
-) -> Result<(), String> {
+) -> Result<Estimate, String> {
     let threads = match threads {
         0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
         n => n,
@@ -346,7 +352,28 @@ pub fn check_render(
         None => default_budget(),
     };
     let e = estimate(scene, settings, kind, backend, threads);
-    check(&e, &budget).map_err(|m| format!("{}: {m}", blame(&e, scene, cli)))
+    check(&e, &budget).map_err(|m| format!("{}: {m}", blame(&e, scene, cli)))?;
+    Ok(e)
+}
+
+/// This process's peak resident memory (`VmHWM` in /proc/self/status), in bytes.
+pub fn peak_resident() -> Option<u64> {
+    proc_kb(
+        &std::fs::read_to_string("/proc/self/status").ok()?,
+        "VmHWM:",
+    )
+}
+
+/// The line a render prints at the end: its estimate and its measured peak.
+pub fn report(e: &Estimate) -> String {
+    let peak = peak_resident().unwrap_or(0);
+    format!(
+        "memory: estimated {} bytes (~{}), peak resident {} bytes (~{})",
+        e.total(),
+        human(e.total()),
+        peak,
+        human(peak)
+    )
 }
 
 #[cfg(test)]
@@ -386,6 +413,29 @@ mod tests {
         assert!(check_float(0.0, 0.0, 1.0, false).is_ok());
         assert!(check_float(-0.5, 0.0, 1.0, false).is_err());
         assert!(check_float(f32::INFINITY, 0.0, f32::MAX, true).is_err());
+    }
+
+    /// Photons stored per photon emitted: 1 / (1 - rho) for the brightest diffuse material,
+    /// at most `max_bounces + 1` (also for rho = 1, the furnace).
+    #[test]
+    fn landings_bound() {
+        let scene = |rho: f32| {
+            Scene::with_geometry(
+                vec![],
+                vec![
+                    Material::Diffuse {
+                        reflectance: Vec3::splat(0.2),
+                    },
+                    Material::Diffuse {
+                        reflectance: Vec3::splat(rho),
+                    },
+                ],
+                vec![],
+            )
+        };
+        assert!((landings_per_photon(&scene(0.5), 32) - 2.0).abs() < 1e-6);
+        assert!((landings_per_photon(&scene(0.9), 5) - 6.0).abs() < 1e-6);
+        assert_eq!(landings_per_photon(&scene(1.0), 32), 33.0);
     }
 
     #[test]

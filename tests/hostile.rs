@@ -37,6 +37,24 @@ fn case_01_gather_samples_are_bounded() {
     // The largest allowed count renders in bounded batches under a 1 GiB cap.
     let r = render_text(&d, &small_scene(""), &["--gather-samples", "4096"], GIB);
     assert_eq!(r.code, Some(0), "{}", r.describe());
+    assert!(ray_count(&r.stdout, "secondary") > 100_000, "{}", r.stdout);
+}
+
+/// The number after `kind` in the "rendered in" line (`camera N, secondary N, shadow N`).
+fn ray_count(stdout: &str, kind: &str) -> u64 {
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("rendered in"))
+        .expect("a rendered line");
+    let after = line
+        .split(&format!("{kind} "))
+        .nth(1)
+        .expect("the ray kind");
+    after
+        .split(|c: char| !c.is_ascii_digit())
+        .next()
+        .and_then(|n| n.parse().ok())
+        .expect("a count")
 }
 
 #[test]
@@ -72,9 +90,12 @@ AreaLightSource "diffuse" "rgb L" [ 1 1 1 ]
 Shape "trianglemesh" "point3 P" [ -1e15 -1e15 0  1e15 -1e15 0  0 1e15 0 ]
 "#;
     let r = render_text(&d, text, &[], GIB);
-    assert_error(&r, &["scene.pbrt:5:7", "too large"]);
+    assert_error(&r, &["scene.pbrt:2:8", "too large", "camera"]);
+    let r = render_text(&d, &text.replace("5e15", "5"), &[], GIB);
+    assert_error(&r, &["scene.pbrt:5:7", "too large", "vertex"]);
     // Inside the supported range, an emitter whose power overflows is an error too.
     let text = text
+        .replace("5e15", "5e8")
         .replace("e15", "e9")
         .replace("[ 1 1 1 ]", "[ 1e20 1e20 1e20 ]");
     let r = render_text(&d, &text, &[], GIB);
@@ -95,6 +116,14 @@ fn case_04_devices_fifos_and_symlinks_are_not_replaced() {
         .unwrap()
         .file_type()
         .is_char_device());
+    // With the PNG preview on, no `/dev/null.png` appears beside the device.
+    let _ = std::fs::remove_file("/dev/null.png"); // left by an older photon, if any
+    let no_png = args.iter().position(|a| a == "--no-png").unwrap();
+    let mut with_png = args.clone();
+    with_png.remove(no_png);
+    let r = run_capped(&with_png, GIB, T);
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    assert!(!Path::new("/dev/null.png").exists());
     // A FIFO gets the EXR's bytes; it is still a FIFO afterwards.
     let fifo = d.join("pipe.exr");
     assert!(std::process::Command::new("mkfifo")
@@ -486,6 +515,8 @@ fn case_18_light_samples_and_threads_are_bounded() {
     assert_error(&r, &["--threads", "0..=1024"]);
     let r = render_text(&d, &small_scene(""), &["--light-samples", "4096"], GIB);
     assert_eq!(r.code, Some(0), "{}", r.describe());
+    // 8x8 pixels x 4096 shadow rays, traced in batches of 16384.
+    assert!(ray_count(&r.stdout, "shadow") > 100_000, "{}", r.stdout);
 }
 
 #[test]
@@ -505,11 +536,17 @@ Shape "trianglemesh" "point3 P" [ -3 -2 -3  3 -2 -3  3 -2 3 ] "integer indices" 
 "#;
     let r = render_text(&d, &text.replace("MAXDEPTH", "10000"), &[], GIB);
     assert_error(&r, &["scene.pbrt:4:", "maxdepth", "0..=1000"]);
-    let r = render_text(&d, &text.replace("MAXDEPTH", "1000"), &[], GIB);
-    assert_eq!(r.code, Some(0), "{}", r.describe());
-    let img = photon::imageio::read_exr(&d.join("out.exr")).unwrap();
-    let max = img.pixels.iter().flatten().fold(0.0f32, |a, &b| a.max(b));
-    assert_eq!(max, 0.0, "light leaked into the closed mirror sphere");
+    for integrator in ["photonmap", "path", "direct"] {
+        let args = ["--integrator", integrator];
+        let r = render_text(&d, &text.replace("MAXDEPTH", "1000"), &args, GIB);
+        assert_eq!(r.code, Some(0), "{}", r.describe());
+        let img = photon::imageio::read_exr(&d.join("out.exr")).unwrap();
+        let max = img.pixels.iter().flatten().fold(0.0f32, |a, &b| a.max(b));
+        assert_eq!(
+            max, 0.0,
+            "{integrator}: light leaked into the closed mirror sphere"
+        );
+    }
 }
 
 #[test]
@@ -544,4 +581,53 @@ fn case_20_backends_agree_to_noise_level() {
         m.overall.relmse
     );
     assert!(m.overall.relmse < 2e-3, "relMSE {}", m.overall.relmse);
+}
+
+/// The numbers of the `memory:` line a render prints: (estimate, peak resident), in bytes.
+fn memory_line(stdout: &str) -> (u64, u64) {
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("memory: estimated "))
+        .expect("a memory line");
+    let nums: Vec<u64> = line
+        .split_whitespace()
+        .filter_map(|w| w.parse().ok())
+        .collect();
+    (nums[0], nums[1])
+}
+
+/// The resource model against the measured peak (VmHWM) of real renders: never below it, and
+/// for the film (measured constants) within a factor 1.5 above it. The photon-map part uses an
+/// upper bound of photons stored per photon emitted, so it may be loose, not low.
+#[test]
+fn resource_model_bounds_the_measured_peak() {
+    let d = tmp_dir("model");
+    let scene = Path::new("../shared/scenes/cornell-box/scene-v4.pbrt");
+    let run = |extra: &[&str]| {
+        let mut args: Vec<std::ffi::OsString> = vec![
+            "render".into(),
+            scene.into(),
+            "--spp".into(),
+            "1".into(),
+            "--threads".into(),
+            "2".into(),
+            "-o".into(),
+            d.join("m.exr").into(),
+            "--png".into(),
+            d.join("m.png").into(),
+        ];
+        args.extend(extra.iter().map(Into::into));
+        let r = run_capped(&args, 4 * GIB, T);
+        assert_eq!(r.code, Some(0), "{}", r.describe());
+        memory_line(&r.stdout)
+    };
+    let (est, peak) = run(&["--res", "2048x2048", "--integrator", "direct"]);
+    println!("film 2048x2048: estimate {est}, peak {peak}");
+    assert!(
+        peak <= est && (est as f64) < 1.5 * peak as f64,
+        "{est} vs {peak}"
+    );
+    let (est, peak) = run(&["--res", "16x16", "--global-photons", "3000000"]);
+    println!("3M photons: estimate {est}, peak {peak}");
+    assert!(peak <= est, "{est} vs {peak}");
 }

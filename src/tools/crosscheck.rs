@@ -46,8 +46,8 @@ pub const DEFAULT_MAX_RELMSE: f64 = 1e-3;
 pub struct CrosscheckOptions {
     /// The pbrt-v4 scene file.
     pub scene: PathBuf,
-    /// Rays of each kind (camera, shadow, photon, gather) to record and compare.
-    #[arg(long, default_value_t = 100_000)]
+    /// Rays of each kind (camera, shadow, photon, gather) to record and compare (at most 10^8).
+    #[arg(long, default_value_t = 100_000, value_parser = super::usize_in(1, 100_000_000))]
     pub rays: usize,
     /// Seed of the render (sample streams) and of the choice of recorded rays.
     #[arg(long, default_value_t = 0)]

@@ -82,6 +82,17 @@ pub struct Outputs {
 /// A writer of one output into the path it is given.
 pub type Writer<'a> = Box<dyn FnOnce(&Path) -> Result<(), String> + 'a>;
 
+/// The PNG preview's default path beside the EXR `exr` (its `.png` sibling), or `None` when
+/// `exr` is a device or a FIFO (`-o /dev/null` must not create `/dev/null.png`).
+pub fn default_png(exr: &Path) -> Option<PathBuf> {
+    use std::os::unix::fs::FileTypeExt;
+    let special = fs::metadata(exr).is_ok_and(|m| {
+        let t = m.file_type();
+        t.is_char_device() || t.is_fifo() || t.is_block_device() || t.is_socket()
+    });
+    (!special).then(|| exr.with_extension("png"))
+}
+
 /// Symlinks followed before giving up (the kernel's own limit).
 const MAX_LINKS: usize = 40;
 
@@ -388,6 +399,15 @@ mod tests {
             .is_symlink());
         assert_eq!(fs::read_to_string(d.join("target.exr")).unwrap(), "new");
         assert_eq!(names(&d), ["link.exr", "target.exr"]);
+    }
+
+    #[test]
+    fn no_default_png_beside_a_device() {
+        assert_eq!(default_png(Path::new("/dev/null")), None);
+        assert_eq!(
+            default_png(Path::new("some/out.exr")),
+            Some(PathBuf::from("some/out.png"))
+        );
     }
 
     #[test]

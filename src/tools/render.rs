@@ -263,17 +263,19 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
         .output
         .clone()
         .unwrap_or_else(|| default_output(scene.film.filename.as_deref(), &opts.scene));
-    let png = (!opts.no_png).then(|| {
-        opts.png
+    let png = match opts.no_png {
+        true => None,
+        false => opts
+            .png
             .clone()
-            .unwrap_or_else(|| exr.with_extension("png"))
-    });
+            .or_else(|| super::output::default_png(&exr)),
+    };
     let outputs = Outputs::plan(&exr, png.as_deref()).map_err(ToolError)?;
     let cli = crate::resources::FromCli {
         res: opts.res.is_some(),
         photons: opts.photon.global_photons.is_some() || opts.photon.caustic_photons.is_some(),
     };
-    crate::resources::check_render(
+    let estimate = crate::resources::check_render(
         &scene,
         &settings,
         (opts.integrator, opts.backend),
@@ -423,6 +425,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     for f in &outputs.files {
         println!("wrote {}", f.shown.display());
     }
+    println!("{}", crate::resources::report(&estimate));
     Ok(())
 }
 

@@ -217,8 +217,8 @@ pub fn all_scenes() -> Vec<PathBuf> {
     v
 }
 
-/// A Cornell-box-like scene text (camera looking down -z at a diffuse box lit by a quad), with
-/// `world` appended after WorldBegin.
+/// A small scene text (camera looking down -z at a floor and a back wall lit by a quad facing
+/// down), with `world` appended after WorldBegin (on line 12).
 pub fn small_scene(world: &str) -> String {
     format!(
         r#"LookAt 0 1 3.5  0 1 0  0 1 0
@@ -230,7 +230,7 @@ Shape "trianglemesh" "point3 P" [ -1 0 -1  1 0 -1  1 0 1  -1 0 1 ] "integer indi
 Shape "trianglemesh" "point3 P" [ -1 0 -1  -1 2 -1  1 2 -1  1 0 -1 ] "integer indices" [ 0 1 2 0 2 3 ]
 AttributeBegin
 AreaLightSource "diffuse" "rgb L" [ 5 5 5 ]
-Shape "trianglemesh" "point3 P" [ -0.3 1.99 -0.3  0.3 1.99 -0.3  0.3 1.99 0.3  -0.3 1.99 0.3 ] "integer indices" [ 0 2 1 0 3 2 ]
+Shape "trianglemesh" "point3 P" [ -0.3 1.99 -0.3  0.3 1.99 -0.3  0.3 1.99 0.3  -0.3 1.99 0.3 ] "integer indices" [ 0 1 2 0 2 3 ]
 AttributeEnd
 {world}
 "#

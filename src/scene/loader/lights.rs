@@ -19,6 +19,12 @@
 //! - spot: I *= power / (2 pi (1 - (cos_start + cos_end) / 2)), pbrt-v4's k_e, with
 //!   cos_end = cos(coneangle), cos_start = cos(coneangle - conedelta).
 //!
+//! Every `L`/`I` component and `scale` must be finite and >= 0 and `power` in (0, 1e30]; the
+//! value after `scale` and `power` at most [`MAX_LIGHT_VALUE`] (1e20) and a light's power,
+//! computed in f64 (an emitter's area can overflow f32), at most [`MAX_LIGHT_POWER`] (1e30 W):
+//! otherwise an error at the parameter (NaN/Inf pixels or a silently dropped light before).
+//! Point and spot lights must lie within the supported coordinates (see `extent`).
+//!
 //! `from`/`to` go through the CTM; a distant light's `dir` is the direction light travels
 //! (`to - from`, transformed as a vector). Distant `illuminance`, spectra and blackbodies, and
 //! other light types are unsupported.
@@ -45,7 +51,7 @@ impl AreaSpec {
         let sides = if self.two_sided { 2.0 } else { 1.0 };
         let l = match self.power {
             None => self.l,
-            Some(_) if !(area > 0.0) => {
+            Some(_) if area.is_nan() || area <= 0.0 => {
                 return Err("\"power\" given for an area light on a shape of zero area".to_string())
             }
             Some(power) => {
@@ -60,7 +66,7 @@ impl AreaSpec {
             }
         };
         let power = std::f64::consts::PI * sides * area * l.max_element() as f64;
-        if !(power <= MAX_LIGHT_POWER) {
+        if power.is_nan() || power > MAX_LIGHT_POWER {
             return Err(format!(
                 "the emitter's power {power:e} (area {area:e}) is above the limit {MAX_LIGHT_POWER:e}"
             ));
@@ -113,13 +119,13 @@ fn scaled(
 /// Reads `scale` (finite, >= 0) and `power` (finite and > 0 when given).
 fn scale_power(params: &mut ParamSet) -> Result<(f32, Option<f32>), SceneError> {
     let scale = params.get_float("scale", 1.0)?;
-    if !(scale >= 0.0) {
+    if scale.is_nan() || scale < 0.0 {
         let p = params.peek("scale").expect("given");
         return Err(p.err(format!("must be >= 0, got {scale}")));
     }
     let power = params.get_float_opt("power")?;
     if let Some(pw) = power {
-        if !(pw > 0.0) || pw as f64 > MAX_LIGHT_POWER {
+        if pw.is_nan() || pw <= 0.0 || pw as f64 > MAX_LIGHT_POWER {
             let p = params.peek("power").expect("given");
             return Err(p.err(format!("must be in (0, {MAX_LIGHT_POWER:e}], got {pw}")));
         }
@@ -194,10 +200,10 @@ fn position(params: &mut ParamSet, loc: &Loc, ctm: &Mat4) -> Result<Vec3, SceneE
     let from = params.get_point3("from", Vec3::ZERO)?;
     let p = xform_point(ctm, from);
     let max = super::extent::MAX_COORDINATE;
-    if !(p.abs().max_element() <= max) {
+    if !p.is_finite() || p.abs().max_element() > max {
         return Err(SceneError::at(
             loc,
-            format!("the light is at {p} after the current transform, beyond the supported coordinates (up to {max:e})"),
+            format!("the scene is too large: the light is at {p} after the current transform (photon supports coordinates up to {max:e}; scale the scene down)"),
         ));
     }
     Ok(p)
@@ -242,7 +248,7 @@ fn spot(params: &mut ParamSet, loc: &Loc, ctm: &Mat4) -> Result<Light, SceneErro
 fn distant(params: &mut ParamSet, loc: &Loc, ctm: &Mat4) -> Result<Light, SceneError> {
     let l = light_rgb(params, "L")?;
     let scale = params.get_float("scale", 1.0)?;
-    if !(scale >= 0.0) {
+    if scale.is_nan() || scale < 0.0 {
         let p = params.peek("scale").expect("given");
         return Err(p.err(format!("must be >= 0, got {scale}")));
     }

@@ -1253,7 +1253,7 @@ fn camera(ty: &str, params: &mut ParamSet, at: &Loc, ctm: &Mat4) -> Result<Camer
     if eye.abs().max_element() > max {
         return Err(SceneError::at(
             at,
-            format!("the camera is at {eye}, beyond the supported coordinates (up to {max:e})"),
+            format!("the scene is too large: the camera is at {eye} (photon supports coordinates up to {max:e}; scale the scene down)"),
         ));
     }
     Ok(CameraDesc {

@@ -412,7 +412,7 @@ pub fn sphere_rings(
     }
     let eye = camera.world_from_camera.transform_point3(Vec3::ZERO);
     let dist = (spec.centre - eye).length() - spec.radius;
-    if !(dist > spec.radius) {
+    if dist.is_nan() || dist <= spec.radius {
         return SPHERE_RINGS;
     }
     let pixels = film.xres.min(film.yres).max(REFERENCE_PIXELS) as f32;
