@@ -1,19 +1,11 @@
 //! The `photon` binary: outputs, exit codes, one-line errors, and that a failed render never
 //! replaces a good image.
+mod common;
+use common::photon;
 use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn photon() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_photon"))
-}
 
 fn tmp(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
-        .join("cli")
-        .join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::scratch("cli", name)
 }
 
 #[test]

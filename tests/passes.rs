@@ -2,20 +2,13 @@
 //! refuses parts of other renders and bad ranges, a render killed with -9 resumes from its
 //! checkpoint to the uninterrupted image, SIGTERM keeps what was finished, and progressive
 //! photon mapping falls below the fixed-map error floor.
+mod common;
+use common::photon;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn photon() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_photon"))
-}
-
 fn tmp(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
-        .join("passes")
-        .join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::scratch("passes", name)
 }
 
 /// A small progressive render of the glass Cornell box (caustics, both maps, gathering).

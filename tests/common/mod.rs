@@ -38,14 +38,24 @@ impl Run {
     }
 }
 
-/// A fresh directory under the target's temporary directory.
+/// A fresh directory under the target's temporary directory (for the hostile-input tests).
 pub fn tmp_dir(name: &str) -> PathBuf {
+    scratch("hostile", name)
+}
+
+/// A fresh directory `group/name` under the target's temporary directory.
+pub fn scratch(group: &str, name: &str) -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
-        .join("hostile")
+        .join(group)
         .join(name);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
+}
+
+/// A command running this build's `photon` binary.
+pub fn photon() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_photon"))
 }
 
 /// Runs `photon ARGS` with its address space capped at `mem` bytes, killed after `timeout`.
