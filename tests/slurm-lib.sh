@@ -1,7 +1,7 @@
 # Shared by tests/slurm.sh and benches/slurm-split.sh (source it from the repository root):
 # a throw-away cluster that is always torn down, the photon binary or a stub of it, and one
 # timed submit-and-wait of contrib/slurm/submit.sh.
-# shellcheck shell=bash
+# shellcheck shell=bash disable=SC2034 # the variables set here are read by the callers
 
 now() { date +%s.%N; }
 since() { awk -v a="$1" -v b="$(now)" 'BEGIN { printf "%.2f", b - a }'; }

@@ -15,7 +15,7 @@
 # text files: it tests the cluster plumbing without the renderer's progressive mode.
 # --keep DIR keeps the job directories (parts, logs, images) in DIR instead of a temporary one.
 set -uo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/.." || exit 2
 . tests/slurm-lib.sh
 
 DRY=0 work=""
@@ -69,11 +69,13 @@ single_run() { # renders the 8 passes in one process and merges the single part
   local t0
   t0=$(now)
   mkdir -p "$work/single"
-  "$PHOTON_BIN" render "$scene" --progressive --passes 0..8 --threads 2 "${args[@]}" \
-    -o "$work/single/part-00000-00008.exr" --no-png >"$work/single/render.log" 2>&1 &&
-    "$PHOTON_BIN" merge "$work/single/part-00000-00008.exr" -o "$work/single/image.exr" --no-png \
-      >"$work/single/merge.log" 2>&1 ||
-    { tail -n 5 "$work"/single/*.log >&2; return 1; }
+  if ! "$PHOTON_BIN" render "$scene" --progressive --passes 0..8 --threads 2 "${args[@]}" \
+    -o "$work/single/part-00000-00008.exr" --no-png >"$work/single/render.log" 2>&1 ||
+    ! "$PHOTON_BIN" merge "$work/single/part-00000-00008.exr" -o "$work/single/image.exr" --no-png \
+      >"$work/single/merge.log" 2>&1; then
+    tail -n 5 "$work"/single/*.log >&2
+    return 1
+  fi
   echo "     one process, 8 passes + merge: $(since "$t0") s"
 }
 
@@ -105,7 +107,7 @@ daemons_running() {
 nothing_left() { # STATE PIDS...
   local s=$1 left
   shift
-  left=$( (ps -o pid=,args= -p "$(IFS=,; echo "$*")"; ps -eo pid=,args= | grep -F "$s/" | grep -v grep) 2>/dev/null)
+  left=$( (ps -o pid=,args= -p "$(IFS=,; echo "$*")"; pgrep -af -- "$s/") 2>/dev/null)
   [ -z "$left" ] || { echo "     left behind: $left" >&2; return 1; }
   echo "     processes left: 0 (checked ${#@} PIDs and every command line)"
 }

@@ -47,8 +47,8 @@ if compgen -G "$outdir/parts/part-*.exr" >/dev/null || [ -e "$outdir/image.exr" 
 fi
 mkdir -p "$outdir/parts" "$outdir/logs"
 
-# shellcheck disable=SC2086 # PHOTON_SBATCH_ARGS is a list of words
-common=(--parsable --export="ALL,PHOTON_BIN=$bin" --chdir="$outdir" ${PHOTON_SBATCH_ARGS:-})
+read -r -a extra <<<"${PHOTON_SBATCH_ARGS:-}"
+common=(--parsable --export="ALL,PHOTON_BIN=$bin" --chdir="$outdir" "${extra[@]}")
 array=$(sbatch "${common[@]}" --array="0-$((tasks - 1))" --cpus-per-task="$cpus" \
   --output="$outdir/logs/render-%A_%a.log" \
   "$here/render-array.sbatch" "$scene" "$passes" "$outdir" "$@")

@@ -19,9 +19,9 @@ while :; do
   if ! grep -qvxE 'COMPLETED|PENDING|CONFIGURING|RUNNING|COMPLETING|SUSPENDED|REQUEUED|RESIZING' <<<"$s"; then
     [ "$s" = COMPLETED ] && { echo "job $job COMPLETED"; exit 0; }
   else
-    echo "job $job ended $(echo $s): $(scontrol show job -o "$job" | grep -o 'Reason=[^ ]*' | sort -u | tr '\n' ' ')" >&2
+    echo "job $job ended ${s//$'\n'/ }: $(scontrol show job -o "$job" | grep -o 'Reason=[^ ]*' | sort -u | tr '\n' ' ')" >&2
     exit 1
   fi
-  [ "$(date +%s)" -lt "$end" ] || { echo "job $job still $(echo $s) after $timeout s" >&2; exit 3; }
+  [ "$(date +%s)" -lt "$end" ] || { echo "job $job still ${s//$'\n'/ } after $timeout s" >&2; exit 3; }
   sleep 0.2
 done
