@@ -34,14 +34,14 @@ else
 fi
 
 passed=0 failed=0
-check() { # NAME COMMAND...: runs COMMAND, counts and prints the result
+check() { # NAME COMMAND...: runs COMMAND, counts and prints the result, returns its status
   local name=$1; shift
   if "$@"; then passed=$((passed + 1)); echo "ok   $name"
-  else failed=$((failed + 1)); echo "FAIL $name"; fi
+  else failed=$((failed + 1)); echo "FAIL $name"; return 1; fi
 }
 summary() {
   echo "$passed passed, $failed failed"
-  [ "$cleanup_work" = 1 ] && [ "$failed" = 0 ] && rm -rf "$work"
+  if [ "$cleanup_work" = 1 ] && [ "$failed" = 0 ]; then rm -rf "$work"; else echo "job directories kept in $work"; fi
   [ "$failed" = 0 ]
 }
 
@@ -50,7 +50,7 @@ args=(--res 64x64 --spp 4 --global-photons 5000 --caustic-photons 5000 --seed 7)
 timeout=300
 
 # Prints a job directory's logs (on failure).
-show_logs() { tail -n 5 "$1"/logs/*.log 2>/dev/null | sed 's/^/    /' >&2; }
+show_logs() { tail -n 8 "$1"/logs/*.log 2>/dev/null | sed 's/^/    /' >&2; }
 
 array_run() { # NAME TASKS: renders the 8 passes as a TASKS-task array into $work/NAME
   if submit_and_wait "$timeout" "$scene" 8 "$2" "$work/$1" "${args[@]}"; then
