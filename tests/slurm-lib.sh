@@ -51,7 +51,7 @@ stub_photon() {
         case "$1" in
           --passes) range=$2; shift 2 ;;
           -o) out=$2; shift 2 ;;
-          --threads | --res | --spp | --seed | --global-photons | --caustic-photons) shift 2 ;;
+          --threads | --res | --spp | --pass-spp | --alpha | --seed | --global-photons | --caustic-photons) shift 2 ;;
           --progressive | --no-png) shift ;;
           *) echo "error: unexpected argument '$1'" >&2; return 2 ;;
         esac

@@ -46,7 +46,7 @@ summary() {
 }
 
 scene=scenes/cornell-glass.pbrt
-args=(--res 64x64 --spp 4 --global-photons 5000 --caustic-photons 5000 --seed 7)
+args=(--res 64x64 --pass-spp 4 --global-photons 5000 --caustic-photons 5000 --seed 7)
 timeout=300
 
 # Prints a job directory's logs (on failure).
