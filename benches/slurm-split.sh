@@ -10,14 +10,14 @@
 #   benches/slurm-split.sh [--dry] [--repeat R] [--passes N] [-- photon render args]
 #
 # Defaults: 3 repeats, 8 passes, scenes/cornell-glass.pbrt with
-# --res 128x128 --spp 4 --global-photons 50000 --caustic-photons 50000 --seed 1.
+# --res 256x256 --pass-spp 4 --global-photons 100000 --caustic-photons 100000 --seed 1.
 # --dry uses tests/slurm-lib.sh's stub photon (measures only the Slurm overhead).
 set -uo pipefail
 cd "$(dirname "$0")/.." || exit 2
 . tests/slurm-lib.sh
 
 DRY=0 repeat=3 passes=8
-args=(--res 128x128 --spp 4 --global-photons 50000 --caustic-photons 50000 --seed 1)
+args=(--res 256x256 --pass-spp 4 --global-photons 100000 --caustic-photons 100000 --seed 1)
 while [ $# -gt 0 ]; do
   case "$1" in
     --dry) DRY=1; shift ;;
@@ -51,6 +51,7 @@ run() { # NAME DIR
 photon_binary "$work" || exit 1
 cluster_up || exit 1
 echo "cluster up in $UP_SECONDS s; $passes passes, render args: ${args[*]}"
+echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg) ($(nproc) CPUs)"
 configs=(slurm-1x2 slurm-2x1 direct)
 for ((r = 0; r < repeat; r++)); do
   for c in "${configs[@]}"; do run "$c" "$work/$c-$r"; done
@@ -59,6 +60,7 @@ for c in "${configs[@]}"; do
   printf '%-10s median %s s over %d runs\n' "$c" \
     "$(awk -v c="$c" '$1 == c { print $2 }' "$work/times" | sort -g | awk '{ v[NR] = $1 } END { print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2 }')" "$repeat"
 done
+echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg)"
 status=0
 for f in "$work"/*/image.exr; do
   cmp -s "$f" "$work/direct-0/image.exr" || { echo "$f differs from direct-0/image.exr" >&2; status=1; }
