@@ -9,8 +9,9 @@
 # 3-task array (2+3+3 passes) with contrib/slurm/submit.sh, renders the same 8 passes in one
 # process and merges that single part, and checks with cmp that all three merged EXRs are
 # identical bit for bit. Also checks that a failing array cancels its merge job instead of
-# leaving it waiting. Prints timings and ends with "N passed, M failed"; exit status 1 on any
-# failure.
+# leaving it waiting, that merge.sbatch refuses parts with a pass range missing and that
+# submit.sh refuses an output directory that already holds parts. Prints timings and ends with
+# "N passed, M failed"; exit status 1 on any failure.
 # --dry replaces photon by a shell stub (tests/slurm-lib.sh: stub_photon) whose "parts" are
 # text files: it tests the cluster plumbing without the renderer's progressive mode.
 # --keep DIR keeps the job directories (parts, logs, images) in DIR instead of a temporary one.
@@ -97,6 +98,30 @@ failing_run() {
   [ "$state" = JobState=CANCELLED ] && [ ! -e "$work/failing/image.exr" ]
 }
 
+# merge.sbatch, run directly, must refuse parts that do not tile 0..8 (a pass range missing).
+merge_refuses_gap() {
+  local msg
+  mkdir -p "$work/gap/parts"
+  cp "$work"/four/parts/part-*.exr "$work/gap/parts/"
+  rm "$work/gap/parts/part-00002-00004.exr"
+  if msg=$(bash contrib/slurm/merge.sbatch "$work/gap" 8 2>&1); then
+    echo "     merge.sbatch accepted parts without passes 2..4" >&2; return 1
+  fi
+  echo "     merge.sbatch: $msg"
+  [[ $msg == *"passes 2..4 missing"* ]] && [ ! -e "$work/gap/image.exr" ]
+}
+
+# submit.sh must refuse an OUTDIR that already holds parts (and submit nothing).
+submit_refuses_reuse() {
+  local msg before
+  before=$(squeue -h | wc -l)
+  if msg=$(contrib/slurm/submit.sh "$scene" 8 4 "$work/four" "${args[@]}" 2>&1); then
+    echo "     submit.sh accepted a used OUTDIR: $msg" >&2; return 1
+  fi
+  echo "     $msg"
+  [[ $msg == *"already holds parts"* ]] && [ "$(squeue -h | wc -l)" = "$before" ]
+}
+
 daemons_running() {
   local n
   n=$(.ci/slurm ps "$SLURM_STATE" | grep -cE '^[0-9]+ (munged|slurmctld|slurmd) ')
@@ -127,6 +152,8 @@ if check "photon binary" photon_binary "$work"; then
   check "4-task merge = single-process merge, bit for bit" same_image four single
   check "3-task merge = single-process merge, bit for bit" same_image three single
   check "failing array cancels the merge" failing_run
+  check "merge.sbatch refuses a missing pass range" merge_refuses_gap
+  check "submit.sh refuses a used output directory" submit_refuses_reuse
 fi
 check "cluster down" cluster_down
 echo "     cluster down in ${DOWN_SECONDS:-?} s"
