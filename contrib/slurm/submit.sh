@@ -4,7 +4,7 @@
 #   contrib/slurm/submit.sh SCENE PASSES TASKS OUTDIR [extra photon render args]
 #
 # e.g.  PHOTON_BIN=$PWD/target/release/photon PHOTON_CPUS_PER_TASK=4 \
-#         contrib/slurm/submit.sh scenes/cornell-glass.pbrt 64 16 /shared/run1 --spp 4
+#         contrib/slurm/submit.sh scenes/cornell-glass.pbrt 64 16 /shared/run1 --pass-spp 4
 #
 # Task t of the array (render-array.sbatch) renders passes [t*PASSES/TASKS, (t+1)*PASSES/TASKS)
 # into OUTDIR/parts/; the merge job (merge.sbatch) starts once every task has succeeded
