@@ -4,8 +4,10 @@
 #   slurm 1x2   a 1-task array with --cpus-per-task=2 (one process, 2 threads) + merge job
 #   slurm 2x1   a 2-task array with --cpus-per-task=1 (two processes, 1 thread each) + merge job
 #   direct      one `photon render --passes 0..N --threads 2` + `photon merge`, no Slurm
-# on a throw-away cluster (.ci/slurm; as root). Each is repeated, in turns; prints every run, the
-# median of each, and checks that every merged image is the same file, bit for bit.
+# on a throw-away cluster (.ci/slurm; as root). Each is repeated, in turns; prints every run (for
+# Slurm runs also the longest task's own time), the median of each, and checks that every merged
+# image is the same file, bit for bit. Run it on a quiet machine: under load, Linux's autogroup
+# scheduler gives each Slurm job (its own session) a CPU share, which favours 2 tasks over 1.
 #
 #   benches/slurm-split.sh [--dry] [--repeat R] [--passes N] [-- photon render args]
 #
@@ -45,7 +47,16 @@ run() { # NAME DIR
     slurm-2x1) PHOTON_CPUS_PER_TASK=1 submit_and_wait 3600 "$scene" "$passes" 2 "$2" "${args[@]}" ;;
     direct) t0=$(now); direct "$2"; RUN_SECONDS=$(since "$t0") ;;
   esac || { echo "$1 failed; logs in $2" >&2; exit 1; }
-  echo "$1 $RUN_SECONDS" | tee -a "$work/times"
+  echo "$1 $RUN_SECONDS" >>"$work/times"
+  echo "$1 $RUN_SECONDS s$(longest_task "$2")"
+}
+
+# For a Slurm run: the longest task's own time (from its log), the rest being Slurm's overhead
+# (scheduling, job start-up, the merge job).
+longest_task() { # DIR
+  local t
+  t=$(cat "$1"/logs/render-*.log 2>/dev/null | sed -n 's/^task .* done in \([0-9.]*\) s$/\1/p' | sort -g | tail -n 1)
+  [ -z "$t" ] || echo " (longest task ${t} s)"
 }
 
 photon_binary "$work" || exit 1
