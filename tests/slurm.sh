@@ -139,7 +139,7 @@ nothing_left() { # STATE PIDS...
 
 [ "$DRY" = 1 ] && echo "dry run: photon is a stub (tests/slurm-lib.sh: stub_photon)"
 check "cluster up" cluster_up || { summary; exit 1; }
-echo "     cluster up in ${UP_SECONDS} s (state $SLURM_STATE)"
+echo "     cluster up in ${UP_SECONDS} s, package check/install included (state $SLURM_STATE)"
 check "daemons running" daemons_running
 state=$SLURM_STATE
 pids=$(.ci/slurm ps "$state" | cut -d' ' -f1 | tr '\n' ' ')
