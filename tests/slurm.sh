@@ -9,9 +9,10 @@
 # 3-task array (2+3+3 passes) with contrib/slurm/submit.sh, renders the same 8 passes in one
 # process and merges that single part, and checks with cmp that all three merged EXRs are
 # identical bit for bit. Also checks that a failing array cancels its merge job instead of
-# leaving it waiting, that merge.sbatch refuses parts with a pass range missing and that
-# submit.sh refuses an output directory that already holds parts. Prints timings and ends with
-# "N passed, M failed"; exit status 1 on any failure.
+# leaving it waiting, that one task submitted again alone writes the same part, that
+# merge.sbatch refuses parts with a pass range missing and that submit.sh refuses an output
+# directory that already holds parts. Prints timings and ends with "N passed, M failed"; exit
+# status 1 on any failure.
 # --dry replaces photon by a shell stub (tests/slurm-lib.sh: stub_photon) whose "parts" are
 # text files: it tests the cluster plumbing without the renderer's progressive mode.
 # --keep DIR keeps the job directories (parts, logs, images) in DIR instead of a temporary one.
@@ -98,6 +99,18 @@ failing_run() {
   [ "$state" = JobState=CANCELLED ] && [ ! -e "$work/failing/image.exr" ]
 }
 
+# Task 1 of the 4-task run, submitted again alone (as after a failure), writes the same part.
+rerun_one_task() {
+  local part=$work/four/parts/part-00002-00004.exr job
+  mv "$part" "$work/four/part-00002-00004.first.exr"
+  job=$(sbatch --parsable --array=1 --export="ALL,PHOTON_BIN=$PHOTON_BIN,PHOTON_ARRAY_TASKS=4" \
+    --output="$work/four/logs/rerun-%A_%a.log" \
+    contrib/slurm/render-array.sbatch "$PWD/$scene" 8 "$work/four" "${args[@]}") &&
+    contrib/slurm/wait.sh "$job" "$timeout" >/dev/null &&
+    cmp "$part" "$work/four/part-00002-00004.first.exr" &&
+    echo "     task 1 of 4 run alone (job $job) wrote the same part-00002-00004.exr"
+}
+
 # merge.sbatch, run directly, must refuse parts that do not tile 0..8 (a pass range missing).
 merge_refuses_gap() {
   local msg
@@ -152,6 +165,7 @@ if check "photon binary" photon_binary "$work"; then
   check "4-task merge = single-process merge, bit for bit" same_image four single
   check "3-task merge = single-process merge, bit for bit" same_image three single
   check "failing array cancels the merge" failing_run
+  check "one task run again alone writes the same part" rerun_one_task
   check "merge.sbatch refuses a missing pass range" merge_refuses_gap
   check "submit.sh refuses a used output directory" submit_refuses_reuse
 fi

@@ -48,7 +48,7 @@ fi
 mkdir -p "$outdir/parts" "$outdir/logs"
 
 read -r -a extra <<<"${PHOTON_SBATCH_ARGS:-}"
-common=(--parsable --export="ALL,PHOTON_BIN=$bin" --chdir="$outdir" "${extra[@]}")
+common=(--parsable --export="ALL,PHOTON_BIN=$bin,PHOTON_ARRAY_TASKS=$tasks" --chdir="$outdir" "${extra[@]}")
 array=$(sbatch "${common[@]}" --array="0-$((tasks - 1))" --cpus-per-task="$cpus" \
   --output="$outdir/logs/render-%A_%a.log" \
   "$here/render-array.sbatch" "$scene" "$passes" "$outdir" "$@")
