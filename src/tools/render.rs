@@ -357,9 +357,6 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     };
     let out = match opts.time {
         Some(budget) => {
-            if opts.photon.global_photons.is_none() && opts.photon.caustic_photons.is_none() {
-                super::converge::scale_photons(&mut settings, budget, 200_000);
-            }
             if opts.integrator == IntegratorKind::Photonmap
                 && budget >= integrator::passes::PROGRESSIVE_FROM_SECONDS
                 && !settings.photon.progressive
@@ -369,6 +366,12 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
                     "time budget {budget:.0} s >= {:.0} s: progressive photon mapping (it reaches a lower error there)",
                     integrator::passes::PROGRESSIVE_FROM_SECONDS
                 );
+            }
+            // Fixed maps grow with the budget; progressive passes keep the file's counts.
+            let given =
+                opts.photon.global_photons.is_some() || opts.photon.caustic_photons.is_some();
+            if !given && !settings.photon.progressive {
+                super::converge::scale_photons(&mut settings, budget, 200_000);
             }
             let (out, spp) = pool.install(|| {
                 integrator::render_for_time(&scene, &accel, &settings, opts.integrator, budget)
