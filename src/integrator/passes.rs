@@ -3,16 +3,20 @@
 //! A render in passes is a sum of pass images. Pass `k` depends only on (scene, settings,
 //! seed, `k`): its pixel samples use the seed [`pass_seed`]`(seed, k)`, and with
 //! progressive photon mapping (Knaus and Zwicker 2011, "Progressive photon mapping: a
-//! probabilistic approach") it also traces fresh global and caustic maps with that seed and
-//! estimates with fixed radii that shrink as
+//! probabilistic approach") it also traces fresh global and caustic maps with that seed, and
+//! its estimates use only the photons within `s_k r_knn^2` of each lookup, where `r_knn` is
+//! the k-nearest radius of the lookup (capped by `globalradius` / `causticradius`) and
 //!
 //! ```text
-//! r_{i+1}^2 = r_i^2 (i + alpha) / (i + 1)        (i = k + 1 = 1, 2, ...; alpha = 2/3)
+//! s_0 = 1,   s_{i+1} = s_i (i + alpha) / (i + 1)        (i = 1, 2, ...; alpha = 2/3)
 //! ```
 //!
-//! from the `globalradius` / `causticradius` of pass 0, so that the average of the pass images
-//! converges to the solution (bias and variance both go to zero; the MSE falls as
-//! `N^(-(1 - alpha))`... `N^(-2/3)` at best for alpha = 2/3). With Jensen's fixed maps
+//! Knaus and Zwicker's schedule with an initial radius that depends on the position (pass 0
+//! is Jensen's estimate). Given `r_knn`, the photons inside the smaller disc are uniform in it,
+//! so the same kernel estimate over them stays consistent; bias and variance both go to zero
+//! as passes are added (the MSE falls as `N^-(1 - alpha)` or faster while pixel noise
+//! dominates). Progressive passes skip the irradiance cache (its nearest-point lookup is a
+//! blur that would not shrink) and the minimum photon count. With Jensen's fixed maps
 //! (`progressive false`) every pass reads the same maps (traced once with `seed`).
 //!
 //! Pass images are added into an exact fixed-point accumulator ([`Partial`]: `i64` per channel
