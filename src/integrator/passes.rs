@@ -422,7 +422,7 @@ pub const PROGRESSIVE_FROM_SECONDS: f64 = f64::INFINITY;
 
 /// Photon work (tracing and building) is kept to at most this share of a pass in
 /// [`render_for_time`] by raising the pass's samples per pixel.
-const PHOTON_SHARE: f64 = 0.25;
+pub const PHOTON_SHARE: f64 = 0.25;
 
 /// Progressive passes until `budget_s` seconds are spent, stopping before a pass that would
 /// not fit. Made for a wall-clock budget, not for merging: each pass traces the configured
