@@ -22,7 +22,7 @@
 use crate::accel::BackendKind;
 use crate::integrator::{IntegratorKind, RenderSettings};
 use crate::math::Vec3;
-use crate::scene::{Material, Scene};
+use crate::scene::{MaterialKind, Scene};
 
 /// Largest image side, in pixels.
 pub const MAX_RESOLUTION: u32 = 32768;
@@ -230,10 +230,11 @@ fn landings_per_photon(scene: &Scene, max_bounces: u32) -> f64 {
     let rho = scene
         .materials
         .iter()
-        .map(|m| match m {
-            Material::Diffuse { reflectance } => {
-                reflectance.clamp(Vec3::ZERO, Vec3::ONE).element_sum() / 3.0
-            }
+        .map(|m| match &m.kind {
+            // A texture may reach 1 somewhere: bounded by max_bounces below.
+            MaterialKind::Diffuse { reflectance } => reflectance
+                .constant()
+                .map_or(1.0, |r| r.clamp(Vec3::ZERO, Vec3::ONE).element_sum() / 3.0),
             _ => 0.0,
         })
         .fold(0.0f32, f32::max) as f64;
@@ -379,6 +380,7 @@ pub fn report(e: &Estimate) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::Material;
 
     #[test]
     fn sizes_parse() {
@@ -423,12 +425,12 @@ mod tests {
             Scene::with_geometry(
                 vec![],
                 vec![
-                    Material::Diffuse {
-                        reflectance: Vec3::splat(0.2),
-                    },
-                    Material::Diffuse {
-                        reflectance: Vec3::splat(rho),
-                    },
+                    Material::from(MaterialKind::Diffuse {
+                        reflectance: Vec3::splat(0.2).into(),
+                    }),
+                    Material::from(MaterialKind::Diffuse {
+                        reflectance: Vec3::splat(rho).into(),
+                    }),
                 ],
                 vec![],
             )

@@ -36,7 +36,8 @@ pub use diffuse::Diffuse;
 pub use microfacet::TrowbridgeReitz;
 
 use crate::math::{Vec2, Vec3};
-use crate::scene::Material;
+use crate::scene::{MaterialKind, Metal};
+use crate::texture::TexCoord;
 
 /// What a path carries: radiance (camera paths) or importance (photons). Only refraction
 /// through a delta interface differs: radiance is scaled by `1 / eta^2`, importance is not.
@@ -120,6 +121,50 @@ impl std::ops::BitOr for BxdfFlags {
     }
 }
 
+/// pbrt-v4's conductor from reflectance: k = 2 sqrt(r) / sqrt(1 - r), with r at most 1 - 1e-7
+/// (so that k stays finite): its normal-incidence reflectance with eta = 1 is r.
+pub fn k_from_reflectance(r: Vec3) -> Vec3 {
+    // In f64: 1 - 1e-7 is not representable in f32 (it would round to 1 - 1.19e-7).
+    let f = |r: f32| {
+        let r = (r as f64).clamp(0.0, 1.0 - 1e-7);
+        (2.0 * r.sqrt() / (1.0 - r).sqrt()) as f32
+    };
+    Vec3::new(f(r.x), f(r.y), f(r.z))
+}
+
+impl MaterialKind {
+    /// Every lobe the BSDF may have somewhere on a surface of this material (the union over
+    /// its textures' values): what the photon-map rules read to decide which maps a scene
+    /// needs.
+    pub fn flags(&self) -> BxdfFlags {
+        use BxdfFlags as F;
+        match self {
+            MaterialKind::Diffuse { .. } => F::REFLECTION | F::DIFFUSE,
+            MaterialKind::Dielectric { eta } => Bsdf::Dielectric(Dielectric::new(*eta)).flags(),
+            MaterialKind::Conductor { roughness, .. } => match roughness.constant() {
+                Some((u, v)) if TrowbridgeReitz::new(u, v).effectively_smooth() => {
+                    F::REFLECTION | F::SPECULAR
+                }
+                Some(_) => F::REFLECTION | F::GLOSSY,
+                None => F::REFLECTION | F::SPECULAR | F::GLOSSY,
+            },
+        }
+    }
+}
+
+impl MaterialKind {
+    /// Whether the surface reflects nothing anywhere (a diffuse material with a constant black
+    /// reflectance): no photon map is needed for it.
+    pub fn is_black(&self) -> bool {
+        match self {
+            MaterialKind::Diffuse { reflectance } => reflectance
+                .constant()
+                .is_some_and(|r| r.max_element() <= 0.0),
+            _ => false,
+        }
+    }
+}
+
 /// The BSDF at a surface point (a closed set; no dynamic dispatch).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Bsdf {
@@ -134,17 +179,25 @@ pub(crate) fn same_hemisphere(a: Vec3, b: Vec3) -> bool {
 }
 
 impl Bsdf {
-    /// The BSDF of a scene material (bad parameters are sanitised: see each variant's `new`).
-    pub fn from_material(m: &Material) -> Bsdf {
-        match m {
-            Material::Diffuse { reflectance } => Bsdf::Diffuse(Diffuse::new(*reflectance)),
-            Material::Dielectric { eta } => Bsdf::Dielectric(Dielectric::new(*eta)),
-            Material::Conductor {
-                eta,
-                k,
-                alpha_u,
-                alpha_v,
-            } => Bsdf::Conductor(Conductor::new(*eta, *k, *alpha_u, *alpha_v)),
+    /// The BSDF of scattering model `kind` with its textures looked up at `tc` (bad values are
+    /// sanitised: reflectances clamped to [0, 1] as pbrt-v4 does, see each variant's `new`).
+    pub fn new(kind: &MaterialKind, tc: &TexCoord) -> Bsdf {
+        match kind {
+            MaterialKind::Diffuse { reflectance } => Bsdf::Diffuse(Diffuse::new(
+                reflectance.eval(tc).clamp(Vec3::ZERO, Vec3::ONE),
+            )),
+            MaterialKind::Dielectric { eta } => Bsdf::Dielectric(Dielectric::new(*eta)),
+            MaterialKind::Conductor { metal, roughness } => {
+                let (eta, k) = match metal {
+                    Metal::EtaK { eta, k } => (eta.eval(tc), k.eval(tc)),
+                    Metal::Reflectance(r) => (
+                        Vec3::ONE,
+                        k_from_reflectance(r.eval(tc).clamp(Vec3::ZERO, Vec3::ONE)),
+                    ),
+                };
+                let (au, av) = roughness.eval(tc);
+                Bsdf::Conductor(Conductor::new(eta, k, au, av))
+            }
         }
     }
 
@@ -226,15 +279,19 @@ mod tests {
 
     #[test]
     fn material_mapping_and_flags() {
-        let diffuse = Bsdf::from_material(&Material::Diffuse {
-            reflectance: Vec3::new(0.1, 0.2, 0.3),
-        });
+        let tc = TexCoord::default();
+        let diffuse = Bsdf::new(
+            &MaterialKind::Diffuse {
+                reflectance: Vec3::new(0.1, 0.2, 0.3).into(),
+            },
+            &tc,
+        );
         let f = diffuse.flags();
         assert!(f.has_diffuse() && !f.has_specular() && !f.has_glossy() && f.has_non_specular());
         assert!(f.contains(BxdfFlags::REFLECTION) && !f.contains(BxdfFlags::TRANSMISSION));
         assert_eq!(diffuse.reflectance_estimate(), Vec3::new(0.1, 0.2, 0.3));
 
-        let glass = Bsdf::from_material(&Material::Dielectric { eta: 1.5 });
+        let glass = Bsdf::new(&MaterialKind::Dielectric { eta: 1.5 }, &tc);
         let f = glass.flags();
         assert!(f.is_specular_only() && !f.has_diffuse() && !f.has_glossy());
         assert!(f.contains(BxdfFlags::REFLECTION | BxdfFlags::TRANSMISSION));
@@ -255,13 +312,27 @@ mod tests {
             2.0 * r.z.sqrt() / (1.0 - r.z).sqrt(),
         );
         for (a, smooth) in [(0.0f32, true), (5e-4, true), (0.2, false)] {
-            let m = Material::Conductor {
-                eta: Vec3::ONE,
-                k,
-                alpha_u: a,
-                alpha_v: a,
+            let eta_k = MaterialKind::Conductor {
+                metal: Metal::EtaK {
+                    eta: Vec3::ONE.into(),
+                    k: k.into(),
+                },
+                roughness: crate::scene::Roughness::alphas(a, a),
             };
-            let b = Bsdf::from_material(&m);
+            let b = Bsdf::new(&eta_k, &tc);
+            assert_eq!(b.flags(), eta_k.flags(), "constant parameters: exact flags");
+            // The same conductor given by reflectance, with roughness remapped (sqrt).
+            let by_r = MaterialKind::Conductor {
+                metal: Metal::Reflectance(r.into()),
+                roughness: crate::scene::Roughness {
+                    u: (a * a).into(),
+                    v: (a * a).into(),
+                    remap: true,
+                },
+            };
+            let b2 = Bsdf::new(&by_r, &tc);
+            assert!((b2.reflectance_estimate() - r).abs().max_element() < 1e-5);
+            assert_eq!(b2.flags(), b.flags());
             assert_eq!(b.flags().is_specular_only(), smooth);
             assert_eq!(b.flags().has_glossy(), !smooth);
             assert!(!b.flags().has_diffuse());

@@ -5,6 +5,7 @@
 pub mod loader;
 
 use crate::math::{Mat4, Vec2, Vec3};
+use crate::texture::{Tex, TexCoord};
 use std::fmt;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -176,22 +177,86 @@ impl Mesh {
     }
 }
 
-/// The closed set of materials (pbrt-v4 names and defaults).
+/// A material: its scattering model and an optional bump map.
 #[derive(Clone, Debug, PartialEq)]
-pub enum Material {
+pub struct Material {
+    pub kind: MaterialKind,
+    /// `"texture displacement"`: a float texture of heights along the shading normal (pbrt-v4's
+    /// bump mapping, see [`crate::interaction::SurfaceInteraction::bsdf`]).
+    pub displacement: Option<Tex>,
+}
+
+impl From<MaterialKind> for Material {
+    fn from(kind: MaterialKind) -> Material {
+        Material {
+            kind,
+            displacement: None,
+        }
+    }
+}
+
+/// The closed set of scattering models (pbrt-v4 names and defaults). Parameters that pbrt-v4
+/// lets be textures are [`Tex`]: a constant or a texture, evaluated per hit.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MaterialKind {
     /// `"diffuse"`: Lambertian, `reflectance` (default 0.5).
-    Diffuse { reflectance: Vec3 },
+    Diffuse { reflectance: Tex },
     /// `"dielectric"`: smooth glass with relative index `eta` (default 1.5).
     Dielectric { eta: f32 },
-    /// `"conductor"`: complex index `eta + i k` (from `eta`/`k`, or from `reflectance` as pbrt-v4
-    /// does: eta = 1, k = 2 sqrt(r) / sqrt(1 - r)); Trowbridge-Reitz roughness `alpha_u/v`
-    /// (already remapped when `remaproughness` is true); 0 means a perfect mirror.
-    Conductor {
-        eta: Vec3,
-        k: Vec3,
-        alpha_u: f32,
-        alpha_v: f32,
-    },
+    /// `"conductor"`: complex index `eta + i k` ([`Metal`]) and Trowbridge-Reitz roughness.
+    Conductor { metal: Metal, roughness: Roughness },
+}
+
+/// A conductor's complex index of refraction: `eta` and `k` (RGB, named spectra or textures),
+/// or pbrt-v4's `reflectance` r, per hit: eta = 1, k = 2 sqrt(r) / sqrt(1 - r).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Metal {
+    EtaK { eta: Tex, k: Tex },
+    Reflectance(Tex),
+}
+
+/// Microfacet roughness in u and v (`uroughness`, `vroughness`, each defaulting to
+/// `roughness`); with `remap` (pbrt-v4's `remaproughness`, default true) the Trowbridge-Reitz
+/// alpha is sqrt(roughness), else the roughness itself. Alpha 0 is a perfect mirror.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Roughness {
+    pub u: Tex,
+    pub v: Tex,
+    pub remap: bool,
+}
+
+impl Roughness {
+    /// A constant roughness (`alpha_u`, `alpha_v` as given, not remapped).
+    pub fn alphas(alpha_u: f32, alpha_v: f32) -> Roughness {
+        Roughness {
+            u: alpha_u.into(),
+            v: alpha_v.into(),
+            remap: false,
+        }
+    }
+
+    /// The Trowbridge-Reitz alphas at `tc` (negative texture values count as 0).
+    pub fn eval(&self, tc: &TexCoord) -> (f32, f32) {
+        (
+            self.alpha(self.u.eval_float(tc)),
+            self.alpha(self.v.eval_float(tc)),
+        )
+    }
+
+    /// The alphas when they are the same everywhere.
+    pub fn constant(&self) -> Option<(f32, f32)> {
+        let (u, v) = (self.u.constant()?, self.v.constant()?);
+        Some((self.alpha(u.x), self.alpha(v.x)))
+    }
+
+    fn alpha(&self, roughness: f32) -> f32 {
+        let r = roughness.max(0.0);
+        if self.remap {
+            r.sqrt()
+        } else {
+            r
+        }
+    }
 }
 
 /// The closed set of lights. Radiometric values are linear RGB, already multiplied by `scale`.

@@ -8,7 +8,7 @@
 //! scenes/cornell-glass.pbrt: ok | 16140 triangles, 1 lights, 5 materials, 0 textures | ~19.2 MB (geometry 0.5, film 3.9, photon maps 14.8, textures 0.0)
 //! bathroom/scene-v4.pbrt: 2 problems | 517308 triangles, ...
 //!   bathroom/scene-v4.pbrt:20:26: imagemap "bathroom/textures/wood.tga": No such file or directory (os error 2)
-//!   bathroom/scene-v4.pbrt:52:5: parameter "texture reflectance": textures are parsed but not yet applied
+//!   bathroom/scene-v4.pbrt:52:5: unsupported material type "coateddiffuse"
 //! ```
 //!
 //! The loader runs in its collect mode ([`crate::scene::loader::load_collecting`]): a directive
@@ -18,7 +18,7 @@
 use super::ToolError;
 use crate::integrator::RenderSettings;
 use crate::scene::loader::load_collecting;
-use crate::scene::{Material, Scene, SceneError};
+use crate::scene::{MaterialKind, Scene, SceneError};
 use crate::texture::{Image, Texture};
 use clap::Args;
 use std::fmt;
@@ -171,8 +171,8 @@ pub fn check_scene(path: &Path) -> SceneReport {
     // As a render does, no caustic map without a specular (non-diffuse) surface.
     let specular = scene.meshes.iter().any(|m| {
         !matches!(
-            scene.materials.get(m.material as usize),
-            Some(Material::Diffuse { .. }) | None
+            scene.materials.get(m.material as usize).map(|m| &m.kind),
+            Some(MaterialKind::Diffuse { .. }) | None
         )
     });
     let photons = settings.map_or(0, |s| {

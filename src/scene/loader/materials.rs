@@ -7,8 +7,14 @@
 //! Material "conductor" "spectrum eta" "metal-Au-eta" "spectrum k" "metal-Au-k"
 //!     "float roughness" 0.1 "bool remaproughness" true                    # alpha = sqrt(0.1)
 //! Material "conductor" "rgb reflectance" [ 0.9 0.6 0.3 ]                 # eta 1, k from r
+//! Material "diffuse" "texture reflectance" "wood" "texture displacement" "bumps"
+//! Material "conductor" "texture roughness" "scratches" "texture reflectance" "tint"
 //! ```
 //!
+//! - Parameters pbrt-v4 lets be textures may be: diffuse `reflectance`; conductor `eta`, `k`,
+//!   `reflectance`, `roughness`, `uroughness`, `vroughness`; and every material's
+//!   `displacement` (a float texture: bump mapping). A `"texture"` value names a texture defined
+//!   earlier in the right namespace (spectrum for colours, float for the others).
 //! - conductor `eta`/`k`: RGB, or pbrt-v4's named spectra `metal-{Ag,Al,Au,Cu,CuZn,MgO,TiO2}-
 //!   {eta,k}` (with or without brackets) as the RGB values of [`super::spectra`]; default
 //!   copper. `reflectance` r instead gives pbrt-v4's
@@ -25,18 +31,25 @@
 
 use super::params::{ParamSet, ParamType};
 use super::spectra::{self, CU_ETA, CU_K};
+use super::textures::texture_param;
 use crate::math::Vec3;
-use crate::scene::{Loc, Material, SceneError};
+use crate::scene::{Loc, Material, MaterialKind, Metal, Roughness, SceneError};
+use crate::texture::{Tex, Textures};
 
 /// Builds material `ty` from `params` (all of which must be used); `loc` is where the type is
-/// named.
-pub fn make_material(ty: &str, params: &mut ParamSet, loc: &Loc) -> Result<Material, SceneError> {
-    let m = match ty {
-        "diffuse" => Material::Diffuse {
-            reflectance: albedo(params, "reflectance", Vec3::splat(0.5))?,
+/// named; `textures` are those defined so far.
+pub fn make_material(
+    ty: &str,
+    params: &mut ParamSet,
+    loc: &Loc,
+    textures: &Textures,
+) -> Result<Material, SceneError> {
+    let kind = match ty {
+        "diffuse" => MaterialKind::Diffuse {
+            reflectance: albedo(params, "reflectance", Vec3::splat(0.5), textures)?,
         },
         "dielectric" => dielectric(params)?,
-        "conductor" => conductor(params)?,
+        "conductor" => conductor(params, textures)?,
         other => {
             return Err(SceneError::at(
                 loc,
@@ -44,12 +57,45 @@ pub fn make_material(ty: &str, params: &mut ParamSet, loc: &Loc) -> Result<Mater
             ))
         }
     };
+    let displacement = match params.peek("displacement") {
+        Some(_) => Some(tex(params, "displacement", false, 0.0, textures)?),
+        None => None,
+    };
     params.check_unused()?;
-    Ok(m)
+    Ok(Material { kind, displacement })
 }
 
-/// An RGB reflectance, checked to lie in [0, 1].
-fn albedo(params: &mut ParamSet, name: &str, default: Vec3) -> Result<Vec3, SceneError> {
+/// A parameter that may be a texture: `spectrum` (RGB) or float, `default` when absent.
+fn tex(
+    params: &mut ParamSet,
+    name: &str,
+    spectrum: bool,
+    default: f32,
+    textures: &Textures,
+) -> Result<Tex, SceneError> {
+    let t = texture_param(params, name, spectrum, default, textures)?;
+    Ok(match *t {
+        crate::texture::Texture::Constant(v) => Tex::Const(v),
+        _ => Tex::Map(t),
+    })
+}
+
+/// Whether `name` is given as a `"texture"`.
+fn is_texture(params: &ParamSet, name: &str) -> bool {
+    params.peek(name).map(|p| p.ty) == Some(ParamType::Texture)
+}
+
+/// A reflectance: a spectrum texture (values clamped to [0, 1] per hit, as pbrt-v4 does), or an
+/// RGB checked to lie in [0, 1].
+fn albedo(
+    params: &mut ParamSet,
+    name: &str,
+    default: Vec3,
+    textures: &Textures,
+) -> Result<Tex, SceneError> {
+    if is_texture(params, name) {
+        return tex(params, name, true, 0.0, textures);
+    }
     let r = params.get_rgb(name, default)?;
     if r.min_element() < 0.0 || r.max_element() > 1.0 {
         let p = params
@@ -57,11 +103,11 @@ fn albedo(params: &mut ParamSet, name: &str, default: Vec3) -> Result<Vec3, Scen
             .expect("an out-of-range value came from the file");
         return Err(p.err("reflectance values must lie in [0, 1]"));
     }
-    Ok(r)
+    Ok(r.into())
 }
 
 /// `dielectric`: `eta` and (zero) roughness.
-fn dielectric(params: &mut ParamSet) -> Result<Material, SceneError> {
+fn dielectric(params: &mut ParamSet) -> Result<MaterialKind, SceneError> {
     let eta = match params.peek("eta").map(|p| p.ty) {
         Some(ParamType::Spectrum) => constant_spectrum(params, "eta")?,
         _ => params.get_float("eta", 1.5)?,
@@ -79,7 +125,7 @@ fn dielectric(params: &mut ParamSet) -> Result<Material, SceneError> {
         }
     }
     params.get_bool("remaproughness", true)?;
-    Ok(Material::Dielectric { eta })
+    Ok(MaterialKind::Dielectric { eta })
 }
 
 /// The value of a `spectrum` parameter that is one number, constant wavelength-value pairs or
@@ -104,49 +150,43 @@ fn constant_spectrum(params: &mut ParamSet, name: &str) -> Result<f32, SceneErro
 }
 
 /// `conductor`: eta/k or reflectance, and roughness.
-fn conductor(params: &mut ParamSet) -> Result<Material, SceneError> {
-    let (eta, k) = match params.get_rgb_opt("reflectance")? {
-        Some(r) => {
-            if let Some(p) = params.peek("eta").or_else(|| params.peek("k")) {
-                return Err(
-                    p.err("a conductor takes either \"reflectance\" or \"eta\"/\"k\", not both")
-                );
-            }
-            if r.min_element() < 0.0 || r.max_element() > 1.0 {
-                let p = params.peek("reflectance").expect("given");
-                return Err(p.err("reflectance values must lie in [0, 1]"));
-            }
-            (Vec3::ONE, k_from_reflectance(r))
+fn conductor(params: &mut ParamSet, textures: &Textures) -> Result<MaterialKind, SceneError> {
+    let metal = if params.peek("reflectance").is_some() {
+        if let Some(p) = params.peek("eta").or_else(|| params.peek("k")) {
+            return Err(
+                p.err("a conductor takes either \"reflectance\" or \"eta\"/\"k\", not both")
+            );
         }
-        None => (metal(params, "eta", CU_ETA)?, metal(params, "k", CU_K)?),
+        Metal::Reflectance(albedo(params, "reflectance", Vec3::ZERO, textures)?)
+    } else {
+        Metal::EtaK {
+            eta: metal(params, "eta", CU_ETA, textures)?,
+            k: metal(params, "k", CU_K, textures)?,
+        }
     };
-    let (alpha_u, alpha_v) = roughness(params)?;
-    Ok(Material::Conductor {
-        eta,
-        k,
-        alpha_u,
-        alpha_v,
-    })
+    let roughness = roughness(params, textures)?;
+    Ok(MaterialKind::Conductor { metal, roughness })
 }
 
-/// pbrt-v4's conductor from reflectance: k = 2 sqrt(r) / sqrt(1 - r), with r at most 1 - 1e-7.
-pub fn k_from_reflectance(r: Vec3) -> Vec3 {
-    // In f64: 1 - 1e-7 is not representable in f32 (it would round to 1 - 1.19e-7).
-    let f = |r: f32| {
-        let r = (r as f64).clamp(0.0, 1.0 - 1e-7);
-        (2.0 * r.sqrt() / (1.0 - r).sqrt()) as f32
-    };
-    Vec3::new(f(r.x), f(r.y), f(r.z))
-}
-
-/// A conductor's `eta` or `k`: RGB, or a named metal spectrum, or `default`.
-fn metal(params: &mut ParamSet, name: &str, default: Vec3) -> Result<Vec3, SceneError> {
+/// A conductor's `eta` or `k`: RGB, a spectrum texture, or a named metal spectrum, or
+/// `default`.
+fn metal(
+    params: &mut ParamSet,
+    name: &str,
+    default: Vec3,
+    textures: &Textures,
+) -> Result<Tex, SceneError> {
+    if is_texture(params, name) {
+        return tex(params, name, true, 0.0, textures);
+    }
     if params.peek(name).map(|p| p.ty) != Some(ParamType::Spectrum) {
-        return params.get_rgb(name, default);
+        return Ok(params.get_rgb(name, default)?.into());
     }
     let p = params.get_param(name).expect("just peeked");
     match p.strings() {
-        Some([s]) => spectra::metal(s).ok_or_else(|| p.err(spectra::unsupported(s))),
+        Some([s]) => spectra::metal(s)
+            .map(Tex::Const)
+            .ok_or_else(|| p.err(spectra::unsupported(s))),
         _ => Err(p.err(
             "expected one named spectrum metal-{Ag,Al,Au,Cu,CuZn,MgO,TiO2}-{eta,k} \
              (sampled spectra are not supported)",
@@ -154,34 +194,31 @@ fn metal(params: &mut ParamSet, name: &str, default: Vec3) -> Result<Vec3, Scene
     }
 }
 
-/// Conductor roughness as Trowbridge-Reitz alphas `(alpha_u, alpha_v)`.
-fn roughness(params: &mut ParamSet) -> Result<(f32, f32), SceneError> {
-    let u = params.get_float_opt("uroughness")?;
-    let v = params.get_float_opt("vroughness")?;
-    let both = if u.is_none() || v.is_none() {
-        params.get_float("roughness", 0.0)?
+/// Conductor roughness: `uroughness`/`vroughness`, each defaulting to `roughness` (0); floats
+/// or float textures; constants must not be negative.
+fn roughness(params: &mut ParamSet, textures: &Textures) -> Result<Roughness, SceneError> {
+    for name in ["uroughness", "vroughness", "roughness"] {
+        if let Some(p) = params.peek(name) {
+            if p.floats()
+                .is_some_and(|f| f.first().is_some_and(|&x| x < 0.0))
+            {
+                return Err(p.err("roughness must not be negative"));
+            }
+        }
+    }
+    // pbrt-v4 reads `roughness` only for a missing u or v (else it is an unused parameter).
+    let given = |params: &ParamSet, n: &str| params.peek(n).is_some();
+    let both = if given(params, "uroughness") && given(params, "vroughness") {
+        Tex::from(0.0)
     } else {
-        0.0
+        tex(params, "roughness", false, 0.0, textures)?
     };
-    let (u, v) = (u.unwrap_or(both), v.unwrap_or(both));
-    if u < 0.0 || v < 0.0 {
-        let name = ["uroughness", "vroughness", "roughness"]
-            .into_iter()
-            .find(|n| {
-                params
-                    .peek(n)
-                    .and_then(|p| p.floats())
-                    .is_some_and(|f| f[0] < 0.0)
-            })
-            .unwrap_or("roughness");
-        let p = params
-            .peek(name)
-            .expect("a negative roughness came from the file");
-        return Err(p.err("roughness must not be negative"));
-    }
-    if params.get_bool("remaproughness", true)? {
-        Ok((u.sqrt(), v.sqrt()))
-    } else {
-        Ok((u, v))
-    }
+    let mut one = |name: &str| match given(params, name) {
+        true => tex(params, name, false, 0.0, textures),
+        false => Ok(both.clone()),
+    };
+    let u = one("uroughness")?;
+    let v = one("vroughness")?;
+    let remap = params.get_bool("remaproughness", true)?;
+    Ok(Roughness { u, v, remap })
 }
