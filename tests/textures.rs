@@ -288,3 +288,55 @@ fn trilinear_filtering_removes_aliasing() {
     assert!(sb > 0.1, "bilinear should alias: std {sb} (mean {mb})");
     assert!(st < 0.1 * sb, "trilinear std {st} vs bilinear {sb}");
 }
+
+/// CRC-32 (IEEE) of `bytes`, bit by bit, for hand-made PNG chunks.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut c = 0xffff_ffffu32;
+    for &b in bytes {
+        c ^= b as u32;
+        for _ in 0..8 {
+            c = if c & 1 != 0 {
+                0xedb8_8320 ^ (c >> 1)
+            } else {
+                c >> 1
+            };
+        }
+    }
+    !c
+}
+
+/// A PNG whose header claims 100000 x 100000 pixels (40 GB as RGB f32) with no image data is
+/// refused from its header, with the file and line of the texture, before any decoding.
+#[test]
+fn huge_image_header_is_refused_before_decoding() {
+    let dir = TempDir::new("photon-tex-huge");
+    let mut ihdr = b"IHDR".to_vec();
+    ihdr.extend_from_slice(&100_000u32.to_be_bytes());
+    ihdr.extend_from_slice(&100_000u32.to_be_bytes());
+    ihdr.extend_from_slice(&[8, 2, 0, 0, 0]); // 8-bit RGB
+    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
+    png.extend_from_slice(&13u32.to_be_bytes());
+    png.extend_from_slice(&ihdr);
+    png.extend_from_slice(&crc32(&ihdr).to_be_bytes());
+    for chunk in [&b"IDAT"[..], b"IEND"] {
+        png.extend_from_slice(&0u32.to_be_bytes());
+        png.extend_from_slice(chunk);
+        png.extend_from_slice(&crc32(chunk).to_be_bytes());
+    }
+    dir.write("huge.png", png);
+    let scene = floor_scene(
+        6.0,
+        8,
+        1,
+        r#"Texture "big" "spectrum" "imagemap" "string filename" "huge.png""#,
+        r#"Material "diffuse" "texture reflectance" "big""#,
+    );
+    let e = loader::load(&dir.write("s.pbrt", scene))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("s.pbrt:9:"), "{e}");
+    assert!(
+        e.contains("100000x100000 pixels is more than the 268435456"),
+        "{e}"
+    );
+}
