@@ -483,7 +483,7 @@ pub fn describe(pass: &PhotonPass) -> Vec<String> {
     let st = &pass.maps.stats;
     let bytes = std::mem::size_of::<Photon>();
     let mut lines = vec![format!(
-        "photons: global {} emitted -> {} stored; caustic {} emitted -> {} stored; {} bytes/photon; traced in {:.3} s ({:.2} Mphotons/s), kd-trees built in {:.3} s",
+        "photons: global {} emitted -> {} stored; caustic {} emitted -> {} stored; {} bytes/photon; traced in {:.3} s ({:.2} Mphotons/s, {:.2} rays/photon), kd-trees built in {:.3} s",
         st.global_emitted,
         st.global_stored,
         st.caustic_emitted,
@@ -491,6 +491,7 @@ pub fn describe(pass: &PhotonPass) -> Vec<String> {
         bytes,
         st.trace_seconds,
         (st.global_emitted + st.caustic_emitted) as f64 / st.trace_seconds.max(1e-9) / 1e6,
+        st.rays as f64 / (st.global_emitted + st.caustic_emitted).max(1) as f64,
         st.build_seconds
     )];
     if st.caustic_emitted > 0 {
