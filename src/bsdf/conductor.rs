@@ -100,6 +100,7 @@ impl Conductor {
                 specular: true,
                 transmission: false,
                 eta: 1.0,
+                pdf_is_proportional: false,
             });
         }
         if wo.z == 0.0 {
@@ -125,6 +126,7 @@ impl Conductor {
             specular: false,
             transmission: false,
             eta: 1.0,
+            pdf_is_proportional: false,
         })
     }
 

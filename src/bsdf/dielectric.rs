@@ -1,68 +1,248 @@
-//! Smooth dielectric (glass, water): a delta reflection lobe and a delta refraction lobe,
-//! chosen in proportion to the Fresnel reflectance `R` and transmittance `T = 1 - R`
-//! (pbrt-v4's `DielectricBxDF` for a smooth interface).
+//! Dielectric interfaces (glass, water; pbrt-v4's `DielectricBxDF`), smooth or rough.
 //!
-//! `eta` is interior over exterior; `wo.z > 0` means the ray arrives from the exterior
-//! (entering), `wo.z < 0` from the interior (the relative index then becomes `1 / eta`).
-use super::fresnel::{fr_dielectric, refract};
-use super::{BsdfSample, TransportMode};
-use crate::math::Vec3;
+//! - **Smooth** (roughness below 1e-3, or `eta == 1`): a delta reflection lobe and a delta
+//!   refraction lobe, chosen in proportion to the Fresnel reflectance `R` and transmittance
+//!   `T = 1 - R`.
+//! - **Rough**: Walter et al.'s microfacet BSDF over an anisotropic Trowbridge-Reitz (GGX)
+//!   distribution with the height-correlated Smith `G`, as pbrt-v4 writes it: reflection
+//!   `D G F / (4 |cos_o cos_i|)` about `wm = normalize(wo + wi)`, transmission
+//!   `D G (1 - F) |wi.wm wo.wm| / (|cos_i cos_o| (wi.wm + wo.wm / eta')^2)` about the
+//!   generalized half vector `wm = normalize(eta' wi + wo)` (`eta'` the relative index crossed),
+//!   both with `wm` turned to the +z side and back-facing microfacets discarded. Sampling picks
+//!   a visible normal, then reflection or refraction about it with probability `F` or `1 - F`.
+//!
+//! Radiance through a refraction is scaled by `1 / eta'^2`, importance is not. `eta` is
+//! interior over exterior; `wo.z > 0` means the ray arrives from the exterior.
+//!
+//! ```text
+//! Material "dielectric" "float eta" [ 1.5 ]                                  # smooth
+//! Material "dielectric" "float eta" [ 1.5 ] "float roughness" [ 0.1 ]        # alpha = sqrt(0.1)
+//! Material "dielectric" "float uroughness" [ 0.05 ] "float vroughness" [ 0.2 ]
+//!     "bool remaproughness" [ false ]                                        # alphas as given
+//! ```
+use super::fresnel::{fr_dielectric, reflect, refract};
+use super::microfacet::TrowbridgeReitz;
+use super::{same_hemisphere, BsdfSample, BxdfFlags, Lobes, TransportMode};
+use crate::math::{Vec2, Vec3};
 
-/// A smooth dielectric interface.
+/// A smooth or rough dielectric interface.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Dielectric {
     /// Relative index of refraction, interior / exterior (> 0).
     pub eta: f32,
+    /// Microfacet distribution; the interface is smooth when it is effectively smooth.
+    pub distrib: TrowbridgeReitz,
+}
+
+/// The generalized half vector of a pair of directions.
+struct Half {
+    /// Microfacet normal on the +z side.
+    wm: Vec3,
+    /// Relative index crossed (1 for reflection).
+    etap: f32,
+    reflect: bool,
 }
 
 impl Dielectric {
-    /// An interface with relative index `eta`; a non-finite or non-positive value reads as 1
-    /// (no interface: light passes straight through).
+    /// A smooth interface with relative index `eta`; a non-finite or non-positive value reads
+    /// as 1 (no interface: light passes straight through).
     pub fn new(eta: f32) -> Self {
+        Self::rough(eta, 0.0, 0.0)
+    }
+
+    /// An interface with relative index `eta` (sanitised as in [`Self::new`]) and
+    /// Trowbridge-Reitz roughness `alpha_u` (local x), `alpha_v` (local y).
+    pub fn rough(eta: f32, alpha_u: f32, alpha_v: f32) -> Self {
         Dielectric {
             eta: if eta.is_finite() && eta > 0.0 {
                 eta
             } else {
                 1.0
             },
+            distrib: TrowbridgeReitz::new(alpha_u, alpha_v),
         }
     }
 
-    /// Samples reflection (probability `R`) or refraction (probability `T`) with `uc`.
+    /// True when the lobes are deltas (effectively smooth, or no interface at all).
+    pub fn is_smooth(&self) -> bool {
+        self.eta == 1.0 || self.distrib.effectively_smooth()
+    }
+
+    /// pbrt-v4's flags: transmission only when `eta == 1`; specular or glossy.
+    pub fn flags(&self) -> BxdfFlags {
+        use BxdfFlags as F;
+        let sides = if self.eta == 1.0 {
+            F::TRANSMISSION
+        } else {
+            F::REFLECTION | F::TRANSMISSION
+        };
+        sides
+            | if self.is_smooth() {
+                F::SPECULAR
+            } else {
+                F::GLOSSY
+            }
+    }
+
+    /// Samples a direction for `wo` among `lobes`.
     ///
-    /// - `wo`: unit direction towards the viewer (local frame);
-    /// - `uc`: uniform in `[0, 1)`;
-    /// - `mode`: `Radiance` divides refracted throughput by `etap^2`, `Importance` does not.
+    /// - `uc`: uniform in `[0, 1)`, chooses reflection (probability `R`) or refraction;
+    /// - `u`: uniform in `[0, 1)^2`, chooses the visible microfacet normal (rough only);
+    /// - `mode`: `Radiance` divides refracted throughput by `eta'^2`, `Importance` does not.
     ///
-    /// The returned `f` is `R / |cos wi|` or `T / |cos wi|` (times `1 / etap^2` for radiance),
+    /// Smooth: `f` is `R / |cos wi|` or `T / |cos wi|` (times `1 / eta'^2` for radiance),
     /// `pdf` the discrete lobe probability.
-    pub fn sample(&self, wo: Vec3, uc: f32, mode: TransportMode) -> Option<BsdfSample> {
+    pub fn sample(
+        &self,
+        wo: Vec3,
+        uc: f32,
+        u: Vec2,
+        mode: TransportMode,
+        lobes: Lobes,
+    ) -> Option<BsdfSample> {
+        if self.is_smooth() {
+            self.sample_smooth(wo, uc, mode, lobes)
+        } else {
+            self.sample_rough(wo, uc, u, mode, lobes)
+        }
+    }
+
+    fn sample_smooth(
+        &self,
+        wo: Vec3,
+        uc: f32,
+        mode: TransportMode,
+        lobes: Lobes,
+    ) -> Option<BsdfSample> {
         let r = fr_dielectric(wo.z, self.eta);
         let t = 1.0 - r;
-        if uc < r || t <= 0.0 {
+        let (pr, pt) = lobes.choose(r, t)?;
+        if uc < pr {
             let wi = Vec3::new(-wo.x, -wo.y, wo.z);
-            return Some(BsdfSample {
-                wi,
-                f: Vec3::splat(r / wi.z.abs()),
-                pdf: r,
-                specular: true,
-                transmission: false,
-                eta: 1.0,
-            });
+            let f = Vec3::splat(r / wi.z.abs());
+            return Some(BsdfSample::new(wi, f, pr, true, false, 1.0));
         }
         let (wi, etap) = refract(wo, Vec3::Z, self.eta)?;
-        let mut ft = t / wi.z.abs();
-        if mode == TransportMode::Radiance {
-            ft /= etap * etap;
+        let ft = t / wi.z.abs() * radiance_scale(mode, etap);
+        Some(BsdfSample::new(wi, Vec3::splat(ft), pt, true, true, etap))
+    }
+
+    fn sample_rough(
+        &self,
+        wo: Vec3,
+        uc: f32,
+        u: Vec2,
+        mode: TransportMode,
+        lobes: Lobes,
+    ) -> Option<BsdfSample> {
+        if wo.z == 0.0 {
+            return None;
         }
-        Some(BsdfSample {
-            wi,
-            f: Vec3::splat(ft),
-            pdf: t,
-            specular: true,
-            transmission: true,
-            eta: etap,
-        })
+        let d = &self.distrib;
+        let wm = d.sample_wm(wo, u);
+        let r = fr_dielectric(wo.dot(wm), self.eta);
+        let (pr, pt) = lobes.choose(r, 1.0 - r)?;
+        if uc < pr {
+            let wi = reflect(wo, wm);
+            if !same_hemisphere(wo, wi) {
+                return None;
+            }
+            let pdf = d.pdf(wo, wm) / (4.0 * wo.dot(wm).abs()) * pr;
+            let f = d.d(wm) * d.g(wo, wi) * r / (4.0 * wi.z * wo.z).abs();
+            return Some(BsdfSample::new(wi, Vec3::splat(f), pdf, false, false, 1.0));
+        }
+        let (wi, etap) = refract(wo, wm, self.eta)?;
+        if same_hemisphere(wo, wi) || wi.z == 0.0 {
+            return None;
+        }
+        let half = Half {
+            wm,
+            etap,
+            reflect: false,
+        };
+        let pdf = self.pdf_given(wo, wi, &half, pr, pt);
+        let f = self.f_given(wo, wi, &half, mode);
+        Some(BsdfSample::new(wi, Vec3::splat(f), pdf, false, true, etap))
+    }
+
+    /// The generalized half vector of `(wo, wi)`, or `None` for a grazing direction, a
+    /// degenerate pair or a back-facing microfacet (pbrt-v4's tests).
+    fn half(&self, wo: Vec3, wi: Vec3) -> Option<Half> {
+        let (cos_o, cos_i) = (wo.z, wi.z);
+        let reflect = cos_o * cos_i > 0.0;
+        let etap = match (reflect, cos_o > 0.0) {
+            (true, _) => 1.0,
+            (false, true) => self.eta,
+            (false, false) => 1.0 / self.eta,
+        };
+        let wm = wi * etap + wo;
+        if cos_i == 0.0 || cos_o == 0.0 || wm.length_squared() == 0.0 {
+            return None;
+        }
+        let wm = wm.normalize();
+        let wm = if wm.z < 0.0 { -wm } else { wm };
+        if wm.dot(wi) * cos_i < 0.0 || wm.dot(wo) * cos_o < 0.0 {
+            return None;
+        }
+        Some(Half { wm, etap, reflect })
+    }
+
+    /// BSDF value for `(wo, wi)`: 0 for the smooth interface (delta lobes).
+    pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+        if self.is_smooth() {
+            return Vec3::ZERO;
+        }
+        match self.half(wo, wi) {
+            Some(h) => Vec3::splat(self.f_given(wo, wi, &h, mode)),
+            None => Vec3::ZERO,
+        }
+    }
+
+    fn f_given(&self, wo: Vec3, wi: Vec3, h: &Half, mode: TransportMode) -> f32 {
+        let d = &self.distrib;
+        let (wm, etap) = (h.wm, h.etap);
+        let fr = fr_dielectric(wo.dot(wm), self.eta);
+        let dg = d.d(wm) * d.g(wo, wi);
+        if h.reflect {
+            return dg * fr / (4.0 * wi.z * wo.z).abs();
+        }
+        let s = wi.dot(wm) + wo.dot(wm) / etap;
+        let denom = s * s * wi.z * wo.z;
+        dg * (1.0 - fr) * (wi.dot(wm) * wo.dot(wm) / denom).abs() * radiance_scale(mode, etap)
+    }
+
+    /// Density with which [`Self::sample`] (restricted to `lobes`) picks `wi`; 0 for the
+    /// smooth interface.
+    pub fn pdf(&self, wo: Vec3, wi: Vec3, lobes: Lobes) -> f32 {
+        if self.is_smooth() {
+            return 0.0;
+        }
+        let Some(h) = self.half(wo, wi) else {
+            return 0.0;
+        };
+        let r = fr_dielectric(wo.dot(h.wm), self.eta);
+        match lobes.choose(r, 1.0 - r) {
+            Some((pr, pt)) => self.pdf_given(wo, wi, &h, pr, pt),
+            None => 0.0,
+        }
+    }
+
+    fn pdf_given(&self, wo: Vec3, wi: Vec3, h: &Half, pr: f32, pt: f32) -> f32 {
+        let d = &self.distrib;
+        let wm = h.wm;
+        if h.reflect {
+            return d.pdf(wo, wm) / (4.0 * wo.dot(wm).abs()) * pr;
+        }
+        let s = wi.dot(wm) + wo.dot(wm) / h.etap;
+        d.pdf(wo, wm) * wi.dot(wm).abs() / (s * s) * pt
+    }
+}
+
+/// `1 / eta'^2` for radiance, 1 for importance: the non-symmetric part of refraction.
+fn radiance_scale(mode: TransportMode, etap: f32) -> f32 {
+    match mode {
+        TransportMode::Radiance => 1.0 / (etap * etap),
+        TransportMode::Importance => 1.0,
     }
 }
 
@@ -108,7 +288,13 @@ mod tests {
             let mut reflected = 0u32;
             for _ in 0..n {
                 let s = glass
-                    .sample(wo, rng.f32(), TransportMode::Importance)
+                    .sample(
+                        wo,
+                        rng.f32(),
+                        Vec2::ZERO,
+                        TransportMode::Importance,
+                        Lobes::All,
+                    )
                     .unwrap();
                 assert!(s.specular);
                 if s.transmission {
@@ -139,8 +325,18 @@ mod tests {
             (Vec3::new(0.6, 0.0, 0.8), eta),
             (Vec3::new(0.3, 0.0, -(1.0f32 - 0.09).sqrt()), 1.0 / eta),
         ] {
-            let rad = glass.sample(wo, 0.9999, TransportMode::Radiance).unwrap();
-            let imp = glass.sample(wo, 0.9999, TransportMode::Importance).unwrap();
+            let rad = glass
+                .sample(wo, 0.9999, Vec2::ZERO, TransportMode::Radiance, Lobes::All)
+                .unwrap();
+            let imp = glass
+                .sample(
+                    wo,
+                    0.9999,
+                    Vec2::ZERO,
+                    TransportMode::Importance,
+                    Lobes::All,
+                )
+                .unwrap();
             assert!(rad.transmission && imp.transmission);
             assert_eq!(rad.wi, imp.wi);
             assert!((rad.eta - etap).abs() < 1e-6);
@@ -165,7 +361,9 @@ mod tests {
         let theta = 0.8f32; // beyond asin(1/1.5) = 0.7297
         let wo = Vec3::new(theta.sin(), 0.0, -theta.cos());
         for uc in [0.0f32, 0.5, 0.999_999] {
-            let s = glass.sample(wo, uc, TransportMode::Radiance).unwrap();
+            let s = glass
+                .sample(wo, uc, Vec2::ZERO, TransportMode::Radiance, Lobes::All)
+                .unwrap();
             assert!(!s.transmission && s.pdf == 1.0);
             assert!((s.wi - Vec3::new(-wo.x, -wo.y, wo.z)).length() < 1e-7);
             assert!((s.f.x * s.wi.z.abs() - 1.0).abs() < 1e-6);
@@ -176,7 +374,9 @@ mod tests {
     fn eta_one_passes_straight_through() {
         let glass = Dielectric::new(1.0);
         let wo = Vec3::new(0.9999, 0.0, 0.01).normalize();
-        let s = glass.sample(wo, 0.0, TransportMode::Radiance).unwrap();
+        let s = glass
+            .sample(wo, 0.0, Vec2::ZERO, TransportMode::Radiance, Lobes::All)
+            .unwrap();
         assert!(s.transmission && s.pdf == 1.0);
         assert!((s.wi + wo).length() < 1e-6);
         assert_eq!(Dielectric::new(f32::NAN).eta, 1.0);

@@ -23,8 +23,11 @@
 pub mod conductor;
 pub mod dielectric;
 pub mod diffuse;
+pub mod diffuse_transmission;
 pub mod fresnel;
+pub mod layered;
 pub mod microfacet;
+pub mod thin_dielectric;
 mod warp;
 
 #[cfg(test)]
@@ -33,10 +36,13 @@ pub(crate) mod testutil;
 pub use conductor::Conductor;
 pub use dielectric::Dielectric;
 pub use diffuse::Diffuse;
+pub use diffuse_transmission::DiffuseTransmission;
+pub use layered::{CoatedConductor, CoatedDiffuse};
 pub use microfacet::TrowbridgeReitz;
+pub use thin_dielectric::ThinDielectric;
 
 use crate::math::{Vec2, Vec3};
-use crate::scene::Material;
+use crate::scene::{Coat, Material};
 
 /// What a path carries: radiance (camera paths) or importance (photons). Only refraction
 /// through a delta interface differs: radiance is scaled by `1 / eta^2`, importance is not.
@@ -44,6 +50,37 @@ use crate::scene::Material;
 pub enum TransportMode {
     Radiance,
     Importance,
+}
+
+impl TransportMode {
+    /// The adjoint mode (pbrt-v4's `!mode`): what a path traced from the other end carries.
+    pub fn flip(self) -> TransportMode {
+        match self {
+            TransportMode::Radiance => TransportMode::Importance,
+            TransportMode::Importance => TransportMode::Radiance,
+        }
+    }
+}
+
+/// Which lobes a sampling routine may choose (pbrt-v4's `BxDFReflTransFlags`); the layered
+/// BSDF restricts its interfaces to one side. The pdf of a restricted sampler is the density
+/// of that restricted choice.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Lobes {
+    All,
+    Reflection,
+    Transmission,
+}
+
+impl Lobes {
+    /// Probabilities of choosing reflection and transmission, given their weights `r`, `t`;
+    /// `None` when nothing may be chosen.
+    pub(crate) fn choose(self, r: f32, t: f32) -> Option<(f32, f32)> {
+        let pr = if self == Lobes::Transmission { 0.0 } else { r };
+        let pt = if self == Lobes::Reflection { 0.0 } else { t };
+        let sum = pr + pt;
+        (sum > 0.0).then(|| (pr / sum, pt / sum))
+    }
 }
 
 /// One sampled scattering direction.
@@ -62,6 +99,43 @@ pub struct BsdfSample {
     /// Relative index of refraction crossed (`eta` entering, `1/eta` leaving); 1 for
     /// reflection.
     pub eta: f32,
+    /// `pdf` is only proportional to the density of `wi` (the layered BSDF returns the
+    /// density of one random-walk path; `f / pdf` is still the right throughput weight, and
+    /// [`Bsdf::pdf`] gives the density for multiple importance sampling).
+    pub pdf_is_proportional: bool,
+}
+
+impl BsdfSample {
+    /// A sample with `pdf_is_proportional` false.
+    /// `wi` is on the other side of the surface from `wo` when `wi.z * wo.z < 0`; the caller
+    /// says so in `transmission`.
+    pub(crate) fn new(
+        wi: Vec3,
+        f: Vec3,
+        pdf: f32,
+        specular: bool,
+        transmission: bool,
+        eta: f32,
+    ) -> BsdfSample {
+        BsdfSample {
+            wi,
+            f,
+            pdf,
+            specular,
+            transmission,
+            eta,
+            pdf_is_proportional: false,
+        }
+    }
+
+    /// True for a usable sample: positive finite pdf, non-zero finite f, `wi` off the surface.
+    pub(crate) fn is_valid(&self) -> bool {
+        self.pdf > 0.0
+            && self.pdf.is_finite()
+            && self.wi.z != 0.0
+            && self.f.is_finite()
+            && self.f.max_element() > 0.0
+    }
 }
 
 /// What lobes a BSDF has, as pbrt-v4's `BxDFFlags`: reflection and/or transmission, each
@@ -126,6 +200,24 @@ pub enum Bsdf {
     Diffuse(Diffuse),
     Dielectric(Dielectric),
     Conductor(Conductor),
+    ThinDielectric(ThinDielectric),
+    DiffuseTransmission(DiffuseTransmission),
+    CoatedDiffuse(CoatedDiffuse),
+    CoatedConductor(CoatedConductor),
+}
+
+/// The layered BSDF of a scene coat over `base`.
+fn coated<B: layered::Layer + Copy>(c: &Coat, base: B) -> layered::Layered<B> {
+    let top = Dielectric::rough(c.eta, c.alpha_u, c.alpha_v);
+    layered::Layered::new(
+        top,
+        base,
+        c.thickness,
+        c.albedo,
+        c.g,
+        c.max_depth,
+        c.n_samples,
+    )
 }
 
 /// True when `a` and `b` are strictly on the same side of the surface.
@@ -138,38 +230,73 @@ impl Bsdf {
     pub fn from_material(m: &Material) -> Bsdf {
         match m {
             Material::Diffuse { reflectance } => Bsdf::Diffuse(Diffuse::new(*reflectance)),
-            Material::Dielectric { eta } => Bsdf::Dielectric(Dielectric::new(*eta)),
+            Material::Dielectric {
+                eta,
+                alpha_u,
+                alpha_v,
+            } => Bsdf::Dielectric(Dielectric::rough(*eta, *alpha_u, *alpha_v)),
             Material::Conductor {
                 eta,
                 k,
                 alpha_u,
                 alpha_v,
             } => Bsdf::Conductor(Conductor::new(*eta, *k, *alpha_u, *alpha_v)),
+            Material::ThinDielectric { eta } => Bsdf::ThinDielectric(ThinDielectric::new(*eta)),
+            Material::DiffuseTransmission {
+                reflectance,
+                transmittance,
+            } => Bsdf::DiffuseTransmission(DiffuseTransmission::new(*reflectance, *transmittance)),
+            Material::CoatedDiffuse { reflectance, coat } => {
+                Bsdf::CoatedDiffuse(coated(coat, Diffuse::new(*reflectance)))
+            }
+            Material::CoatedConductor {
+                coat,
+                eta,
+                k,
+                alpha_u,
+                alpha_v,
+            } => {
+                // pbrt-v4: the base's index is relative to the coat's medium.
+                let e = if coat.eta > 0.0 { coat.eta } else { 1.0 };
+                let base = Conductor::new(*eta / e, *k / e, *alpha_u, *alpha_v);
+                Bsdf::CoatedConductor(coated(coat, base))
+            }
         }
     }
 
-    /// BSDF value for the pair `(wo, wi)`; 0 for delta lobes. `mode` does not matter for the
-    /// non-delta lobes here (they are symmetric).
-    pub fn f(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> Vec3 {
+    /// BSDF value for the pair `(wo, wi)`; 0 for delta lobes. `mode` matters for refraction
+    /// through a rough dielectric (radiance is scaled by `1 / eta'^2`) and for the layered
+    /// BSDFs; the coated BSDFs' value is a deterministic Monte Carlo estimate.
+    pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
         if wo.z == 0.0 {
             return Vec3::ZERO;
         }
         match self {
             Bsdf::Diffuse(b) => b.f(wo, wi),
-            Bsdf::Dielectric(_) => Vec3::ZERO,
+            Bsdf::Dielectric(b) => b.f(wo, wi, mode),
             Bsdf::Conductor(b) => b.f(wo, wi),
+            Bsdf::ThinDielectric(_) => Vec3::ZERO,
+            Bsdf::DiffuseTransmission(b) => b.f(wo, wi),
+            Bsdf::CoatedDiffuse(b) => b.f(wo, wi, mode),
+            Bsdf::CoatedConductor(b) => b.f(wo, wi, mode),
         }
     }
 
-    /// Solid-angle density with which [`Self::sample`] picks `wi`; 0 for delta lobes.
+    /// Solid-angle density with which [`Self::sample`] picks `wi`; 0 for delta lobes. For the
+    /// coated BSDFs, pbrt-v4's stochastic estimate of it (see [`layered`]).
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         if wo.z == 0.0 {
             return 0.0;
         }
+        let mode = TransportMode::Radiance; // no density here depends on it
         match self {
             Bsdf::Diffuse(b) => b.pdf(wo, wi),
-            Bsdf::Dielectric(_) => 0.0,
+            Bsdf::Dielectric(b) => b.pdf(wo, wi, Lobes::All),
             Bsdf::Conductor(b) => b.pdf(wo, wi),
+            Bsdf::ThinDielectric(_) => 0.0,
+            Bsdf::DiffuseTransmission(b) => b.pdf(wo, wi, Lobes::All),
+            Bsdf::CoatedDiffuse(b) => b.pdf(wo, wi, mode),
+            Bsdf::CoatedConductor(b) => b.pdf(wo, wi, mode),
         }
     }
 
@@ -187,15 +314,14 @@ impl Bsdf {
         }
         let s = match self {
             Bsdf::Diffuse(b) => b.sample(wo, u),
-            Bsdf::Dielectric(b) => b.sample(wo, uc, mode),
+            Bsdf::Dielectric(b) => b.sample(wo, uc, u, mode, Lobes::All),
             Bsdf::Conductor(b) => b.sample(wo, u),
+            Bsdf::ThinDielectric(b) => b.sample(wo, uc, Lobes::All),
+            Bsdf::DiffuseTransmission(b) => b.sample(wo, uc, u, Lobes::All),
+            Bsdf::CoatedDiffuse(b) => b.sample(wo, uc, u, mode),
+            Bsdf::CoatedConductor(b) => b.sample(wo, uc, u, mode),
         }?;
-        let valid = s.pdf > 0.0
-            && s.pdf.is_finite()
-            && s.wi.z != 0.0
-            && s.f.is_finite()
-            && s.f.max_element() > 0.0;
-        valid.then_some(s)
+        s.is_valid().then_some(s)
     }
 
     /// The lobes this BSDF has.
@@ -203,19 +329,28 @@ impl Bsdf {
         use BxdfFlags as F;
         match self {
             Bsdf::Diffuse(_) => F::REFLECTION | F::DIFFUSE,
-            Bsdf::Dielectric(_) => F::REFLECTION | F::TRANSMISSION | F::SPECULAR,
+            Bsdf::Dielectric(b) => b.flags(),
             Bsdf::Conductor(c) if c.is_smooth() => F::REFLECTION | F::SPECULAR,
             Bsdf::Conductor(_) => F::REFLECTION | F::GLOSSY,
+            Bsdf::ThinDielectric(_) => F::REFLECTION | F::TRANSMISSION | F::SPECULAR,
+            Bsdf::DiffuseTransmission(b) => b.flags(),
+            Bsdf::CoatedDiffuse(b) => b.flags(),
+            Bsdf::CoatedConductor(b) => b.flags(),
         }
     }
 
-    /// A rough albedo for Russian roulette: the diffuse reflectance, 1 for a dielectric, the
-    /// normal-incidence Fresnel reflectance for a conductor.
+    /// A rough albedo for Russian roulette: the diffuse reflectance, 1 for (thin) dielectrics,
+    /// the normal-incidence Fresnel reflectance for a conductor, `R + T` for diffuse
+    /// transmission, and for a coat its normal-incidence reflectance plus the rest times the
+    /// base's estimate.
     pub fn reflectance_estimate(&self) -> Vec3 {
         match self {
             Bsdf::Diffuse(b) => b.reflectance,
-            Bsdf::Dielectric(_) => Vec3::ONE,
+            Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => Vec3::ONE,
             Bsdf::Conductor(c) => c.normal_reflectance(),
+            Bsdf::DiffuseTransmission(b) => b.reflectance + b.transmittance,
+            Bsdf::CoatedDiffuse(b) => b.reflectance_estimate(b.bottom.reflectance),
+            Bsdf::CoatedConductor(b) => b.reflectance_estimate(b.bottom.normal_reflectance()),
         }
     }
 }
@@ -234,7 +369,11 @@ mod tests {
         assert!(f.contains(BxdfFlags::REFLECTION) && !f.contains(BxdfFlags::TRANSMISSION));
         assert_eq!(diffuse.reflectance_estimate(), Vec3::new(0.1, 0.2, 0.3));
 
-        let glass = Bsdf::from_material(&Material::Dielectric { eta: 1.5 });
+        let glass = Bsdf::from_material(&Material::Dielectric {
+            eta: 1.5,
+            alpha_u: 0.0,
+            alpha_v: 0.0,
+        });
         let f = glass.flags();
         assert!(f.is_specular_only() && !f.has_diffuse() && !f.has_glossy());
         assert!(f.contains(BxdfFlags::REFLECTION | BxdfFlags::TRANSMISSION));

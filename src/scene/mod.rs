@@ -181,8 +181,34 @@ impl Mesh {
 pub enum Material {
     /// `"diffuse"`: Lambertian, `reflectance` (default 0.5).
     Diffuse { reflectance: Vec3 },
-    /// `"dielectric"`: smooth glass with relative index `eta` (default 1.5).
-    Dielectric { eta: f32 },
+    /// `"dielectric"`: glass with relative index `eta` (default 1.5) and Trowbridge-Reitz
+    /// roughness `alpha_u/v` (already remapped when `remaproughness` is true); smooth below
+    /// 1e-3.
+    Dielectric {
+        eta: f32,
+        alpha_u: f32,
+        alpha_v: f32,
+    },
+    /// `"thindielectric"`: a thin sheet of relative index `eta` (default 1.5).
+    ThinDielectric { eta: f32 },
+    /// `"diffusetransmission"`: Lambertian `reflectance` and `transmittance` (defaults 0.25,
+    /// already multiplied by `scale`).
+    DiffuseTransmission {
+        reflectance: Vec3,
+        transmittance: Vec3,
+    },
+    /// `"coateddiffuse"`: a dielectric coat over a Lambertian base of `reflectance` (0.5).
+    CoatedDiffuse { reflectance: Vec3, coat: Coat },
+    /// `"coatedconductor"`: a dielectric coat over a conductor of complex index `eta + i k`
+    /// (relative to the outside, as given in the file: the BSDF divides by the coat's index)
+    /// and roughness `alpha_u/v`.
+    CoatedConductor {
+        coat: Coat,
+        eta: Vec3,
+        k: Vec3,
+        alpha_u: f32,
+        alpha_v: f32,
+    },
     /// `"conductor"`: complex index `eta + i k` (from `eta`/`k`, or from `reflectance` as pbrt-v4
     /// does: eta = 1, k = 2 sqrt(r) / sqrt(1 - r)); Trowbridge-Reitz roughness `alpha_u/v`
     /// (already remapped when `remaproughness` is true); 0 means a perfect mirror.
@@ -192,6 +218,20 @@ pub enum Material {
         alpha_u: f32,
         alpha_v: f32,
     },
+}
+
+/// The dielectric coat and slab of `coateddiffuse` and `coatedconductor` (pbrt-v4 defaults:
+/// `eta` 1.5, roughness 0, `thickness` 0.01, `albedo` 0, `g` 0, `maxdepth` 10, `nsamples` 1).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coat {
+    pub eta: f32,
+    pub alpha_u: f32,
+    pub alpha_v: f32,
+    pub thickness: f32,
+    pub albedo: Vec3,
+    pub g: f32,
+    pub max_depth: u32,
+    pub n_samples: u32,
 }
 
 /// The closed set of lights. Radiometric values are linear RGB, already multiplied by `scale`.

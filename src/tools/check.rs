@@ -18,7 +18,7 @@
 use super::ToolError;
 use crate::integrator::RenderSettings;
 use crate::scene::loader::load_collecting;
-use crate::scene::{Material, Scene, SceneError};
+use crate::scene::{Scene, SceneError};
 use crate::texture::{Image, Texture};
 use clap::Args;
 use std::fmt;
@@ -170,10 +170,10 @@ pub fn check_scene(path: &Path) -> SceneReport {
     });
     // As a render does, no caustic map without a specular (non-diffuse) surface.
     let specular = scene.meshes.iter().any(|m| {
-        !matches!(
-            scene.materials.get(m.material as usize),
-            Some(Material::Diffuse { .. }) | None
-        )
+        scene
+            .materials
+            .get(m.material as usize)
+            .is_some_and(|mat| crate::bsdf::Bsdf::from_material(mat).flags().has_specular())
     });
     let photons = settings.map_or(0, |s| {
         s.photon.trace.global_photons + u64::from(specular) * s.photon.trace.caustic_photons

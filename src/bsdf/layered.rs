@@ -1,0 +1,565 @@
+//! Coated surfaces (pbrt-v4's `LayeredBxDF`): a dielectric interface (smooth or rough) over a
+//! diffuse base (`coateddiffuse`) or a conductor base (`coatedconductor`), with a slab of
+//! `thickness` between them that absorbs (`exp(-thickness / |cos|)` per crossing) and, when
+//! `albedo` is not black, scatters with a Henyey-Greenstein phase function of asymmetry `g`.
+//!
+//! The BSDF has no closed form: `f` and `pdf` are Monte Carlo estimates over random walks
+//! through the slab (`nsamples` walks of at most `maxdepth` bounces, with next-event
+//! estimation through the interface and MIS, exactly the estimators of pbrt-v4), and `sample`
+//! follows one random walk and returns its path throughput and path density (so `f / pdf`
+//! is an unbiased weight, but `pdf` is not the marginal density: `pdf_is_proportional` is
+//! set). The random numbers of `f` and `pdf` are a hash of `(wo, wi)` and those of `sample`
+//! a hash of `(wo, uc, u)`, so the same query always gives the same answer.
+//!
+//! Both coated materials are two-sided (a `wo` below the surface sees the mirror image) and
+//! opaque (the base transmits nothing, so `f` across the surface is 0). Flags follow pbrt-v4:
+//! reflection, plus specular when the coat is smooth, plus diffuse when the base is diffuse or
+//! `albedo` is not black, else glossy when the coat or the base is rough.
+//!
+//! ```text
+//! Material "coateddiffuse" "rgb reflectance" [ 0.5 0.5 0.5 ] "float roughness" [ 0 ]
+//!     "float thickness" [ 0.01 ] "float eta" [ 1.5 ] "rgb albedo" [ 0 0 0 ] "float g" [ 0 ]
+//!     "integer maxdepth" [ 10 ] "integer nsamples" [ 1 ] "bool remaproughness" [ true ]
+//! Material "coatedconductor" "float interface.roughness" [ 0 ] "float interface.eta" [ 1.5 ]
+//!     "spectrum conductor.eta" "metal-Cu-eta" "spectrum conductor.k" "metal-Cu-k"
+//!     "float conductor.roughness" [ 0 ]          # or "rgb reflectance" instead of eta/k
+//!     "float thickness" [ 0.01 ] "rgb albedo" [ 0 0 0 ] "float g" [ 0 ] ...
+//! ```
+use super::{BsdfSample, BxdfFlags, Conductor, Dielectric, Diffuse, Lobes, TransportMode};
+use crate::integrator::power_heuristic;
+use crate::math::{Frame, Vec2, Vec3};
+use crate::sampling::{hash, mix64, to_unit};
+use std::f32::consts::PI;
+
+/// One interface of the slab, as the random walk sees it.
+pub trait Layer {
+    fn flags(&self) -> BxdfFlags;
+    fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3;
+    /// A sample among `lobes`, only if it is usable ([`BsdfSample::is_valid`]).
+    fn sample(
+        &self,
+        wo: Vec3,
+        uc: f32,
+        u: Vec2,
+        mode: TransportMode,
+        lobes: Lobes,
+    ) -> Option<BsdfSample>;
+    fn pdf(&self, wo: Vec3, wi: Vec3, lobes: Lobes) -> f32;
+}
+
+impl Layer for Dielectric {
+    fn flags(&self) -> BxdfFlags {
+        Dielectric::flags(self)
+    }
+    fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+        Dielectric::f(self, wo, wi, mode)
+    }
+    fn sample(
+        &self,
+        wo: Vec3,
+        uc: f32,
+        u: Vec2,
+        mode: TransportMode,
+        lobes: Lobes,
+    ) -> Option<BsdfSample> {
+        Dielectric::sample(self, wo, uc, u, mode, lobes).filter(BsdfSample::is_valid)
+    }
+    fn pdf(&self, wo: Vec3, wi: Vec3, lobes: Lobes) -> f32 {
+        Dielectric::pdf(self, wo, wi, lobes)
+    }
+}
+
+impl Layer for Diffuse {
+    fn flags(&self) -> BxdfFlags {
+        BxdfFlags::REFLECTION | BxdfFlags::DIFFUSE
+    }
+    fn f(&self, wo: Vec3, wi: Vec3, _: TransportMode) -> Vec3 {
+        Diffuse::f(self, wo, wi)
+    }
+    fn sample(&self, wo: Vec3, _: f32, u: Vec2, _: TransportMode, l: Lobes) -> Option<BsdfSample> {
+        (l != Lobes::Transmission)
+            .then(|| Diffuse::sample(self, wo, u))?
+            .filter(BsdfSample::is_valid)
+    }
+    fn pdf(&self, wo: Vec3, wi: Vec3, lobes: Lobes) -> f32 {
+        if lobes == Lobes::Transmission {
+            return 0.0;
+        }
+        Diffuse::pdf(self, wo, wi)
+    }
+}
+
+impl Layer for Conductor {
+    fn flags(&self) -> BxdfFlags {
+        if self.is_smooth() {
+            BxdfFlags::REFLECTION | BxdfFlags::SPECULAR
+        } else {
+            BxdfFlags::REFLECTION | BxdfFlags::GLOSSY
+        }
+    }
+    fn f(&self, wo: Vec3, wi: Vec3, _: TransportMode) -> Vec3 {
+        Conductor::f(self, wo, wi)
+    }
+    fn sample(&self, wo: Vec3, _: f32, u: Vec2, _: TransportMode, l: Lobes) -> Option<BsdfSample> {
+        (l != Lobes::Transmission)
+            .then(|| Conductor::sample(self, wo, u))?
+            .filter(BsdfSample::is_valid)
+    }
+    fn pdf(&self, wo: Vec3, wi: Vec3, lobes: Lobes) -> f32 {
+        if lobes == Lobes::Transmission {
+            return 0.0;
+        }
+        Conductor::pdf(self, wo, wi)
+    }
+}
+
+/// The Henyey-Greenstein phase function in pbrt-v4's convention: both directions point away
+/// from the scattering point, so `g > 0` (forward scattering) peaks at `wi = -wo`.
+#[derive(Clone, Copy, Debug)]
+struct HenyeyGreenstein {
+    g: f32,
+}
+
+impl HenyeyGreenstein {
+    fn p(&self, wo: Vec3, wi: Vec3) -> f32 {
+        let g = self.g;
+        let denom = 1.0 + g * g + 2.0 * g * wo.dot(wi);
+        (1.0 - g * g) / (4.0 * PI * denom * denom.max(0.0).sqrt())
+    }
+
+    /// `(wi, p)`; the density equals `p`.
+    fn sample(&self, wo: Vec3, u: Vec2) -> (Vec3, f32) {
+        let g = self.g;
+        let cos = if g.abs() < 1e-3 {
+            1.0 - 2.0 * u.x
+        } else {
+            let s = (1.0 - g * g) / (1.0 + g - 2.0 * g * u.x);
+            -(1.0 + g * g - s * s) / (2.0 * g)
+        };
+        let cos = cos.clamp(-1.0, 1.0);
+        let sin = (1.0 - cos * cos).max(0.0).sqrt();
+        let phi = 2.0 * PI * u.y;
+        let wi = Frame::from_normal(wo).to_world(Vec3::new(sin * phi.cos(), sin * phi.sin(), cos));
+        (wi, self.p(wo, wi))
+    }
+}
+
+/// The deterministic random numbers of one evaluation: a counter hashed with the query.
+struct WalkRng {
+    key: u64,
+    i: u64,
+}
+
+impl WalkRng {
+    fn new(a: Vec3, b: Vec3, c: f32, tag: u64) -> Self {
+        let bits = |v: Vec3| {
+            [
+                v.x.to_bits() as u64,
+                v.y.to_bits() as u64,
+                v.z.to_bits() as u64,
+            ]
+        };
+        let (a, b) = (bits(a), bits(b));
+        let key = hash(&[tag, a[0], a[1], a[2], b[0], b[1], b[2], c.to_bits() as u64]);
+        WalkRng { key, i: 0 }
+    }
+
+    fn next(&mut self) -> f32 {
+        self.i += 1;
+        to_unit(mix64(self.key ^ self.i.wrapping_mul(0xD1B5_4A32_D192_ED03)))
+    }
+
+    fn next2(&mut self) -> Vec2 {
+        Vec2::new(self.next(), self.next())
+    }
+}
+
+/// Transmittance of the slab along `w` over the height `dz` (unit extinction).
+fn tr(dz: f32, w: Vec3) -> f32 {
+    if dz.abs() <= f32::MIN_POSITIVE {
+        return 1.0;
+    }
+    (-(dz / w.z).abs()).exp()
+}
+
+/// A dielectric coat over the base `B` (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Layered<B> {
+    pub top: Dielectric,
+    pub bottom: B,
+    /// Slab thickness in units of the mean free path (> 0).
+    pub thickness: f32,
+    /// Single-scattering albedo of the slab medium, per channel in `[0, 1]`.
+    pub albedo: Vec3,
+    /// Henyey-Greenstein asymmetry in `[-1, 1]`.
+    pub g: f32,
+    pub max_depth: u32,
+    pub n_samples: u32,
+}
+
+/// `coateddiffuse`.
+pub type CoatedDiffuse = Layered<Diffuse>;
+/// `coatedconductor`.
+pub type CoatedConductor = Layered<Conductor>;
+
+/// The state of one random walk in `f`.
+struct Walk {
+    beta: Vec3,
+    w: Vec3,
+    z: f32,
+}
+
+impl<B: Layer + Copy> Layered<B> {
+    /// A coat `top` over `bottom`. Parameters are sanitised as pbrt-v4 does: `thickness` at
+    /// least the smallest normal float, `albedo` clamped to `[0, 1]`, `g` to `[-1, 1]`;
+    /// non-finite values read as the defaults (0.01, 0, 0).
+    pub fn new(
+        top: Dielectric,
+        bottom: B,
+        thickness: f32,
+        albedo: Vec3,
+        g: f32,
+        max_depth: u32,
+        n_samples: u32,
+    ) -> Self {
+        let finite_or = |x: f32, d: f32| if x.is_finite() { x } else { d };
+        let a = |x: f32| finite_or(x, 0.0).clamp(0.0, 1.0);
+        Layered {
+            top,
+            bottom,
+            thickness: finite_or(thickness, 0.01).max(f32::MIN_POSITIVE),
+            albedo: Vec3::new(a(albedo.x), a(albedo.y), a(albedo.z)),
+            g: finite_or(g, 0.0).clamp(-1.0, 1.0),
+            max_depth,
+            n_samples: n_samples.max(1),
+        }
+    }
+
+    fn has_medium(&self) -> bool {
+        self.albedo.max_element() > 0.0
+    }
+
+    fn phase(&self) -> HenyeyGreenstein {
+        HenyeyGreenstein { g: self.g }
+    }
+
+    /// pbrt-v4's flags of a layered BSDF whose base is opaque.
+    pub fn flags(&self) -> BxdfFlags {
+        use BxdfFlags as F;
+        let (top, bottom) = (self.top.flags(), self.bottom.flags());
+        let mut flags = F::REFLECTION;
+        if top.has_specular() {
+            flags = flags | F::SPECULAR;
+        }
+        if top.has_diffuse() || bottom.has_diffuse() || self.has_medium() {
+            flags = flags | F::DIFFUSE;
+        } else if top.has_glossy() || bottom.has_glossy() {
+            flags = flags | F::GLOSSY;
+        }
+        flags
+    }
+
+    /// Stochastic estimate of the BSDF for `(wo, wi)` (deterministic for a given pair).
+    pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+        let (wo, wi) = if wo.z < 0.0 { (-wo, -wi) } else { (wo, wi) };
+        if wi.z <= 0.0 {
+            return Vec3::ZERO; // the base is opaque: no transmission
+        }
+        let n = self.n_samples;
+        let mut f = self.top.f(wo, wi, mode) * n as f32;
+        let mut rng = WalkRng::new(wo, wi, 0.0, 0x4C41_5945_5246);
+        for _ in 0..n {
+            f += self.f_walk(wo, wi, mode, &mut rng);
+        }
+        f / n as f32
+    }
+
+    /// One random walk of `f`: enter through the coat along `wo`, leave along `wi`, with
+    /// next-event estimation towards the direction `wis` presampled from `wi`.
+    fn f_walk(&self, wo: Vec3, wi: Vec3, mode: TransportMode, rng: &mut WalkRng) -> Vec3 {
+        let top = &self.top;
+        let t = Lobes::Transmission;
+        let Some(wos) = top.sample(wo, rng.next(), rng.next2(), mode, t) else {
+            return Vec3::ZERO;
+        };
+        let Some(wis) = top.sample(wi, rng.next(), rng.next2(), mode.flip(), t) else {
+            return Vec3::ZERO;
+        };
+        let mut walk = Walk {
+            beta: wos.f * wos.wi.z.abs() / wos.pdf,
+            w: wos.wi,
+            z: self.thickness,
+        };
+        let mut f = Vec3::ZERO;
+        for depth in 0..self.max_depth {
+            if depth > 3 && walk.beta.max_element() < 0.25 {
+                let q = (1.0 - walk.beta.max_element()).max(0.0);
+                if rng.next() < q {
+                    break;
+                }
+                walk.beta /= 1.0 - q;
+            }
+            if !self.has_medium() {
+                walk.z = if walk.z == self.thickness {
+                    0.0
+                } else {
+                    self.thickness
+                };
+                walk.beta *= tr(self.thickness, walk.w);
+            } else {
+                match self.medium_step(&mut walk, &wis, wi, mode, rng, &mut f) {
+                    Step::Scattered => continue,
+                    Step::Interface => {}
+                    Step::Lost => continue,
+                }
+            }
+            let alive = if walk.z == self.thickness {
+                self.reflect_at_top(&mut walk, mode, rng)
+            } else {
+                self.scatter_at_bottom(&mut walk, &wis, wi, mode, rng, &mut f)
+            };
+            if !alive {
+                break;
+            }
+        }
+        f
+    }
+
+    /// A medium step of `f`'s walk: either a scattering event inside the slab (with its two
+    /// NEE contributions through the coat added to `f`) or arrival at an interface.
+    fn medium_step(
+        &self,
+        walk: &mut Walk,
+        wis: &BsdfSample,
+        wi: Vec3,
+        mode: TransportMode,
+        rng: &mut WalkRng,
+        f: &mut Vec3,
+    ) -> Step {
+        let exit_z = self.thickness;
+        let w = walk.w;
+        let dz = -(1.0 - rng.next()).ln() * w.z.abs();
+        let zp = if w.z > 0.0 { walk.z + dz } else { walk.z - dz };
+        if zp == walk.z {
+            return Step::Lost;
+        }
+        if !(0.0 < zp && zp < self.thickness) {
+            walk.z = zp.clamp(0.0, self.thickness);
+            return Step::Interface;
+        }
+        let phase = self.phase();
+        let top_rough = !self.top.flags().has_specular();
+        let wt = if top_rough {
+            power_heuristic(wis.pdf, phase.p(-w, -wis.wi))
+        } else {
+            1.0
+        };
+        *f += walk.beta * self.albedo * phase.p(-w, -wis.wi) * wt * tr(zp - exit_z, wis.wi) * wis.f
+            / wis.pdf;
+        let (w_new, p) = phase.sample(-w, rng.next2());
+        if p == 0.0 || w_new.z == 0.0 {
+            return Step::Lost;
+        }
+        walk.beta *= self.albedo; // p / pdf = 1
+        walk.w = w_new;
+        walk.z = zp;
+        if top_rough && w_new.z > 0.0 {
+            let f_exit = self.top.f(-w_new, wi, mode);
+            if f_exit.max_element() > 0.0 {
+                let exit_pdf = self.top.pdf(-w_new, wi, Lobes::Transmission);
+                let wt = power_heuristic(p, exit_pdf);
+                *f += walk.beta * tr(zp - exit_z, w_new) * f_exit * wt;
+            }
+        }
+        Step::Scattered
+    }
+
+    /// Internal reflection at the coat (no NEE there: the NEE happened below).
+    fn reflect_at_top(&self, walk: &mut Walk, mode: TransportMode, rng: &mut WalkRng) -> bool {
+        let r = Lobes::Reflection;
+        let Some(bs) = self.top.sample(-walk.w, rng.next(), rng.next2(), mode, r) else {
+            return false;
+        };
+        walk.beta *= bs.f * bs.wi.z.abs() / bs.pdf;
+        walk.w = bs.wi;
+        true
+    }
+
+    /// Scattering at the base: NEE along the presampled `wis`, then a reflection sample and
+    /// NEE along it through a rough coat, both combined by MIS.
+    fn scatter_at_bottom(
+        &self,
+        walk: &mut Walk,
+        wis: &BsdfSample,
+        wi: Vec3,
+        mode: TransportMode,
+        rng: &mut WalkRng,
+        f: &mut Vec3,
+    ) -> bool {
+        let (top, bottom) = (&self.top, &self.bottom);
+        let top_rough = !top.flags().has_specular();
+        let bottom_rough = !bottom.flags().has_specular();
+        let w = walk.w;
+        if bottom_rough {
+            let wt = if top_rough {
+                power_heuristic(wis.pdf, bottom.pdf(-w, -wis.wi, Lobes::All))
+            } else {
+                1.0
+            };
+            *f += walk.beta
+                * bottom.f(-w, -wis.wi, mode)
+                * (wis.wi.z.abs() * wt * tr(self.thickness, wis.wi) / wis.pdf)
+                * wis.f;
+        }
+        let r = Lobes::Reflection;
+        let Some(bs) = bottom.sample(-w, rng.next(), rng.next2(), mode, r) else {
+            return false;
+        };
+        walk.beta *= bs.f * bs.wi.z.abs() / bs.pdf;
+        walk.w = bs.wi;
+        if top_rough {
+            let f_exit = top.f(-bs.wi, wi, mode);
+            if f_exit.max_element() > 0.0 {
+                let wt = if bottom_rough {
+                    power_heuristic(bs.pdf, top.pdf(-bs.wi, wi, Lobes::Transmission))
+                } else {
+                    1.0
+                };
+                *f += walk.beta * tr(self.thickness, bs.wi) * f_exit * wt;
+            }
+        }
+        true
+    }
+
+    /// Samples one random walk: reflection at the coat, or a path through the slab that
+    /// leaves through the coat. `f` and `pdf` are the path's throughput and density.
+    pub fn sample(&self, wo: Vec3, uc: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+        let flip = wo.z < 0.0;
+        let wo = if flip { -wo } else { wo };
+        let unflip = |w: Vec3| if flip { -w } else { w };
+        let bs = self.top.sample(wo, uc, u, mode, Lobes::All)?;
+        if !bs.transmission {
+            return Some(BsdfSample {
+                wi: unflip(bs.wi),
+                pdf_is_proportional: true,
+                ..bs
+            });
+        }
+        let mut rng = WalkRng::new(wo, Vec3::new(uc, u.x, u.y), 0.0, 0x5341_4D50_4C45);
+        let mut specular = bs.specular;
+        let mut f = bs.f * bs.wi.z.abs();
+        let mut pdf = bs.pdf;
+        let mut w = bs.wi;
+        let mut z = self.thickness;
+        for depth in 0..self.max_depth {
+            let rr_beta = f.max_element() / pdf;
+            if depth > 3 && rr_beta < 0.25 {
+                let q = (1.0 - rr_beta).max(0.0);
+                if rng.next() < q {
+                    return None;
+                }
+                pdf *= 1.0 - q;
+            }
+            if w.z == 0.0 {
+                return None;
+            }
+            if self.has_medium() {
+                let dz = -(1.0 - rng.next()).ln() * w.z.abs();
+                let zp = if w.z > 0.0 { z + dz } else { z - dz };
+                if zp == z {
+                    return None;
+                }
+                if 0.0 < zp && zp < self.thickness {
+                    let (wi, p) = self.phase().sample(-w, rng.next2());
+                    if p == 0.0 || wi.z == 0.0 {
+                        return None;
+                    }
+                    f *= self.albedo * p;
+                    pdf *= p;
+                    specular = false;
+                    w = wi;
+                    z = zp;
+                    continue;
+                }
+                z = zp.clamp(0.0, self.thickness);
+            } else {
+                z = if z == self.thickness {
+                    0.0
+                } else {
+                    self.thickness
+                };
+                f *= tr(self.thickness, w);
+            }
+            let (uc, u) = (rng.next(), rng.next2());
+            let bs = if z == 0.0 {
+                self.bottom.sample(-w, uc, u, mode, Lobes::All)
+            } else {
+                self.top.sample(-w, uc, u, mode, Lobes::All)
+            }?;
+            f *= bs.f;
+            pdf *= bs.pdf;
+            specular &= bs.specular;
+            w = bs.wi;
+            if bs.transmission {
+                let mut s = BsdfSample::new(unflip(w), f, pdf, specular, w.z < 0.0, 1.0);
+                s.pdf_is_proportional = true;
+                return Some(s);
+            }
+            f *= bs.wi.z.abs();
+        }
+        None
+    }
+
+    /// Stochastic estimate of the density of `wi` (pbrt-v4's: the coat's reflection, the
+    /// transmission-reflection-transmission paths by MIS, mixed 9:1 with a uniform density).
+    pub fn pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> f32 {
+        let (wo, wi) = if wo.z < 0.0 { (-wo, -wi) } else { (wo, wi) };
+        let n = self.n_samples as f32;
+        let mut sum = 0.0;
+        if wi.z > 0.0 {
+            sum += n * self.top.pdf(wo, wi, Lobes::Reflection);
+            let mut rng = WalkRng::new(wi, wo, 0.0, 0x5044_4650_4446);
+            for _ in 0..self.n_samples {
+                sum += self.pdf_trt(wo, wi, mode, &mut rng);
+            }
+        }
+        0.1 / (4.0 * PI) + 0.9 * sum / n
+    }
+
+    /// One estimate of the density of a transmission-reflection-transmission path.
+    fn pdf_trt(&self, wo: Vec3, wi: Vec3, mode: TransportMode, rng: &mut WalkRng) -> f32 {
+        let (top, bottom) = (&self.top, &self.bottom);
+        let t = Lobes::Transmission;
+        let wos = top.sample(wo, rng.next(), rng.next2(), mode, t);
+        let wis = top.sample(wi, rng.next(), rng.next2(), mode.flip(), t);
+        let (Some(wos), Some(wis)) = (wos, wis) else {
+            return 0.0;
+        };
+        if !top.flags().has_non_specular() {
+            return bottom.pdf(-wos.wi, -wis.wi, Lobes::All);
+        }
+        let Some(rs) = bottom.sample(-wos.wi, rng.next(), rng.next2(), mode, Lobes::All) else {
+            return 0.0;
+        };
+        if !bottom.flags().has_non_specular() {
+            return top.pdf(-rs.wi, wi, Lobes::All);
+        }
+        let r_pdf = bottom.pdf(-wos.wi, -wis.wi, Lobes::All);
+        let t_pdf = top.pdf(-rs.wi, wi, Lobes::All);
+        power_heuristic(wis.pdf, r_pdf) * r_pdf + power_heuristic(rs.pdf, t_pdf) * t_pdf
+    }
+
+    /// A rough albedo for Russian roulette: the coat's normal-incidence reflectance plus what
+    /// it transmits times the base's estimate.
+    pub fn reflectance_estimate(&self, base: Vec3) -> Vec3 {
+        let r0 = super::fresnel::fr_dielectric(1.0, self.top.eta);
+        Vec3::splat(r0) + (1.0 - r0) * base
+    }
+}
+
+/// What a medium step of `f`'s walk did.
+enum Step {
+    Scattered,
+    Interface,
+    Lost,
+}
