@@ -385,6 +385,7 @@ pub fn report(e: &Estimate) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::Material;
 
     #[test]
     fn sizes_parse() {
