@@ -56,6 +56,49 @@ impl Camera {
     }
 }
 
+/// How far one pixel step moves a point `p` on a surface with normal `n` (pbrt-v4's
+/// `Camera::Approximate_dp_dxy`, which every hit uses for texture filtering and bump mapping):
+/// the camera rays one pixel right and down from the ray through `p` are approximated by
+/// offsets of `r * spread` along the camera's x and y axes (`r` the distance to the camera,
+/// `spread` the angle one pixel spans at the image centre), projected along the view ray onto
+/// the tangent plane, and scaled by `max(1/8, 1/sqrt(spp))` since pixels take several samples.
+pub fn approximate_dp_dxy(
+    desc: &CameraDesc,
+    res: (u32, u32),
+    spp: u32,
+    p: Vec3,
+    n: Vec3,
+) -> (Vec3, Vec3) {
+    let origin = desc.world_from_camera.transform_point3(Vec3::ZERO);
+    let to_p = p - origin;
+    let r = to_p.length();
+    let d = to_p / r;
+    let tan_half = (desc.fov_deg.to_radians() * 0.5).tan();
+    let spread = 2.0 * tan_half / res.0.min(res.1).max(1) as f32;
+    let scale = (1.0 / (spp.max(1) as f32).sqrt()).max(0.125) * r * spread;
+    let along = |axis: Vec3| {
+        let e = desc
+            .world_from_camera
+            .transform_vector3(axis)
+            .normalize_or_zero()
+            * scale;
+        // Slide e along d until it lies in the tangent plane: e - d (n.e)/(n.d).
+        let nd = n.dot(d);
+        let nd = if nd.abs() < 1e-4 {
+            1e-4f32.copysign(nd)
+        } else {
+            nd
+        };
+        e - d * (n.dot(e) / nd)
+    };
+    let (dx, dy) = (along(Vec3::X), along(Vec3::Y));
+    if dx.is_finite() && dy.is_finite() {
+        (dx, dy)
+    } else {
+        (Vec3::ZERO, Vec3::ZERO)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -90,5 +133,44 @@ mod tests {
         let cam = Camera::new(&desc(90.0), 100, 100);
         let r = cam.generate_ray(Vec2::ZERO);
         assert!(r.d.x < 0.0 && r.d.y > 0.0 && r.d.z > 0.0);
+    }
+
+    /// At the image centre, the approximate footprint equals the step between the hit points of
+    /// the rays through two neighbouring pixel centres, on a facing and on a tilted plane.
+    #[test]
+    fn footprint_matches_neighbouring_rays() {
+        let d = desc(40.0);
+        let cam = Camera::new(&d, 200, 100);
+        // The approximation is first order in the pixel angle (0.0073 rad here): exact to
+        // rounding on the facing plane, off by about that angle times tan 45 on the tilted one.
+        for (n, tol) in [
+            (Vec3::new(0.0, 0.0, -1.0), 1e-4),
+            (Vec3::new(1.0, 0.0, -1.0).normalize(), 1e-2),
+        ] {
+            // The plane through (0, 0, 10) with normal n.
+            let hit = |x: f32, y: f32| {
+                let r = cam.generate_ray(Vec2::new(x, y));
+                let t = n.dot(Vec3::new(0.0, 0.0, 10.0) - r.o) / n.dot(r.d);
+                r.o + r.d * t
+            };
+            let centre = hit(100.0, 50.0);
+            let (dx, dy) = approximate_dp_dxy(&d, (200, 100), 1, centre, n);
+            let want_x = hit(101.0, 50.0) - centre;
+            let want_y = hit(100.0, 51.0) - centre;
+            assert!(
+                (dx - want_x).length() < tol * want_x.length(),
+                "{dx} {want_x}"
+            );
+            // Raster y grows downwards, camera y upwards: the step is the opposite vector.
+            assert!(
+                (dy + want_y).length() < tol * want_y.length(),
+                "{dy} {want_y}"
+            );
+            // 16 samples per pixel: a quarter of the step; 1000: capped at an eighth.
+            let (dx16, _) = approximate_dp_dxy(&d, (200, 100), 16, centre, n);
+            assert!((dx16 * 4.0 - dx).length() < 1e-6 * dx.length().max(1.0));
+            let (dx1k, _) = approximate_dp_dxy(&d, (200, 100), 1000, centre, n);
+            assert!((dx1k * 8.0 - dx).length() < 1e-6 * dx.length().max(1.0));
+        }
     }
 }

@@ -8,14 +8,30 @@
 //!   rays leave it through [`SurfaceInteraction::spawn`] (pbrt-v4's offset past the bound);
 //! - `ng` follows pbrt's orientation (`Mesh::geometric_normal`), `ns` is the interpolated
 //!   shading normal (or `ng`), and `frame` has `z = ns`;
-//! - `uv` are the mesh's texture coordinates at the hit, or the barycentrics `(u, v)` when the
-//!   mesh has none (pbrt-v4's default parameterisation of a triangle);
+//! - `uv` are the mesh's texture coordinates at the hit, or pbrt-v4's default for a triangle
+//!   without them (vertex uvs (0,0), (1,0), (1,1), so uv = (b1 + b2, b2) for barycentrics
+//!   (b1, b2));
 //! - `wo` points back along the ray, in world space (`wo_world`) and in the frame (`wo`).
+//!
+//! [`SurfaceInteraction::bsdf`] builds the BSDF per hit from the material with its textures
+//! looked up here. When a texture filters (trilinear images, checkerboards) or the material
+//! is bump mapped, the lookup gets a footprint: the pixel's extent on the surface from
+//! [`crate::camera::approximate_dp_dxy`] (pbrt-v4 uses that approximation for every hit),
+//! turned into `du/dx, dv/dx, du/dy, dv/dy` by least squares against the triangle's
+//! `dp/du, dp/dv`.
+//!
+//! Bump mapping (`"texture displacement"`, pbrt-v4's `BumpMap`): with the displacement `d`
+//! looked up at the point and at points shifted by `du = (|du/dx| + |du/dy|) / 2` (0.0005 when
+//! that is 0) in u and `dv` alike in v, `dp/du' = dp/du + (d(u + du) - d(u)) / du n` (and v
+//! alike), and the shading normal becomes `normalize(dp/du' x dp/dv')`, turned to the side of
+//! the unbumped one. pbrt-v4's `d(u) dn/du` term is left out (it is zero on meshes without
+//! shading normals).
 use crate::accel::Hit;
 use crate::bsdf::Bsdf;
 use crate::light::LightSample;
 use crate::math::{spawn_origin, Frame, Ray, Vec2, Vec3};
-use crate::scene::{Mesh, Scene};
+use crate::scene::{Material, Mesh, Scene};
+use crate::texture::{Tex, TexCoord};
 
 /// A ray hit, ready to shade.
 #[derive(Clone, Copy, Debug)]
@@ -67,9 +83,79 @@ impl<'s> SurfaceInteraction<'s> {
         }
     }
 
-    /// The BSDF at this point.
-    pub fn bsdf(&self, scene: &Scene) -> Bsdf {
-        Bsdf::from_material(&scene.materials[self.mesh.material as usize])
+    /// The BSDF at this point, its textures looked up here. A bump-mapped material first
+    /// moves the shading normal (and `frame`, `wo` with it).
+    pub fn bsdf(&mut self, scene: &Scene) -> Bsdf {
+        let m = &scene.materials[self.mesh.material as usize];
+        let tc = if material_needs_differentials(m) {
+            self.tex_coord(scene)
+        } else {
+            TexCoord::point(self.uv)
+        };
+        if let Some(d) = &m.displacement {
+            self.bump(d, &tc);
+        }
+        Bsdf::new(&m.kind, &tc)
+    }
+
+    /// The texture lookup at this point with its footprint (one pixel step in x and y).
+    pub fn tex_coord(&self, scene: &Scene) -> TexCoord {
+        let res = (scene.film.xres, scene.film.yres);
+        let spp = scene.sampler.pixel_samples;
+        let (dpdx, dpdy) =
+            crate::camera::approximate_dp_dxy(&scene.camera, res, spp, self.p, self.ng);
+        let (dpdu, dpdv) = self.dpduv();
+        TexCoord {
+            uv: self.uv,
+            duvdx: uv_step(dpdu, dpdv, dpdx),
+            duvdy: uv_step(dpdu, dpdv, dpdy),
+        }
+    }
+
+    /// The triangle's `dp/du`, `dp/dv` from its vertex uvs (pbrt-v4's `Triangle::Intersect`),
+    /// or two tangents of `ng` when the uvs are degenerate.
+    pub fn dpduv(&self) -> (Vec3, Vec3) {
+        let [p0, p1, p2] = self.mesh.triangle(self.prim);
+        let [uv0, uv1, uv2] = triangle_uvs(self.mesh, self.prim);
+        let (duv02, duv12) = (uv0 - uv2, uv1 - uv2);
+        let (dp02, dp12) = (p0 - p2, p1 - p2);
+        let det = duv02.x * duv12.y - duv02.y * duv12.x;
+        let dpdu = (dp02 * duv12.y - dp12 * duv02.y) / det;
+        let dpdv = (dp12 * duv02.x - dp02 * duv12.x) / det;
+        if det.abs() < 1e-9
+            || !dpdu.is_finite()
+            || !dpdv.is_finite()
+            || dpdu.cross(dpdv).length_squared() == 0.0
+        {
+            let f = Frame::from_normal(self.ng);
+            return (f.s, f.t);
+        }
+        (dpdu, dpdv)
+    }
+
+    /// pbrt-v4's bump mapping with displacement texture `d` (see the module docs).
+    fn bump(&mut self, d: &Tex, tc: &TexCoord) {
+        let (dpdu, dpdv) = self.dpduv();
+        let step = |a: f32, b: f32| match 0.5 * (a.abs() + b.abs()) {
+            s if s > 0.0 && s.is_finite() => s,
+            _ => 0.0005,
+        };
+        let du = step(tc.duvdx.x, tc.duvdy.x);
+        let dv = step(tc.duvdx.y, tc.duvdy.y);
+        let at = |uv: Vec2| d.eval_float(&TexCoord { uv, ..*tc });
+        let h = at(tc.uv);
+        let hu = at(tc.uv + Vec2::new(du, 0.0));
+        let hv = at(tc.uv + Vec2::new(0.0, dv));
+        let n = self.ns;
+        let dpdu = dpdu + n * ((hu - h) / du);
+        let dpdv = dpdv + n * ((hv - h) / dv);
+        let bumped = dpdu.cross(dpdv).normalize_or_zero();
+        if bumped == Vec3::ZERO || !bumped.is_finite() {
+            return;
+        }
+        self.ns = if bumped.dot(n) < 0.0 { -bumped } else { bumped };
+        self.frame = Frame::from_normal(self.ns);
+        self.wo = self.frame.to_local(self.wo_world);
     }
 
     /// The area light this surface emits as, if any.
@@ -117,13 +203,35 @@ impl<'s> SurfaceInteraction<'s> {
     }
 }
 
-/// The mesh's texture coordinates at barycentrics `(u, v)`, or `(u, v)` without them.
-fn mesh_uv(mesh: &Mesh, prim: u32, u: f32, v: f32) -> Vec2 {
-    match &mesh.uvs {
-        Some(uvs) => {
-            let [a, b, c] = mesh.indices[prim as usize];
-            uvs[a as usize] * (1.0 - u - v) + uvs[b as usize] * u + uvs[c as usize] * v
-        }
-        None => Vec2::new(u, v),
+/// Whether any texture of `m` reads its footprint, or `m` is bump mapped.
+fn material_needs_differentials(m: &Material) -> bool {
+    m.displacement.is_some() || m.kind.textures().iter().any(|t| t.needs_differentials())
+}
+
+/// The `(du, dv)` that best explains the surface step `dp` (least squares against `dpdu`,
+/// `dpdv`; pbrt-v4's `ComputeDifferentials`), clamped to +-1e8; 0 when degenerate.
+fn uv_step(dpdu: Vec3, dpdv: Vec3, dp: Vec3) -> Vec2 {
+    let (a00, a01, a11) = (dpdu.dot(dpdu), dpdu.dot(dpdv), dpdv.dot(dpdv));
+    let inv_det = 1.0 / (a00 * a11 - a01 * a01);
+    let (b0, b1) = (dpdu.dot(dp), dpdv.dot(dp));
+    let uv = Vec2::new(a11 * b0 - a01 * b1, a00 * b1 - a01 * b0) * inv_det;
+    if uv.is_finite() {
+        uv.clamp(Vec2::splat(-1e8), Vec2::splat(1e8))
+    } else {
+        Vec2::ZERO
     }
+}
+
+/// The uvs of triangle `prim`'s vertices: the mesh's, or pbrt-v4's default (0,0), (1,0), (1,1).
+fn triangle_uvs(mesh: &Mesh, prim: u32) -> [Vec2; 3] {
+    match &mesh.uvs {
+        Some(uvs) => mesh.indices[prim as usize].map(|i| uvs[i as usize]),
+        None => [Vec2::ZERO, Vec2::X, Vec2::ONE],
+    }
+}
+
+/// The texture coordinates at barycentrics `(u, v)` (weights `1-u-v, u, v`) of triangle `prim`.
+pub fn mesh_uv(mesh: &Mesh, prim: u32, u: f32, v: f32) -> Vec2 {
+    let [a, b, c] = triangle_uvs(mesh, prim);
+    a * (1.0 - u - v) + b * u + c * v
 }

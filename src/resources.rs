@@ -22,7 +22,7 @@
 use crate::accel::BackendKind;
 use crate::integrator::{IntegratorKind, RenderSettings};
 use crate::math::Vec3;
-use crate::scene::Scene;
+use crate::scene::{MaterialKind, Scene};
 
 /// Largest image side, in pixels.
 pub const MAX_RESOLUTION: u32 = 32768;
@@ -224,23 +224,26 @@ pub fn default_budget() -> Budget {
 
 /// An upper estimate of photons stored per photon emitted: a diffuse bounce survives roulette
 /// with the surface's mean reflectance, so a photon lands at most `1 / (1 - rho)` times on
-/// average when `rho` is the largest mean reflectance estimate of a surface with a diffuse
-/// lobe in the scene (specular bounces store nothing), and never more than `max_bounces + 1`
-/// times.
+/// average when `rho` is the largest mean diffuse reflectance in the scene (specular bounces
+/// store nothing), and never more than `max_bounces + 1` times.
 fn landings_per_photon(scene: &Scene, max_bounces: u32) -> f64 {
     let rho = scene
         .materials
         .iter()
-        .map(|m| {
-            let b = crate::bsdf::Bsdf::from_material(m);
-            if b.flags().has_diffuse() {
+        .map(|m| match &m.kind {
+            // A texture may reach 1 somewhere: bounded by max_bounces below.
+            MaterialKind::Diffuse { reflectance } => reflectance
+                .constant()
+                .map_or(1.0, |r| r.clamp(Vec3::ZERO, Vec3::ONE).element_sum() / 3.0),
+            // Coated diffuse, diffuse transmission: their albedo estimate (at uv 0,0).
+            kind if kind.flags().has_diffuse() => {
+                let b = crate::bsdf::Bsdf::new(kind, &crate::texture::TexCoord::default());
                 b.reflectance_estimate()
                     .clamp(Vec3::ZERO, Vec3::ONE)
                     .element_sum()
                     / 3.0
-            } else {
-                0.0
             }
+            _ => 0.0,
         })
         .fold(0.0f32, f32::max) as f64;
     let most = max_bounces as f64 + 1.0;
@@ -430,12 +433,12 @@ mod tests {
             Scene::with_geometry(
                 vec![],
                 vec![
-                    Material::Diffuse {
-                        reflectance: Vec3::splat(0.2),
-                    },
-                    Material::Diffuse {
-                        reflectance: Vec3::splat(rho),
-                    },
+                    Material::from(MaterialKind::Diffuse {
+                        reflectance: Vec3::splat(0.2).into(),
+                    }),
+                    Material::from(MaterialKind::Diffuse {
+                        reflectance: Vec3::splat(rho).into(),
+                    }),
                 ],
                 vec![],
             )

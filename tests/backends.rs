@@ -50,9 +50,11 @@ fn scene_of(meshes: Vec<Mesh>) -> Scene {
         },
         ..Scene::with_geometry(
             meshes,
-            vec![photon::scene::Material::Diffuse {
-                reflectance: Vec3::splat(0.5),
-            }],
+            vec![photon::scene::Material::from(
+                photon::scene::MaterialKind::Diffuse {
+                    reflectance: Vec3::splat(0.5).into(),
+                },
+            )],
             Vec::new(),
         )
     }

@@ -57,9 +57,10 @@ fn collect_mode_lists_every_problem_in_order() {
         (9, "participating media are not supported"),
         (10, "unknown directive \"Frobnicate\""),
         (11, "unsupported light type \"infinite\""),
+        // The texture failed to load on line 4, so the name is unknown here.
         (
             12,
-            "\"texture reflectance\": textures are parsed but not yet applied",
+            "\"texture reflectance\": unknown spectrum texture \"wood\"",
         ),
     ];
     assert_eq!(errs.len(), want.len(), "{errs:#?}");

@@ -134,7 +134,7 @@ struct Step {
 
 fn step(scene: &Scene, accel: &Accel, ray: &Ray, uc: f32) -> Option<Step> {
     let hit = accel.intersect(ray)?;
-    let si = SurfaceInteraction::new(scene, &hit, ray);
+    let mut si = SurfaceInteraction::new(scene, &hit, ray);
     let sample = si
         .bsdf(scene)
         .sample(si.wo, uc, Vec2::splat(0.5), TransportMode::Radiance)?;

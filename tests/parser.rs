@@ -5,7 +5,7 @@
 
 use photon::math::{Mat4, Vec2, Vec3};
 use photon::scene::loader::load;
-use photon::scene::{FilterDesc, Light, Material, Scene, SceneError};
+use photon::scene::{FilterDesc, Light, Material, MaterialKind, Metal, Scene, SceneError};
 use std::f32::consts::PI;
 use std::path::{Path, PathBuf};
 
@@ -131,18 +131,14 @@ fn cornell_box_loads() {
     assert_eq!(s.meshes[*mesh as usize].area_light, Some(0));
     assert_eq!(
         s.materials[s.meshes[*mesh as usize].material as usize],
-        Material::Diffuse {
-            reflectance: Vec3::ZERO
-        }
+        diffuse(Vec3::ZERO)
     );
     // The light is the last shape: 0.47 x 0.38 at y = 1.98.
     let lm = &s.meshes[*mesh as usize];
     let area: f32 = (0..2).map(|t| lm.area(t)).sum();
     assert!(close(area, 0.47 * 0.38, 1e-5));
     // Floor material: LeftWall colour appears on the left wall.
-    let red = Material::Diffuse {
-        reflectance: Vec3::new(0.63, 0.065, 0.05),
-    };
+    let red = diffuse(Vec3::new(0.63, 0.065, 0.05));
     assert_eq!(s.materials.iter().filter(|m| **m == red).count(), 1);
 
     let cam = s.camera.world_from_camera;
@@ -215,19 +211,12 @@ fn veach_mis_loads() {
     let mut alphas: Vec<f32> = s
         .materials
         .iter()
-        .filter_map(|m| match m {
-            Material::Conductor {
-                eta,
-                k,
-                alpha_u,
-                alpha_v,
-            } => {
-                assert_eq!(*eta, Vec3::new(0.200438, 0.924033, 1.102212));
-                assert_eq!(*k, Vec3::new(3.912949, 2.452848, 2.142188));
-                assert_eq!(alpha_u, alpha_v);
-                Some(*alpha_u)
-            }
-            _ => None,
+        .filter_map(conductor)
+        .map(|(eta, k, alpha_u, alpha_v)| {
+            assert_eq!(eta, Vec3::new(0.200438, 0.924033, 1.102212));
+            assert_eq!(k, Vec3::new(3.912949, 2.452848, 2.142188));
+            assert_eq!(alpha_u, alpha_v);
+            alpha_u
         })
         .collect();
     alphas.sort_by(f32::total_cmp);
@@ -267,18 +256,13 @@ fn cornell_spheres_loads() {
         assert!(lo.y >= 0.0 && lo.y < 1e-3, "lowest point {}", lo.y);
         assert!(m.normals.is_none() && m.sphere.is_none());
     }
-    let glass = Material::Dielectric {
-        eta: 1.5,
-        alpha_u: 0.0,
-        alpha_v: 0.0,
-    };
+    let glass = dielectric(1.5);
     assert!(s.materials.contains(&glass));
-    let mirror = s.materials.iter().find_map(|m| match m {
-        Material::Conductor {
-            eta, k, alpha_u, ..
-        } => Some((*eta, *k, *alpha_u)),
-        _ => None,
-    });
+    let mirror = s
+        .materials
+        .iter()
+        .find_map(conductor)
+        .map(|(eta, k, alpha_u, _)| (eta, k, alpha_u));
     let (eta, k, alpha) = mirror.expect("mirror conductor");
     assert_eq!(eta, Vec3::ONE);
     let k_expect = 2.0 * (1.0f64 - 1e-7).sqrt() / 1e-7f64.sqrt();
@@ -441,19 +425,10 @@ AttributeEnd
     assert_eq!(s.meshes.len(), 2);
     let (inner, outer) = (&s.meshes[0], &s.meshes[1]);
     assert_vec(inner.positions[0], Vec3::new(1.0, 0.0, 10.0), 0.0);
-    assert_eq!(
-        s.materials[inner.material as usize],
-        Material::Dielectric {
-            eta: 1.5,
-            alpha_u: 0.0,
-            alpha_v: 0.0
-        }
-    );
+    assert_eq!(s.materials[inner.material as usize], dielectric(1.5));
     assert!(inner.flip_normals && inner.area_light == Some(0));
     assert_vec(outer.positions[0], Vec3::X, 0.0);
-    let want = Material::Diffuse {
-        reflectance: Vec3::new(0.1, 0.2, 0.3),
-    };
+    let want = diffuse(Vec3::new(0.1, 0.2, 0.3));
     assert_eq!(s.materials[outer.material as usize], want);
     assert!(!outer.flip_normals && outer.area_light.is_none());
     assert_eq!(s.lights.len(), 1);
@@ -584,68 +559,75 @@ fn material_of(body: &str) -> Material {
     s.materials[only_mesh(&s).material as usize].clone()
 }
 
+/// A diffuse material with a constant reflectance and no bump map.
+fn diffuse(r: Vec3) -> Material {
+    MaterialKind::Diffuse {
+        reflectance: r.into(),
+    }
+    .into()
+}
+
+/// A smooth dielectric.
+fn dielectric(eta: f32) -> Material {
+    MaterialKind::Dielectric {
+        eta,
+        // As a file without roughness says: 0, remapped (pbrt-v4's default).
+        roughness: photon::scene::Roughness {
+            u: 0.0.into(),
+            v: 0.0.into(),
+            remap: true,
+        },
+    }
+    .into()
+}
+
+/// A conductor's constant (eta, k, alpha_u, alpha_v), or `None` for another material; a
+/// `reflectance` conductor reads as pbrt-v4 converts it (eta 1, k from r).
+fn conductor(m: &Material) -> Option<(Vec3, Vec3, f32, f32)> {
+    let MaterialKind::Conductor { metal, roughness } = &m.kind else {
+        return None;
+    };
+    let (eta, k) = match metal {
+        Metal::EtaK { eta, k } => (eta.constant()?, k.constant()?),
+        Metal::Reflectance(r) => (Vec3::ONE, photon::bsdf::k_from_reflectance(r.constant()?)),
+    };
+    let (au, av) = roughness.constant()?;
+    Some((eta, k, au, av))
+}
+
 #[test]
 fn materials() {
-    assert_eq!(
-        material_of(""),
-        Material::Diffuse {
-            reflectance: Vec3::splat(0.5)
-        }
-    );
+    assert_eq!(material_of(""), diffuse(Vec3::splat(0.5)));
     assert_eq!(
         material_of(r#"Material "dielectric" "float eta" 1.33"#),
-        Material::Dielectric {
-            eta: 1.33,
-            alpha_u: 0.0,
-            alpha_v: 0.0
-        }
+        dielectric(1.33)
     );
     assert_eq!(
         material_of(r#"Material "dielectric" "spectrum eta" [ 1.7 ] "float roughness" 0"#),
-        Material::Dielectric {
-            eta: 1.7,
-            alpha_u: 0.0,
-            alpha_v: 0.0
-        }
+        dielectric(1.7)
     );
     assert_eq!(
         material_of(r#"Material "dielectric" "spectrum eta" [ 400 1.6 700 1.6 ]"#),
-        Material::Dielectric {
-            eta: 1.6,
-            alpha_u: 0.0,
-            alpha_v: 0.0
-        }
+        dielectric(1.6)
     );
     // Default conductor: copper, smooth (the published RGB of pbrt's copper; ours are computed
     // from pbrt-v4's tables by the same method and agree to 1e-4).
-    let Material::Conductor {
-        eta,
-        k,
-        alpha_u: 0.0,
-        alpha_v: 0.0,
-    } = material_of(r#"Material "conductor""#)
-    else {
+    let Some((eta, k, 0.0, 0.0)) = conductor(&material_of(r#"Material "conductor""#)) else {
         panic!("not a smooth conductor")
     };
     assert_vec(eta, Vec3::new(0.200438, 0.924033, 1.102212), 3e-4);
     assert_vec(k, Vec3::new(3.912949, 2.452848, 2.142188), 3e-4);
     // Named glasses: the index at 550 nm (BK7: 1.51852 from Schott's Sellmeier fit).
-    let Material::Dielectric { eta, .. } =
-        material_of(r#"Material "dielectric" "spectrum eta" [ "glass-BK7" ]"#)
+    let MaterialKind::Dielectric { eta, .. } =
+        material_of(r#"Material "dielectric" "spectrum eta" [ "glass-BK7" ]"#).kind
     else {
         panic!("not a dielectric")
     };
     assert!(close(eta, 1.51852, 1e-4), "{eta}");
     // reflectance 0.64: eta 1, k = 2 * 0.8 / 0.6; roughness 0.09 remapped to alpha 0.3.
-    let Material::Conductor {
-        eta,
-        k,
-        alpha_u,
-        alpha_v,
-    } = material_of(
+    let Some((eta, k, alpha_u, alpha_v)) = conductor(&material_of(
         r#"Material "conductor" "rgb reflectance" [ 0.64 0 0.36 ] "float roughness" 0.09"#,
-    )
-    else {
+    )) else {
         panic!()
     };
     assert_eq!(eta, Vec3::ONE);
@@ -657,30 +639,18 @@ fn materials() {
         r#""spectrum eta" "metal-Au-eta" "spectrum k" "metal-Au-k""#,
         r#""spectrum eta" [ "metal-Au-eta" ] "spectrum k" ["metal-Au-k"]"#,
     ] {
-        let Material::Conductor {
-            eta,
-            k,
-            alpha_u: 0.2,
-            alpha_v: 0.04,
-        } = material_of(&format!(
+        let Some((eta, k, 0.2, 0.04)) = conductor(&material_of(&format!(
             r#"Material "conductor" {src}
                "float uroughness" 0.2 "float vroughness" 0.04 "bool remaproughness" false"#
-        ))
-        else {
+        ))) else {
             panic!("not gold with alpha 0.2 x 0.04: {src}")
         };
         assert_vec(eta, Vec3::new(0.143119, 0.374957, 1.44248), 3e-4);
         assert_vec(k, Vec3::new(3.98316, 2.38572, 1.60322), 3e-4);
     }
-    let Material::Conductor {
-        eta,
-        k,
-        alpha_u,
-        alpha_v,
-    } = material_of(
+    let Some((eta, k, alpha_u, alpha_v)) = conductor(&material_of(
         r#"Material "conductor" "spectrum eta" "metal-Al-eta" "rgb k" [1 2 3] "float uroughness" 0.25"#,
-    )
-    else {
+    )) else {
         panic!()
     };
     assert_vec(eta, Vec3::new(1.65746, 0.880369, 0.521229), 3e-4);
@@ -705,20 +675,10 @@ Material "diffuse"
         .map(|m| &s.materials[m.material as usize])
         .collect();
     assert!(
-        matches!(mats[0], Material::Conductor { eta, .. } if (*eta - Vec3::new(0.155265, 0.116723, 0.138342)).abs().max_element() < 1e-4)
+        matches!(conductor(mats[0]), Some((eta, ..)) if (eta - Vec3::new(0.155265, 0.116723, 0.138342)).abs().max_element() < 1e-4)
     );
-    assert_eq!(
-        *mats[1],
-        Material::Diffuse {
-            reflectance: Vec3::splat(0.2)
-        }
-    );
-    assert_eq!(
-        *mats[2],
-        Material::Diffuse {
-            reflectance: Vec3::splat(0.5)
-        }
-    );
+    assert_eq!(*mats[1], diffuse(Vec3::splat(0.2)));
+    assert_eq!(*mats[2], diffuse(Vec3::splat(0.5)));
     assert_eq!(
         s.materials.len(),
         3,
@@ -1033,9 +993,7 @@ fn syntax_details() {
     assert_eq!(s.meshes.len(), 3);
     assert_eq!(
         s.materials[s.meshes[0].material as usize],
-        Material::Diffuse {
-            reflectance: Vec3::splat(0.5)
-        }
+        diffuse(Vec3::splat(0.5))
     );
     assert!(matches!(
         s.lights[0],
@@ -1138,7 +1096,7 @@ fn error_parameter_types_and_values() {
     assert_src_err(
         "WorldBegin\nMaterial \"diffuse\" \"texture reflectance\" \"t\"\n",
         2,
-        &["textures are parsed but not yet applied"],
+        &["\"texture reflectance\"", "unknown spectrum texture \"t\""],
     );
     assert_src_err(
         "WorldBegin\nLightSource \"point\"\n \"blackbody I\" 5500\n",
@@ -1276,7 +1234,7 @@ fn error_unused_parameters() {
     assert_src_err(
         "WorldBegin\nMaterial \"diffuse\" \"texture normalmap\" \"n\"\n",
         2,
-        &["\"texture normalmap\": textures are parsed but not yet applied"],
+        &["\"texture normalmap\": a texture is not supported for this parameter"],
     );
     assert_src_err("WorldBegin\nMaterial \"conductor\" \"float uroughness\" 0.1 \"float vroughness\" 0.1\n \"float roughness\" 0.2\n", 3, &["unused parameter \"float roughness\""]);
     assert_src_err(
@@ -1294,7 +1252,7 @@ fn error_unused_parameters() {
         2,
         &["unused parameter \"string filename\""],
     );
-    assert_src_err("WorldBegin\nShape \"plymesh\" \"string filename\" \"x.ply\"\n\"texture displacement\" \"d\"\n", 3, &["\"texture displacement\": textures are parsed but not yet applied"]);
+    assert_src_err("WorldBegin\nShape \"plymesh\" \"string filename\" \"x.ply\"\n\"texture displacement\" \"d\"\n", 3, &["\"texture displacement\": a texture is not supported for this parameter"]);
 }
 
 #[test]
@@ -1807,7 +1765,7 @@ fn every_named_metal_loads_with_and_without_brackets() {
             r#"Material "conductor" "spectrum eta" [ "metal-{metal}-eta" ] "spectrum k" [ "metal-{metal}-k" ]"#
         ));
         assert_eq!(plain, bracketed, "{metal}");
-        let Material::Conductor { eta, k, .. } = plain else {
+        let Some((eta, k, ..)) = conductor(&plain) else {
             panic!("{metal}")
         };
         assert!(
@@ -1817,9 +1775,9 @@ fn every_named_metal_loads_with_and_without_brackets() {
     }
     // Brass (CuZn) is yellow: its k falls from red to blue, as in the table (3.52 at 630 nm,
     // 1.92 at 465 nm).
-    let Material::Conductor { k, .. } = material_of(
+    let Some((_, k, ..)) = conductor(&material_of(
         r#"Material "conductor" "spectrum k" "metal-CuZn-k" "spectrum eta" "metal-CuZn-eta""#,
-    ) else {
+    )) else {
         panic!()
     };
     assert!(k.x > 3.5 && k.z < 2.0, "{k}");
@@ -1946,10 +1904,23 @@ fn texture_errors() {
     assert!(e.contains("unsupported texture class \"wrinkled\""), "{e}");
     let e = err(r#"Texture "a" "spectrum" "constant" "float uscale" 2"#);
     assert!(e.contains("unused parameter \"float uscale\""), "{e}");
-    // A material that uses a texture that exists is still an error: not applied yet.
-    let e = err("Texture \"a\" \"spectrum\" \"constant\"\nMaterial \"diffuse\" \"texture reflectance\" \"a\"");
+    // A float texture where a spectrum one is wanted, and the other way round.
+    let e = err(
+        "Texture \"a\" \"float\" \"constant\"\nMaterial \"diffuse\" \"texture reflectance\" \"a\"",
+    );
     assert!(
-        e.contains("scene.pbrt:3:20: parameter \"texture reflectance\": textures are parsed but not yet applied"),
+        e.contains(
+            "scene.pbrt:3:20: parameter \"texture reflectance\": unknown spectrum texture \"a\""
+        ),
+        "{e}"
+    );
+    let e = err("Texture \"a\" \"spectrum\" \"constant\"\nMaterial \"conductor\" \"texture roughness\" \"a\"");
+    assert!(e.contains("unknown float texture \"a\""), "{e}");
+    // A light's colour cannot be a texture.
+    let e =
+        err("Texture \"a\" \"spectrum\" \"constant\"\nLightSource \"point\" \"texture I\" \"a\"");
+    assert!(
+        e.contains("\"texture I\": a texture is not supported for this parameter"),
         "{e}"
     );
 }
@@ -1979,9 +1950,7 @@ ObjectInstance "thing"
     assert!(s.lights.is_empty(), "area lights in instances are ignored");
     assert_eq!(s.notes.len(), 1);
     assert!(s.notes[0].contains(":8:11: area light ignored inside object \"thing\""));
-    let red = Material::Diffuse {
-        reflectance: Vec3::new(0.8, 0.0, 0.0),
-    };
+    let red = diffuse(Vec3::new(0.8, 0.0, 0.0));
     assert!(s
         .meshes
         .iter()

@@ -42,7 +42,8 @@ pub use microfacet::TrowbridgeReitz;
 pub use thin_dielectric::ThinDielectric;
 
 use crate::math::{Vec2, Vec3};
-use crate::scene::{Coat, Material};
+use crate::scene::{Coat, MaterialKind, Metal, Roughness};
+use crate::texture::TexCoord;
 
 /// What a path carries: radiance (camera paths) or importance (photons). Only refraction
 /// through a delta interface differs: radiance is scaled by `1 / eta^2`, importance is not.
@@ -194,6 +195,109 @@ impl std::ops::BitOr for BxdfFlags {
     }
 }
 
+impl std::ops::BitAnd for BxdfFlags {
+    type Output = BxdfFlags;
+    fn bitand(self, other: BxdfFlags) -> BxdfFlags {
+        BxdfFlags(self.0 & other.0)
+    }
+}
+
+/// pbrt-v4's conductor from reflectance: k = 2 sqrt(r) / sqrt(1 - r), with r at most 1 - 1e-7
+/// (so that k stays finite): its normal-incidence reflectance with eta = 1 is r.
+pub fn k_from_reflectance(r: Vec3) -> Vec3 {
+    // In f64: 1 - 1e-7 is not representable in f32 (it would round to 1 - 1.19e-7).
+    let f = |r: f32| {
+        let r = (r as f64).clamp(0.0, 1.0 - 1e-7);
+        (2.0 * r.sqrt() / (1.0 - r).sqrt()) as f32
+    };
+    Vec3::new(f(r.x), f(r.y), f(r.z))
+}
+
+/// The specular and/or glossy lobe of a microfacet surface whose roughness may vary.
+fn microfacet_lobe(r: &Roughness) -> BxdfFlags {
+    match r.constant() {
+        Some((u, v)) if TrowbridgeReitz::new(u, v).effectively_smooth() => BxdfFlags::SPECULAR,
+        Some(_) => BxdfFlags::GLOSSY,
+        None => BxdfFlags::SPECULAR | BxdfFlags::GLOSSY,
+    }
+}
+
+/// Whether a texture is the constant 0 (black everywhere).
+fn is_zero(t: &crate::texture::Tex) -> bool {
+    t.constant().is_some_and(|v| v.max_element() <= 0.0)
+}
+
+impl MaterialKind {
+    /// Every lobe the BSDF may have somewhere on a surface of this material (the union over
+    /// its textures' values): what the photon-map rules read to decide which maps a scene
+    /// needs. The coated materials follow pbrt-v4's `LayeredBxDF::Flags`: reflection,
+    /// specular when the coat is smooth, diffuse when the base is diffuse or the slab
+    /// scatters (`albedo`), else glossy when the coat or the base is rough.
+    pub fn flags(&self) -> BxdfFlags {
+        use BxdfFlags as F;
+        match self {
+            MaterialKind::Diffuse { .. } => F::REFLECTION | F::DIFFUSE,
+            MaterialKind::Dielectric { eta, roughness } => {
+                let sides = if *eta == 1.0 {
+                    return F::TRANSMISSION | F::SPECULAR; // no interface: straight through
+                } else {
+                    F::REFLECTION | F::TRANSMISSION
+                };
+                sides | microfacet_lobe(roughness)
+            }
+            MaterialKind::Conductor { roughness, .. } => F::REFLECTION | microfacet_lobe(roughness),
+            MaterialKind::ThinDielectric { .. } => F::REFLECTION | F::TRANSMISSION | F::SPECULAR,
+            MaterialKind::DiffuseTransmission {
+                reflectance,
+                transmittance,
+                scale,
+            } => {
+                let mut f = F::default();
+                if *scale > 0.0 && !is_zero(reflectance) {
+                    f = f | F::REFLECTION | F::DIFFUSE;
+                }
+                if *scale > 0.0 && !is_zero(transmittance) {
+                    f = f | F::TRANSMISSION | F::DIFFUSE;
+                }
+                f
+            }
+            MaterialKind::CoatedDiffuse { roughness, .. } => {
+                F::REFLECTION | F::DIFFUSE | (microfacet_lobe(roughness) & F::SPECULAR)
+            }
+            MaterialKind::CoatedConductor {
+                interface,
+                coat,
+                roughness,
+                ..
+            } => {
+                let (top, base) = (microfacet_lobe(interface), microfacet_lobe(roughness));
+                let mut f = F::REFLECTION | (top & F::SPECULAR);
+                if !is_zero(&coat.albedo) {
+                    f = f | F::DIFFUSE;
+                }
+                if is_zero(&coat.albedo) || coat.albedo.constant().is_none() {
+                    f = f | ((top | base) & F::GLOSSY);
+                }
+                f
+            }
+        }
+    }
+
+    /// Whether the surface reflects nothing anywhere (a diffuse or diffuse-transmission
+    /// material with constant black colours): no photon map is needed for it.
+    pub fn is_black(&self) -> bool {
+        match self {
+            MaterialKind::Diffuse { reflectance } => is_zero(reflectance),
+            MaterialKind::DiffuseTransmission {
+                reflectance,
+                transmittance,
+                scale,
+            } => *scale <= 0.0 || (is_zero(reflectance) && is_zero(transmittance)),
+            _ => false,
+        }
+    }
+}
+
 /// The BSDF at a surface point (a closed set; no dynamic dispatch).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Bsdf {
@@ -206,18 +310,33 @@ pub enum Bsdf {
     CoatedConductor(CoatedConductor),
 }
 
-/// The layered BSDF of a scene coat over `base`.
-fn coated<B: layered::Layer + Copy>(c: &Coat, base: B) -> layered::Layered<B> {
-    let top = Dielectric::rough(c.eta, c.alpha_u, c.alpha_v);
-    layered::Layered::new(
-        top,
-        base,
-        c.thickness,
-        c.albedo,
-        c.g,
-        c.max_depth,
-        c.n_samples,
-    )
+/// A conductor's BSDF at `tc`, its index divided by `outside` (the index of the medium above
+/// it: 1, or a coat's).
+fn conductor(metal: &Metal, roughness: &Roughness, outside: f32, tc: &TexCoord) -> Conductor {
+    let (eta, k) = match metal {
+        Metal::EtaK { eta, k } => (eta.eval(tc), k.eval(tc)),
+        Metal::Reflectance(r) => (
+            Vec3::ONE,
+            k_from_reflectance(r.eval(tc).clamp(Vec3::ZERO, Vec3::ONE)),
+        ),
+    };
+    let e = if outside > 0.0 { outside } else { 1.0 };
+    let (au, av) = roughness.eval(tc);
+    Conductor::new(eta / e, k / e, au, av)
+}
+
+/// The layered BSDF at `tc` of a coat of `roughness` over `base`.
+fn coated<B: layered::Layer + Copy>(
+    c: &Coat,
+    roughness: &Roughness,
+    base: B,
+    tc: &TexCoord,
+) -> layered::Layered<B> {
+    let (au, av) = roughness.eval(tc);
+    let top = Dielectric::rough(c.eta, au, av);
+    let (thickness, g) = (c.thickness.eval_float(tc), c.g.eval_float(tc));
+    let albedo = c.albedo.eval(tc);
+    layered::Layered::new(top, base, thickness, albedo, g, c.max_depth, c.n_samples)
 }
 
 /// True when `a` and `b` are strictly on the same side of the surface.
@@ -226,40 +345,42 @@ pub(crate) fn same_hemisphere(a: Vec3, b: Vec3) -> bool {
 }
 
 impl Bsdf {
-    /// The BSDF of a scene material (bad parameters are sanitised: see each variant's `new`).
-    pub fn from_material(m: &Material) -> Bsdf {
-        match m {
-            Material::Diffuse { reflectance } => Bsdf::Diffuse(Diffuse::new(*reflectance)),
-            Material::Dielectric {
-                eta,
-                alpha_u,
-                alpha_v,
-            } => Bsdf::Dielectric(Dielectric::rough(*eta, *alpha_u, *alpha_v)),
-            Material::Conductor {
-                eta,
-                k,
-                alpha_u,
-                alpha_v,
-            } => Bsdf::Conductor(Conductor::new(*eta, *k, *alpha_u, *alpha_v)),
-            Material::ThinDielectric { eta } => Bsdf::ThinDielectric(ThinDielectric::new(*eta)),
-            Material::DiffuseTransmission {
+    /// The BSDF of scattering model `kind` with its textures looked up at `tc` (bad values are
+    /// sanitised: reflectances clamped to [0, 1] as pbrt-v4 does, see each variant's `new`).
+    pub fn new(kind: &MaterialKind, tc: &TexCoord) -> Bsdf {
+        let unit = |t: &crate::texture::Tex| t.eval(tc).clamp(Vec3::ZERO, Vec3::ONE);
+        match kind {
+            MaterialKind::Diffuse { reflectance } => Bsdf::Diffuse(Diffuse::new(unit(reflectance))),
+            MaterialKind::Dielectric { eta, roughness } => {
+                let (au, av) = roughness.eval(tc);
+                Bsdf::Dielectric(Dielectric::rough(*eta, au, av))
+            }
+            MaterialKind::Conductor { metal, roughness } => {
+                Bsdf::Conductor(conductor(metal, roughness, 1.0, tc))
+            }
+            MaterialKind::ThinDielectric { eta } => Bsdf::ThinDielectric(ThinDielectric::new(*eta)),
+            MaterialKind::DiffuseTransmission {
                 reflectance,
                 transmittance,
-            } => Bsdf::DiffuseTransmission(DiffuseTransmission::new(*reflectance, *transmittance)),
-            Material::CoatedDiffuse { reflectance, coat } => {
-                Bsdf::CoatedDiffuse(coated(coat, Diffuse::new(*reflectance)))
-            }
-            Material::CoatedConductor {
+                scale,
+            } => Bsdf::DiffuseTransmission(DiffuseTransmission::new(
+                reflectance.eval(tc) * *scale,
+                transmittance.eval(tc) * *scale,
+            )),
+            MaterialKind::CoatedDiffuse {
+                reflectance,
+                roughness,
                 coat,
-                eta,
-                k,
-                alpha_u,
-                alpha_v,
+            } => Bsdf::CoatedDiffuse(coated(coat, roughness, Diffuse::new(unit(reflectance)), tc)),
+            MaterialKind::CoatedConductor {
+                interface,
+                coat,
+                metal,
+                roughness,
             } => {
                 // pbrt-v4: the base's index is relative to the coat's medium.
-                let e = if coat.eta > 0.0 { coat.eta } else { 1.0 };
-                let base = Conductor::new(*eta / e, *k / e, *alpha_u, *alpha_v);
-                Bsdf::CoatedConductor(coated(coat, base))
+                let base = conductor(metal, roughness, coat.eta, tc);
+                Bsdf::CoatedConductor(coated(coat, interface, base, tc))
             }
         }
     }
@@ -361,19 +482,25 @@ mod tests {
 
     #[test]
     fn material_mapping_and_flags() {
-        let diffuse = Bsdf::from_material(&Material::Diffuse {
-            reflectance: Vec3::new(0.1, 0.2, 0.3),
-        });
+        let tc = TexCoord::default();
+        let diffuse = Bsdf::new(
+            &MaterialKind::Diffuse {
+                reflectance: Vec3::new(0.1, 0.2, 0.3).into(),
+            },
+            &tc,
+        );
         let f = diffuse.flags();
         assert!(f.has_diffuse() && !f.has_specular() && !f.has_glossy() && f.has_non_specular());
         assert!(f.contains(BxdfFlags::REFLECTION) && !f.contains(BxdfFlags::TRANSMISSION));
         assert_eq!(diffuse.reflectance_estimate(), Vec3::new(0.1, 0.2, 0.3));
 
-        let glass = Bsdf::from_material(&Material::Dielectric {
-            eta: 1.5,
-            alpha_u: 0.0,
-            alpha_v: 0.0,
-        });
+        let glass = Bsdf::new(
+            &MaterialKind::Dielectric {
+                eta: 1.5,
+                roughness: Roughness::alphas(0.0, 0.0),
+            },
+            &tc,
+        );
         let f = glass.flags();
         assert!(f.is_specular_only() && !f.has_diffuse() && !f.has_glossy());
         assert!(f.contains(BxdfFlags::REFLECTION | BxdfFlags::TRANSMISSION));
@@ -394,13 +521,27 @@ mod tests {
             2.0 * r.z.sqrt() / (1.0 - r.z).sqrt(),
         );
         for (a, smooth) in [(0.0f32, true), (5e-4, true), (0.2, false)] {
-            let m = Material::Conductor {
-                eta: Vec3::ONE,
-                k,
-                alpha_u: a,
-                alpha_v: a,
+            let eta_k = MaterialKind::Conductor {
+                metal: Metal::EtaK {
+                    eta: Vec3::ONE.into(),
+                    k: k.into(),
+                },
+                roughness: crate::scene::Roughness::alphas(a, a),
             };
-            let b = Bsdf::from_material(&m);
+            let b = Bsdf::new(&eta_k, &tc);
+            assert_eq!(b.flags(), eta_k.flags(), "constant parameters: exact flags");
+            // The same conductor given by reflectance, with roughness remapped (sqrt).
+            let by_r = MaterialKind::Conductor {
+                metal: Metal::Reflectance(r.into()),
+                roughness: crate::scene::Roughness {
+                    u: (a * a).into(),
+                    v: (a * a).into(),
+                    remap: true,
+                },
+            };
+            let b2 = Bsdf::new(&by_r, &tc);
+            assert!((b2.reflectance_estimate() - r).abs().max_element() < 1e-5);
+            assert_eq!(b2.flags(), b.flags());
             assert_eq!(b.flags().is_specular_only(), smooth);
             assert_eq!(b.flags().has_glossy(), !smooth);
             assert!(!b.flags().has_diffuse());

@@ -71,7 +71,7 @@ impl Shade for Direct {
 /// Shades one hit: emission, shadow rays, photon-map components, continuation.
 fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<Gathers>) {
     let scene = ctx.scene;
-    let si = SurfaceInteraction::new(scene, hit, &path.ray);
+    let mut si = SurfaceInteraction::new(scene, hit, &path.ray);
 
     // Emission seen along the ray.
     if let Some(li) = si.area_light() {

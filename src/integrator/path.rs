@@ -83,7 +83,7 @@ fn component(direct: bool) -> Component {
 
 /// Shades one hit: emission, a light sample, and a BSDF-sampled continuation.
 fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<()>) {
-    let si = SurfaceInteraction::new(ctx.scene, hit, &path.ray);
+    let mut si = SurfaceInteraction::new(ctx.scene, hit, &path.ray);
     if let Some(li) = si.area_light() {
         let le = emitted(ctx, &path, li, si.p, si.ng);
         let direct = path.depth == 0 || (path.depth == 1 && path.prev_pdf > 0.0);

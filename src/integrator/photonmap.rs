@@ -25,7 +25,7 @@
 //! built: no caustic map without specular surfaces, no global map without diffuse ones.
 use super::{charge, RenderContext};
 use crate::accel::{Accel, Hit, RayQuery};
-use crate::bsdf::{Bsdf, TransportMode};
+use crate::bsdf::TransportMode;
 use crate::interaction::SurfaceInteraction;
 use crate::light::Lights;
 use crate::math::{Frame, Ray, Vec2, Vec3};
@@ -171,15 +171,14 @@ pub struct PhotonPass {
 
 /// Which maps the scene needs: (global, caustic).
 pub fn needed_maps(scene: &Scene) -> (bool, bool) {
-    let bsdfs: Vec<Bsdf> = scene
-        .meshes
-        .iter()
-        .map(|m| Bsdf::from_material(&scene.materials[m.material as usize]))
-        .collect();
-    let any_diffuse = bsdfs
-        .iter()
-        .any(|b| b.flags().has_diffuse() && b.reflectance_estimate().max_element() > 0.0);
-    let any_specular = bsdfs.iter().any(|b| b.flags().has_specular());
+    let kinds = || {
+        scene
+            .meshes
+            .iter()
+            .map(|m| &scene.materials[m.material as usize].kind)
+    };
+    let any_diffuse = kinds().any(|k| k.flags().has_diffuse() && !k.is_black());
+    let any_specular = kinds().any(|k| k.flags().has_specular());
     let lights = !scene.lights.is_empty();
     (lights && any_diffuse, lights && any_diffuse && any_specular)
 }
@@ -428,7 +427,7 @@ fn reflected(
     let mut throughput = Vec3::ONE;
     for _ in 0..=GATHER_SPECULAR_BOUNCES {
         let Some(h) = hit else { return Vec3::ZERO };
-        let si = SurfaceInteraction::new(scene, &h, &ray);
+        let mut si = SurfaceInteraction::new(scene, &h, &ray);
         let bsdf = si.bsdf(scene);
         let wo = si.wo;
         if bsdf.flags().has_diffuse() {

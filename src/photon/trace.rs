@@ -95,7 +95,8 @@ pub fn specular_targets(scene: &Scene) -> Vec<(Vec3, f32)> {
         .meshes
         .iter()
         .filter(|m| {
-            Bsdf::from_material(&scene.materials[m.material as usize])
+            scene.materials[m.material as usize]
+                .kind
                 .flags()
                 .has_specular()
         })
@@ -328,7 +329,7 @@ fn trace_one(
         let Some(hit) = accel.intersect(&ray) else {
             break;
         };
-        let si = SurfaceInteraction::new(scene, &hit, &ray);
+        let mut si = SurfaceInteraction::new(scene, &hit, &ray);
         let bsdf = si.bsdf(scene);
         let flags = bsdf.flags();
         if bounce == 0 {
@@ -416,7 +417,6 @@ fn unrestricted_efficiency(
     powers: &[f32],
 ) -> f64 {
     let counts = allocate(s.caustic_photons.min(20_000), powers);
-    let bsdfs: Vec<Bsdf> = scene.materials.iter().map(Bsdf::from_material).collect();
     let (mut hits, mut total) = (0u64, 0u64);
     for (i, &n) in counts.iter().enumerate() {
         for j in 0..n {
@@ -433,9 +433,8 @@ fn unrestricted_efficiency(
                 spawn_origin(e.p, e.err, e.n)
             };
             if let Some(h) = accel.intersect(&Ray::new(o, e.dir)) {
-                hits += bsdfs[scene.meshes[h.mesh as usize].material as usize]
-                    .flags()
-                    .has_specular() as u64;
+                let material = &scene.materials[scene.meshes[h.mesh as usize].material as usize];
+                hits += material.kind.flags().has_specular() as u64;
             }
         }
     }

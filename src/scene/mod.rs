@@ -5,6 +5,7 @@
 pub mod loader;
 
 use crate::math::{Mat4, Vec2, Vec3};
+use crate::texture::{Tex, TexCoord};
 use std::fmt;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -176,62 +177,177 @@ impl Mesh {
     }
 }
 
-/// The closed set of materials (pbrt-v4 names and defaults).
+/// A material: its scattering model and an optional bump map.
 #[derive(Clone, Debug, PartialEq)]
-pub enum Material {
+pub struct Material {
+    pub kind: MaterialKind,
+    /// `"texture displacement"`: a float texture of heights along the shading normal (pbrt-v4's
+    /// bump mapping, see [`crate::interaction::SurfaceInteraction::bsdf`]).
+    pub displacement: Option<Tex>,
+}
+
+impl From<MaterialKind> for Material {
+    fn from(kind: MaterialKind) -> Material {
+        Material {
+            kind,
+            displacement: None,
+        }
+    }
+}
+
+/// The closed set of scattering models (pbrt-v4 names and defaults). Parameters that pbrt-v4
+/// lets be textures are [`Tex`]: a constant or a texture, evaluated per hit.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MaterialKind {
     /// `"diffuse"`: Lambertian, `reflectance` (default 0.5).
-    Diffuse { reflectance: Vec3 },
+    Diffuse { reflectance: Tex },
     /// `"dielectric"`: glass with relative index `eta` (default 1.5) and Trowbridge-Reitz
-    /// roughness `alpha_u/v` (already remapped when `remaproughness` is true); smooth below
-    /// 1e-3.
-    Dielectric {
-        eta: f32,
-        alpha_u: f32,
-        alpha_v: f32,
-    },
+    /// roughness (default 0: smooth; smooth wherever alpha is below 1e-3).
+    Dielectric { eta: f32, roughness: Roughness },
+    /// `"conductor"`: complex index `eta + i k` ([`Metal`]) and Trowbridge-Reitz roughness.
+    Conductor { metal: Metal, roughness: Roughness },
     /// `"thindielectric"`: a thin sheet of relative index `eta` (default 1.5).
     ThinDielectric { eta: f32 },
-    /// `"diffusetransmission"`: Lambertian `reflectance` and `transmittance` (defaults 0.25,
-    /// already multiplied by `scale`).
+    /// `"diffusetransmission"`: Lambertian `reflectance` and `transmittance` (defaults 0.25),
+    /// each times `scale` (1) and clamped to [0, 1] per hit.
     DiffuseTransmission {
-        reflectance: Vec3,
-        transmittance: Vec3,
+        reflectance: Tex,
+        transmittance: Tex,
+        scale: f32,
     },
-    /// `"coateddiffuse"`: a dielectric coat over a Lambertian base of `reflectance` (0.5).
-    CoatedDiffuse { reflectance: Vec3, coat: Coat },
-    /// `"coatedconductor"`: a dielectric coat over a conductor of complex index `eta + i k`
-    /// (relative to the outside, as given in the file: the BSDF divides by the coat's index)
-    /// and roughness `alpha_u/v`.
-    CoatedConductor {
+    /// `"coateddiffuse"`: a dielectric coat of `roughness` over a Lambertian `reflectance`
+    /// (0.5).
+    CoatedDiffuse {
+        reflectance: Tex,
+        roughness: Roughness,
         coat: Coat,
-        eta: Vec3,
-        k: Vec3,
-        alpha_u: f32,
-        alpha_v: f32,
     },
-    /// `"conductor"`: complex index `eta + i k` (from `eta`/`k`, or from `reflectance` as pbrt-v4
-    /// does: eta = 1, k = 2 sqrt(r) / sqrt(1 - r)); Trowbridge-Reitz roughness `alpha_u/v`
-    /// (already remapped when `remaproughness` is true); 0 means a perfect mirror.
-    Conductor {
-        eta: Vec3,
-        k: Vec3,
-        alpha_u: f32,
-        alpha_v: f32,
+    /// `"coatedconductor"`: a dielectric coat of roughness `interface` over a conductor
+    /// (`conductor.eta`/`conductor.k` as given in the file, relative to the outside: the BSDF
+    /// divides them by the coat's index, as pbrt-v4 does; or `reflectance`) of `roughness`.
+    CoatedConductor {
+        interface: Roughness,
+        coat: Coat,
+        metal: Metal,
+        roughness: Roughness,
     },
 }
 
-/// The dielectric coat and slab of `coateddiffuse` and `coatedconductor` (pbrt-v4 defaults:
-/// `eta` 1.5, roughness 0, `thickness` 0.01, `albedo` 0, `g` 0, `maxdepth` 10, `nsamples` 1).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// The textures of a conductor's index.
+fn metal(m: &Metal) -> Vec<&Tex> {
+    match m {
+        Metal::EtaK { eta, k } => vec![eta, k],
+        Metal::Reflectance(r) => vec![r],
+    }
+}
+
+impl MaterialKind {
+    /// Every colour and float parameter (constant or texture) of the model.
+    pub fn textures(&self) -> Vec<&Tex> {
+        let mut out = match self {
+            MaterialKind::Diffuse { reflectance } => vec![reflectance],
+            MaterialKind::Dielectric { roughness, .. } => vec![&roughness.u, &roughness.v],
+            MaterialKind::Conductor {
+                metal: m,
+                roughness,
+            } => {
+                let mut v = metal(m);
+                v.extend([&roughness.u, &roughness.v]);
+                v
+            }
+            MaterialKind::ThinDielectric { .. } => vec![],
+            MaterialKind::DiffuseTransmission {
+                reflectance,
+                transmittance,
+                ..
+            } => vec![reflectance, transmittance],
+            MaterialKind::CoatedDiffuse {
+                reflectance,
+                roughness,
+                ..
+            } => vec![reflectance, &roughness.u, &roughness.v],
+            MaterialKind::CoatedConductor {
+                interface,
+                metal: m,
+                roughness,
+                ..
+            } => {
+                let mut v = metal(m);
+                v.extend([&interface.u, &interface.v, &roughness.u, &roughness.v]);
+                v
+            }
+        };
+        if let MaterialKind::CoatedDiffuse { coat, .. }
+        | MaterialKind::CoatedConductor { coat, .. } = self
+        {
+            out.extend([&coat.thickness, &coat.albedo, &coat.g]);
+        }
+        out
+    }
+}
+
+/// The coat and slab of `coateddiffuse` and `coatedconductor` (pbrt-v4's defaults: `eta` 1.5,
+/// `thickness` 0.01, `albedo` 0, `g` 0, `maxdepth` 10, `nsamples` 1).
+#[derive(Clone, Debug, PartialEq)]
 pub struct Coat {
     pub eta: f32,
-    pub alpha_u: f32,
-    pub alpha_v: f32,
-    pub thickness: f32,
-    pub albedo: Vec3,
-    pub g: f32,
+    pub thickness: Tex,
+    pub albedo: Tex,
+    pub g: Tex,
     pub max_depth: u32,
     pub n_samples: u32,
+}
+
+/// A conductor's complex index of refraction: `eta` and `k` (RGB, named spectra or textures),
+/// or pbrt-v4's `reflectance` r, per hit: eta = 1, k = 2 sqrt(r) / sqrt(1 - r).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Metal {
+    EtaK { eta: Tex, k: Tex },
+    Reflectance(Tex),
+}
+
+/// Microfacet roughness in u and v (`uroughness`, `vroughness`, each defaulting to
+/// `roughness`); with `remap` (pbrt-v4's `remaproughness`, default true) the Trowbridge-Reitz
+/// alpha is sqrt(roughness), else the roughness itself. Alpha 0 is a perfect mirror.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Roughness {
+    pub u: Tex,
+    pub v: Tex,
+    pub remap: bool,
+}
+
+impl Roughness {
+    /// A constant roughness (`alpha_u`, `alpha_v` as given, not remapped).
+    pub fn alphas(alpha_u: f32, alpha_v: f32) -> Roughness {
+        Roughness {
+            u: alpha_u.into(),
+            v: alpha_v.into(),
+            remap: false,
+        }
+    }
+
+    /// The Trowbridge-Reitz alphas at `tc` (negative texture values count as 0).
+    pub fn eval(&self, tc: &TexCoord) -> (f32, f32) {
+        (
+            self.alpha(self.u.eval_float(tc)),
+            self.alpha(self.v.eval_float(tc)),
+        )
+    }
+
+    /// The alphas when they are the same everywhere.
+    pub fn constant(&self) -> Option<(f32, f32)> {
+        let (u, v) = (self.u.constant()?, self.v.constant()?);
+        Some((self.alpha(u.x), self.alpha(v.x)))
+    }
+
+    fn alpha(&self, roughness: f32) -> f32 {
+        let r = roughness.max(0.0);
+        if self.remap {
+            r.sqrt()
+        } else {
+            r
+        }
+    }
 }
 
 /// The closed set of lights. Radiometric values are linear RGB, already multiplied by `scale`.

@@ -10,25 +10,33 @@
 //! Texture "m" "spectrum" "mix" "texture tex1" "wood" "rgb tex2" [ 0 0 1 ] "float amount" 0.3
 //! ```
 //!
-//! The loader parses and stores them ([`crate::scene::Scene::textures`]); the integrators do
-//! not read them yet (that needs per-hit BSDFs), so a material that names a texture is still an
-//! error, "textures are parsed but not yet applied", and nothing renders silently wrong.
+//! The loader parses and stores them ([`crate::scene::Scene::textures`]); materials hold
+//! texture-valued parameters as [`Tex`], evaluated per hit at a [`TexCoord`] (the point's uv and
+//! its screen-space derivatives, from [`crate::interaction::SurfaceInteraction`]).
 //!
 //! Lookups follow pbrt-v4:
 //! - `uv` mapping: (s, t) = (uscale u + udelta, vscale v + vdelta); image textures then flip
 //!   t (t = 1 - t) because image rows run top to bottom.
-//! - image lookups (`filter` `bilinear`, the default; `point` is the nearest texel; `trilinear`
-//!   and `ewa` are looked up bilinearly from the full-resolution image until ray differentials
-//!   exist): x = s w - 1/2, y = t h - 1/2, the four texels around (x, y) weighted by their
+//! - image lookups (`filter` `bilinear`, the default; `point` is the nearest texel):
+//!   x = s w - 1/2, y = t h - 1/2, the four texels around (x, y) weighted by their
 //!   fractional distances, each texel address wrapped by `wrap`: `repeat` (modulo), `clamp`
 //!   (to the edge), `black` (0 outside).
+//! - `trilinear` (and `ewa`, which is looked up trilinearly) reads a MIP pyramid
+//!   ([`Pyramid`]: each level halves the previous one, rounding up, by averaging 2x2 texels with
+//!   clamped edges): the filter width is `w = 2 max(|ds/dx|, |ds/dy|, |dt/dx|, |dt/dy|)` (pbrt-v4)
+//!   and the level `L = n - 1 + log2 w` for n levels; the lookup interpolates bilinear lookups
+//!   in levels floor(L) and floor(L) + 1 (level 0 below 0, the coarsest above n - 1).
 //! - `encoding` decodes 8- and 16-bit images: `sRGB` (the IEC 61966-2-1 curve; the default for
 //!   PNG files), `linear` (the default for other files), `gamma G` (v^G). Float images (EXR,
 //!   PFM) are linear.
 //! - `imagemap`: scale times the lookup, then `invert` gives max(0, 1 - v); a float imagemap
 //!   reads the mean of the three channels.
-//! - `checkerboard` (2D): `tex1` where floor(s) + floor(t) is even, else `tex2` (pbrt-v4's
-//!   filtered checkerboard at zero filter width); `mix`: (1 - amount) tex1 + amount tex2;
+//! - `checkerboard` (2D): `tex1` where floor(s) + floor(t) is even, else `tex2`, box-filtered
+//!   over the lookup's footprint (pbrt-v4 filters it too): with half-widths
+//!   `ds = 1.5 max(|ds/dx|, |ds/dy|)` (and `dt` alike), the fraction of odd cells in s is
+//!   `ps = (F(s + ds) - F(s - ds)) / 2ds` with `F(x) = floor(x/2) + 2 max(x/2 - floor(x/2) - 1/2, 0)`
+//!   (the integral of the 0/1 square wave), and the value is `(1 - p) tex1 + p tex2` with
+//!   `p = ps + pt - 2 ps pt` (odd cells are where exactly one of s, t is odd); `mix`: (1 - amount) tex1 + amount tex2;
 //!   `scale`: tex times scale; `constant`: value.
 //!
 //! Float textures are [`Texture`]s whose three channels are equal.
@@ -97,11 +105,32 @@ impl Encoding {
     }
 }
 
-/// Nearest texel or bilinear interpolation of the four around the lookup point.
+/// Nearest texel, bilinear interpolation of the four around the lookup point, or trilinear
+/// interpolation between two MIP levels chosen by the lookup's footprint.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Filter {
     Point,
     Bilinear,
+    Trilinear,
+}
+
+/// Where a texture is looked up: surface coordinates `uv` and their derivatives with respect to
+/// the image's x and y (one pixel step), zero when unknown (an unfiltered lookup).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TexCoord {
+    pub uv: Vec2,
+    pub duvdx: Vec2,
+    pub duvdy: Vec2,
+}
+
+impl TexCoord {
+    /// A lookup at `uv` with no footprint.
+    pub fn point(uv: Vec2) -> TexCoord {
+        TexCoord {
+            uv,
+            ..Default::default()
+        }
+    }
 }
 
 /// A decoded (linear) RGB image, row 0 at the top.
@@ -147,6 +176,30 @@ impl Image {
         Some(self.texels[(y * w + x) as usize])
     }
 
+    /// The next MIP level: half the size (rounded up), each texel the mean of the 2x2 texels
+    /// above it (addresses clamped at odd edges); `None` for a 1x1 image.
+    fn halved(&self) -> Option<Image> {
+        if self.width <= 1 && self.height <= 1 {
+            return None;
+        }
+        let (w, h) = (self.width.div_ceil(2), self.height.div_ceil(2));
+        let mut texels = Vec::with_capacity(w * h);
+        for y in 0..h as i64 {
+            for x in 0..w as i64 {
+                let t = |i: i64, j: i64| {
+                    self.texel(2 * x + i, 2 * y + j, Wrap::Clamp)
+                        .unwrap_or(Vec3::ZERO)
+                };
+                texels.push((t(0, 0) + t(1, 0) + t(0, 1) + t(1, 1)) * 0.25);
+            }
+        }
+        Some(Image {
+            width: w,
+            height: h,
+            texels,
+        })
+    }
+
     /// The image at continuous coordinates `st` in [0, 1]^2 (s to the right, t down).
     pub fn lookup(&self, st: Vec2, wrap: Wrap, filter: Filter) -> Vec3 {
         let x = st.x * self.width as f32 - 0.5;
@@ -163,6 +216,61 @@ impl Image {
             + t(1, 0) * (dx * (1.0 - dy))
             + t(0, 1) * ((1.0 - dx) * dy)
             + t(1, 1) * (dx * dy)
+    }
+}
+
+/// The coarser MIP levels of an image: `levels[0]` is half the image (rounded up), each next
+/// level half the one before, down to 1x1.
+#[derive(Clone, PartialEq)]
+pub struct Pyramid {
+    pub levels: Vec<Image>,
+}
+
+impl fmt::Debug for Pyramid {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "Pyramid of {} levels", self.levels.len())
+    }
+}
+
+impl Pyramid {
+    /// The levels below `image`, each averaging 2x2 texels of the one above (clamped at odd
+    /// edges).
+    pub fn build(image: &Image) -> Pyramid {
+        let mut levels: Vec<Image> = Vec::new();
+        while let Some(next) = levels.last().unwrap_or(image).halved() {
+            levels.push(next);
+        }
+        Pyramid { levels }
+    }
+
+    /// Texels the pyramid of a `width` x `height` image holds (for memory estimates).
+    pub fn texel_count(width: usize, height: usize) -> usize {
+        let (mut w, mut h, mut n) = (width, height, 0);
+        while w > 1 || h > 1 {
+            (w, h) = (w.div_ceil(2), h.div_ceil(2));
+            n += w * h;
+        }
+        n
+    }
+
+    /// A trilinear lookup of `image` (level 0) and this pyramid at `st` with filter width
+    /// `width` (in s, t units).
+    pub fn lookup(&self, image: &Image, st: Vec2, width: f32, wrap: Wrap) -> Vec3 {
+        let n = self.levels.len() + 1;
+        let level = (n - 1) as f32 + width.max(1e-8).log2();
+        let at = |l: usize| match l {
+            0 => image.lookup(st, wrap, Filter::Bilinear),
+            l => self.levels[l - 1].lookup(st, wrap, Filter::Bilinear),
+        };
+        if level <= 0.0 {
+            return at(0);
+        }
+        if level >= (n - 1) as f32 {
+            return at(n - 1);
+        }
+        let l0 = level.floor() as usize;
+        let f = level - l0 as f32;
+        at(l0) * (1.0 - f) + at(l0 + 1) * f
     }
 }
 
@@ -199,6 +307,99 @@ pub struct ImageMap {
     pub invert: bool,
     /// A `float` texture: the mean of the channels.
     pub float: bool,
+    /// The MIP levels, present for the `trilinear` filter.
+    pub pyramid: Option<Arc<Pyramid>>,
+}
+
+impl ImageMap {
+    /// The lookup at `tc`: mapped, t flipped, filtered, scaled, inverted.
+    fn eval(&self, tc: &TexCoord) -> Vec3 {
+        let st = self.mapping.map(tc.uv);
+        let st = Vec2::new(st.x, 1.0 - st.y);
+        let v = match (&self.pyramid, self.filter) {
+            (Some(p), Filter::Trilinear) => {
+                let (dx, dy) = (self.mapping.scale * tc.duvdx, self.mapping.scale * tc.duvdy);
+                let width = 2.0 * dx.abs().max(dy.abs()).max_element();
+                p.lookup(&self.image, st, width, self.wrap)
+            }
+            (_, Filter::Point) => self.image.lookup(st, self.wrap, Filter::Point),
+            _ => self.image.lookup(st, self.wrap, Filter::Bilinear),
+        };
+        let v = if self.float {
+            Vec3::splat(v.element_sum() / 3.0)
+        } else {
+            v
+        } * self.scale;
+        if self.invert {
+            (Vec3::ONE - v).max(Vec3::ZERO)
+        } else {
+            v
+        }
+    }
+}
+
+/// The fraction of `[s - ds, s + ds]` where floor(s) is odd (`ds = 0`: 1 if it is).
+fn odd_fraction(s: f32, ds: f32) -> f32 {
+    if ds <= 0.0 || !ds.is_finite() {
+        return (s.floor() as i64).rem_euclid(2) as f32;
+    }
+    let f = |x: f32| {
+        let h = (x / 2.0).floor();
+        h + 2.0 * (x / 2.0 - h - 0.5).max(0.0)
+    };
+    ((f(s + ds) - f(s - ds)) / (2.0 * ds)).clamp(0.0, 1.0)
+}
+
+/// A material parameter: a constant or a texture (spectrum: RGB; float: three equal channels).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Tex {
+    Const(Vec3),
+    Map(Arc<Texture>),
+}
+
+impl From<Vec3> for Tex {
+    fn from(v: Vec3) -> Tex {
+        Tex::Const(v)
+    }
+}
+
+impl From<f32> for Tex {
+    fn from(v: f32) -> Tex {
+        Tex::Const(Vec3::splat(v))
+    }
+}
+
+impl Tex {
+    /// The value at `tc`.
+    #[inline]
+    pub fn eval(&self, tc: &TexCoord) -> Vec3 {
+        match self {
+            Tex::Const(v) => *v,
+            Tex::Map(t) => t.eval_at(tc),
+        }
+    }
+
+    /// A float parameter's value at `tc` (the first channel).
+    #[inline]
+    pub fn eval_float(&self, tc: &TexCoord) -> f32 {
+        self.eval(tc).x
+    }
+
+    /// The value when it is the same everywhere.
+    pub fn constant(&self) -> Option<Vec3> {
+        match self {
+            Tex::Const(v) => Some(*v),
+            Tex::Map(t) => match **t {
+                Texture::Constant(v) => Some(v),
+                _ => None,
+            },
+        }
+    }
+
+    /// Whether lookups read the footprint (`TexCoord`'s derivatives).
+    pub fn needs_differentials(&self) -> bool {
+        matches!(self, Tex::Map(t) if t.needs_differentials())
+    }
 }
 
 /// A texture (spectrum textures as RGB; float textures with three equal channels).
@@ -223,43 +424,55 @@ pub enum Texture {
 }
 
 impl Texture {
-    /// The texture's value at surface coordinates `uv`.
+    /// The texture's value at surface coordinates `uv`, unfiltered (no footprint).
     pub fn eval(&self, uv: Vec2) -> Vec3 {
+        self.eval_at(&TexCoord::point(uv))
+    }
+
+    /// The texture's value at `tc`, filtered over its footprint where the texture filters.
+    pub fn eval_at(&self, tc: &TexCoord) -> Vec3 {
         match self {
             Texture::Constant(v) => *v,
-            Texture::Image(m) => {
-                let st = m.mapping.map(uv);
-                let v = m
-                    .image
-                    .lookup(Vec2::new(st.x, 1.0 - st.y), m.wrap, m.filter);
-                let v = if m.float {
-                    Vec3::splat(v.element_sum() / 3.0)
-                } else {
-                    v
-                } * m.scale;
-                if m.invert {
-                    (Vec3::ONE - v).max(Vec3::ZERO)
-                } else {
-                    v
-                }
-            }
+            Texture::Image(m) => m.eval(tc),
             Texture::Checkerboard {
                 mapping,
                 tex1,
                 tex2,
             } => {
-                let st = mapping.map(uv);
-                let odd = (st.x.floor() as i64 + st.y.floor() as i64).rem_euclid(2) == 1;
-                if odd {
-                    tex2.eval(uv)
+                let st = mapping.map(tc.uv);
+                let (dx, dy) = (mapping.scale * tc.duvdx, mapping.scale * tc.duvdy);
+                let d = dx.abs().max(dy.abs()) * 1.5;
+                let (ps, pt) = (odd_fraction(st.x, d.x), odd_fraction(st.y, d.y));
+                let p = ps + pt - 2.0 * ps * pt;
+                if p <= 0.0 {
+                    tex1.eval_at(tc)
+                } else if p >= 1.0 {
+                    tex2.eval_at(tc)
                 } else {
-                    tex1.eval(uv)
+                    tex1.eval_at(tc) * (1.0 - p) + tex2.eval_at(tc) * p
                 }
             }
-            Texture::Scale { tex, scale } => tex.eval(uv) * scale.eval(uv),
+            Texture::Scale { tex, scale } => tex.eval_at(tc) * scale.eval_at(tc),
             Texture::Mix { tex1, tex2, amount } => {
-                let a = amount.eval(uv);
-                (Vec3::ONE - a) * tex1.eval(uv) + a * tex2.eval(uv)
+                let a = amount.eval_at(tc);
+                (Vec3::ONE - a) * tex1.eval_at(tc) + a * tex2.eval_at(tc)
+            }
+        }
+    }
+
+    /// Whether lookups read the footprint: a trilinear image or a checkerboard anywhere in it.
+    pub fn needs_differentials(&self) -> bool {
+        match self {
+            Texture::Constant(_) => false,
+            Texture::Image(m) => m.filter == Filter::Trilinear,
+            Texture::Checkerboard { .. } => true,
+            Texture::Scale { tex, scale } => {
+                tex.needs_differentials() || scale.needs_differentials()
+            }
+            Texture::Mix { tex1, tex2, amount } => {
+                tex1.needs_differentials()
+                    || tex2.needs_differentials()
+                    || amount.needs_differentials()
             }
         }
     }
@@ -357,6 +570,7 @@ mod tests {
                 scale,
                 invert,
                 float,
+                pyramid: None,
             })
         };
         let plain = map(UvMapping::default(), 1.0, false, false);
@@ -412,5 +626,142 @@ mod tests {
             amount: c(0.25),
         };
         near(mix.eval(Vec2::ZERO), Vec3::new(0.75, 0.75, 1.5));
+    }
+
+    /// A 4x4 image with texel (x, y) = x + 4 y, and its pyramid: 2x2 block means, then 7.5.
+    fn ramp() -> (Image, Pyramid) {
+        let texels = (0..16).map(|i| Vec3::splat(i as f32)).collect();
+        let im = Image {
+            width: 4,
+            height: 4,
+            texels,
+        };
+        let p = Pyramid::build(&im);
+        (im, p)
+    }
+
+    #[test]
+    fn pyramid_levels_are_block_means() {
+        let (im, p) = ramp();
+        assert_eq!(p.levels.len(), 2);
+        let l1: Vec<f32> = p.levels[0].texels.iter().map(|t| t.x).collect();
+        assert_eq!(l1, vec![2.5, 4.5, 10.5, 12.5]);
+        assert_eq!(p.levels[1].texels, vec![Vec3::splat(7.5)]);
+        assert_eq!(Pyramid::texel_count(4, 4), 5);
+        // Odd sizes clamp: [0 3 6] -> [(0+3)/2, 6] -> [3.75].
+        let odd = Image {
+            width: 3,
+            height: 1,
+            texels: vec![Vec3::ZERO, Vec3::splat(3.0), Vec3::splat(6.0)],
+        };
+        let po = Pyramid::build(&odd);
+        let xs: Vec<f32> = po
+            .levels
+            .iter()
+            .flat_map(|l| l.texels.iter().map(|t| t.x))
+            .collect();
+        assert_eq!(xs, vec![1.5, 6.0, 3.75]);
+        assert_eq!(Pyramid::texel_count(3, 1), 3);
+        // The full-resolution image is level 0 of a lookup.
+        assert_eq!(
+            im.lookup(Vec2::splat(0.125), Wrap::Clamp, Filter::Bilinear)
+                .x,
+            0.0
+        );
+    }
+
+    #[test]
+    fn trilinear_picks_the_level_from_the_footprint() {
+        let (im, p) = ramp();
+        let map = ImageMap {
+            image: Arc::new(im),
+            mapping: UvMapping::default(),
+            wrap: Wrap::Clamp,
+            filter: Filter::Trilinear,
+            scale: 1.0,
+            invert: false,
+            float: false,
+            pyramid: Some(Arc::new(p)),
+        };
+        let tex = Texture::Image(map);
+        // uv (0.125, 0.875) is st (0.125, 0.125): texel (0, 0)'s centre in level 0 (value 0);
+        // in level 1 it lies a quarter texel outside the first centre, clamped: 2.5.
+        // Width w = 2 |du/dx| selects level 2 + log2 w of the 3 levels.
+        let at = |w: f32| {
+            tex.eval_at(&TexCoord {
+                uv: Vec2::new(0.125, 0.875),
+                duvdx: Vec2::new(w / 2.0, 0.0),
+                duvdy: Vec2::new(0.0, w / 8.0),
+            })
+            .x
+        };
+        near(Vec3::splat(at(0.0)), Vec3::ZERO);
+        near(Vec3::splat(at(0.25)), Vec3::ZERO); // level 0 exactly
+        near(Vec3::splat(at(0.5)), Vec3::splat(2.5)); // level 1
+        near(Vec3::splat(at(2f32.powf(-1.5))), Vec3::splat(1.25)); // halfway 0..1
+        near(
+            Vec3::splat(at(0.75)),
+            Vec3::splat(2.5 + (0.75f32.log2() + 1.0) * 5.0),
+        ); // 1..2
+        near(Vec3::splat(at(4.0)), Vec3::splat(7.5)); // beyond the coarsest
+                                                      // Bilinear ignores the footprint.
+        let Texture::Image(mut m) = tex.clone() else {
+            unreachable!()
+        };
+        m.filter = Filter::Bilinear;
+        let bilinear = Texture::Image(m);
+        let far = TexCoord {
+            uv: Vec2::new(0.125, 0.875),
+            duvdx: Vec2::splat(4.0),
+            duvdy: Vec2::ZERO,
+        };
+        near(bilinear.eval_at(&far), Vec3::ZERO);
+        assert!(tex.needs_differentials() && !bilinear.needs_differentials());
+    }
+
+    #[test]
+    fn checkerboard_is_box_filtered_over_the_footprint() {
+        let c = |v: f32| Arc::new(Texture::Constant(Vec3::splat(v)));
+        let checks = Texture::Checkerboard {
+            mapping: UvMapping::default(),
+            tex1: c(1.0),
+            tex2: c(0.0),
+        };
+        // Half-width 1.5 |d/dx|: 0.5 for a step of 1/3.
+        let at = |u: f32, v: f32, dx: f32, dy: f32| {
+            checks
+                .eval_at(&TexCoord {
+                    uv: Vec2::new(u, v),
+                    duvdx: Vec2::new(dx, 0.0),
+                    duvdy: Vec2::new(0.0, dy),
+                })
+                .x
+        };
+        let third = 1.0 / 3.0;
+        assert_eq!(at(0.5, 0.5, 0.0, 0.0), 1.0);
+        assert_eq!(at(1.5, 0.5, 0.0, 0.0), 0.0);
+        // s in [0.5, 1.5]: half odd; [0.25, 1.25]: a quarter odd.
+        assert!((at(1.0, 0.5, third, 0.0) - 0.5).abs() < 1e-6);
+        assert!((at(0.75, 0.5, third, 0.0) - 0.75).abs() < 1e-6);
+        // [0.25, 1.25]^2: exactly one of s, t odd on 2 x 0.25 x 0.75 of the area.
+        assert!((at(0.75, 0.75, third, third) - 0.625).abs() < 1e-6);
+        // A footprint of many cells averages to one half.
+        assert!((at(0.3, 0.7, 40.3, 25.1) - 0.5).abs() < 0.02);
+        // Brute force over a footprint that is not symmetric about a cell edge.
+        let (u, v, ds, dt) = (0.37f32, 1.81f32, 0.8f32, 0.45f32);
+        let n = 400;
+        let mut sum = 0.0;
+        for i in 0..n {
+            for j in 0..n {
+                let s = u - ds + 2.0 * ds * (i as f32 + 0.5) / n as f32;
+                let t = v - dt + 2.0 * dt * (j as f32 + 0.5) / n as f32;
+                sum += checks.eval(Vec2::new(s, t)).x;
+            }
+        }
+        let brute = sum / (n * n) as f32;
+        assert!(
+            (at(u, v, ds / 1.5, dt / 1.5) - brute).abs() < 0.01,
+            "{brute}"
+        );
     }
 }

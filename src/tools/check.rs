@@ -8,7 +8,7 @@
 //! scenes/cornell-glass.pbrt: ok | 16140 triangles, 1 lights, 5 materials, 0 textures | ~19.2 MB (geometry 0.5, film 3.9, photon maps 14.8, textures 0.0)
 //! bathroom/scene-v4.pbrt: 2 problems | 517308 triangles, ...
 //!   bathroom/scene-v4.pbrt:20:26: imagemap "bathroom/textures/wood.tga": No such file or directory (os error 2)
-//!   bathroom/scene-v4.pbrt:52:5: parameter "texture reflectance": textures are parsed but not yet applied
+//!   bathroom/scene-v4.pbrt:52:5: unsupported material type "coateddiffuse"
 //! ```
 //!
 //! The loader runs in its collect mode ([`crate::scene::loader::load_collecting`]): a directive
@@ -173,7 +173,7 @@ pub fn check_scene(path: &Path) -> SceneReport {
         scene
             .materials
             .get(m.material as usize)
-            .is_some_and(|mat| crate::bsdf::Bsdf::from_material(mat).flags().has_specular())
+            .is_some_and(|m| m.kind.flags().has_specular())
     });
     let photons = settings.map_or(0, |s| {
         s.photon.trace.global_photons + u64::from(specular) * s.photon.trace.caustic_photons

@@ -13,7 +13,7 @@
 //! Shape "trianglemesh" ...   # floor z = -1.1, 8 x 8
 //! ```
 use crate::math::{Mat4, Vec3};
-use crate::scene::{CameraDesc, Light, Material, Mesh, Scene};
+use crate::scene::{CameraDesc, Light, Material, MaterialKind, Mesh, Scene};
 use std::path::PathBuf;
 
 /// A bumpy UV sphere of `2 * nlat * nlon + 3` triangles around the origin (radius 1 +- 5 %).
@@ -108,9 +108,9 @@ pub fn sphere_scene(triangles: usize) -> Scene {
         path: PathBuf::from(format!("sphere-{}", short_count(triangles))),
         ..Scene::with_geometry(
             vec![sphere, floor],
-            vec![Material::Diffuse {
-                reflectance: Vec3::splat(0.6),
-            }],
+            vec![Material::from(MaterialKind::Diffuse {
+                reflectance: Vec3::splat(0.6).into(),
+            })],
             vec![Light::Point {
                 pos: Vec3::new(2.0, -2.0, 4.0),
                 intensity: Vec3::splat(30.0),

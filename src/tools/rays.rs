@@ -216,7 +216,7 @@ fn shade(
     if s.max_depth == 0 {
         return;
     }
-    let si = SurfaceInteraction::new(c.scene, hit, ray);
+    let mut si = SurfaceInteraction::new(c.scene, hit, ray);
     let bsdf = si.bsdf(c.scene);
     let ls = s.light_samples.max(1);
     sampler.set_dimension(CAMERA_DIMS);
@@ -414,7 +414,7 @@ impl PhotonPath<'_> {
             let Some(hit) = accel.intersect(&ray) else {
                 break;
             };
-            let si = SurfaceInteraction::new(self.scene, &hit, &ray);
+            let mut si = SurfaceInteraction::new(self.scene, &hit, &ray);
             let bsdf = si.bsdf(self.scene);
             if self.kind == MapKind::Caustic && !bsdf.flags().has_specular() {
                 break;

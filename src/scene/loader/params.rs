@@ -15,9 +15,9 @@
 use crate::math::{Vec2, Vec3};
 use crate::scene::{Loc, SceneError};
 
-/// What a texture-valued material or shape parameter is told: the texture was read, but the
-/// integrators cannot use it yet, so the scene would not render as written.
-pub const TEXTURES_NOT_APPLIED: &str = "textures are parsed but not yet applied";
+/// What a texture is told where photon does not take one (materials take them where pbrt-v4
+/// does; a light's or a shape's other parameters, `"texture normalmap"`, plymesh displacement).
+pub const TEXTURE_NOT_HERE: &str = "a texture is not supported for this parameter";
 
 /// The type of a parameter, as declared by the first word of `"type name"` (aliases folded:
 /// `point` is `point3`, `vector` is `vector3`, `normal3` is `normal`, `color` is `rgb`).
@@ -232,10 +232,10 @@ impl ParamSet {
     }
 
     /// The first parameter nobody read, as an error at its location (a texture-valued one says
-    /// that textures are not applied yet: `"texture displacement"`, `"texture alpha"`).
+    /// that no texture is supported there).
     pub fn check_unused(&self) -> Result<(), SceneError> {
         match self.params.iter().find(|p| !p.used) {
-            Some(p) if p.ty == ParamType::Texture => Err(p.err(TEXTURES_NOT_APPLIED)),
+            Some(p) if p.ty == ParamType::Texture => Err(p.err(TEXTURE_NOT_HERE)),
             Some(p) => Err(SceneError::at(
                 &p.loc,
                 format!("unused parameter {}", p.decl()),
@@ -254,7 +254,7 @@ impl ParamSet {
         }
         let want: Vec<&str> = types.iter().map(|t| t.name()).collect();
         let why = match p.ty {
-            ParamType::Texture => TEXTURES_NOT_APPLIED.to_string(),
+            ParamType::Texture => TEXTURE_NOT_HERE.to_string(),
             ParamType::Blackbody => "blackbody spectra are not supported".to_string(),
             ParamType::Spectrum if types.contains(&ParamType::Rgb) => {
                 "spectrum values are not supported here (give an rgb)".to_string()

@@ -39,8 +39,8 @@ use super::shapes;
 use super::tokenizer::{unescape, TokKind, Token, Tokenizer};
 use crate::math::{Mat4, Vec2, Vec3};
 use crate::scene::{
-    CameraDesc, FilmDesc, FilterDesc, IntegratorDesc, Loc, Material, Mesh, SamplerDesc, Scene,
-    SceneError,
+    CameraDesc, FilmDesc, FilterDesc, IntegratorDesc, Loc, Material, MaterialKind, Mesh,
+    SamplerDesc, Scene, SceneError,
 };
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -562,7 +562,7 @@ impl Builder {
         match what {
             "Material" => {
                 let mut params = read_params(tok)?;
-                let m = self.or_default(make_material(&name, &mut params, &at))?;
+                let m = self.or_default(make_material(&name, &mut params, &at, &self.textures))?;
                 self.materials.push(m);
                 self.gs.material = MatRef::Index(self.materials.len() as u32 - 1);
             }
@@ -574,7 +574,7 @@ impl Builder {
                         format!("named material \"{name}\" redefined"),
                     ));
                 }
-                let m = self.or_default(named_material(&mut params, &at))?;
+                let m = self.or_default(named_material(&mut params, &at, &self.textures))?;
                 self.materials.push(m);
                 self.named_materials
                     .insert(name, self.materials.len() as u32 - 1);
@@ -625,9 +625,9 @@ impl Builder {
     fn or_default(&mut self, m: Result<Material, SceneError>) -> Result<Material, SceneError> {
         m.or_else(|e| {
             self.recover(e)?;
-            Ok(Material::Diffuse {
-                reflectance: Vec3::splat(0.5),
-            })
+            Ok(Material::from(MaterialKind::Diffuse {
+                reflectance: Vec3::splat(0.5).into(),
+            }))
         })
     }
 
@@ -771,9 +771,9 @@ impl Builder {
         match self.gs.material {
             MatRef::Index(i) => i,
             MatRef::Default => *self.default_material.get_or_insert_with(|| {
-                self.materials.push(Material::Diffuse {
-                    reflectance: Vec3::splat(0.5),
-                });
+                self.materials.push(Material::from(MaterialKind::Diffuse {
+                    reflectance: Vec3::splat(0.5).into(),
+                }));
                 self.materials.len() as u32 - 1
             }),
         }
@@ -857,7 +857,11 @@ fn not_utf8(file: &Arc<PathBuf>, e: std::string::FromUtf8Error) -> SceneError {
 }
 
 /// `MakeNamedMaterial`'s material, from its `"string type"`.
-fn named_material(params: &mut ParamSet, at: &Loc) -> Result<Material, SceneError> {
+fn named_material(
+    params: &mut ParamSet,
+    at: &Loc,
+    textures: &crate::texture::Textures,
+) -> Result<Material, SceneError> {
     let Some(ty) = params.get_string_opt("type")? else {
         return Err(SceneError::at(
             at,
@@ -865,7 +869,7 @@ fn named_material(params: &mut ParamSet, at: &Loc) -> Result<Material, SceneErro
         ));
     };
     let ty_loc = params.loc("type").cloned().unwrap_or_else(|| at.clone());
-    make_material(&ty, params, &ty_loc)
+    make_material(&ty, params, &ty_loc, textures)
 }
 
 /// Skips what is left of a directive that failed: everything up to the next directive word.

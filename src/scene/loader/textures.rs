@@ -16,18 +16,21 @@
 //! or a value (`rgb` for spectrum textures, `float` for float ones and for `scale`/`amount`).
 //! Image files are PNG, TGA, JPEG (through the `image` crate), EXR (through
 //! [`crate::imageio`]) and PFM ([`read_pfm`]), paths relative to the main file's directory; each (file, encoding) is
-//! decoded once. Only the `uv` mapping and 2D checkerboards are supported.
+//! decoded once, and its MIP pyramid built once when a `trilinear` texture reads it. Only the `uv` mapping and 2D checkerboards are supported.
 
 use super::params::{ParamSet, ParamType};
 use crate::math::{Vec2, Vec3};
 use crate::scene::{Loc, SceneError};
-use crate::texture::{Encoding, Filter, Image, ImageMap, Texture, Textures, UvMapping, Wrap};
+use crate::texture::{
+    Encoding, Filter, Image, ImageMap, Pyramid, Texture, Textures, UvMapping, Wrap,
+};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-/// Decoded images by file and encoding, shared by every texture that reads them.
-pub type ImageCache = HashMap<(PathBuf, String), Arc<Image>>;
+/// Decoded images by file and encoding, shared by every texture that reads them, with their
+/// MIP pyramid once a trilinear texture asked for it.
+pub type ImageCache = HashMap<(PathBuf, String), (Arc<Image>, Option<Arc<Pyramid>>)>;
 
 /// Everything building a texture needs besides its parameters.
 pub struct TextureContext<'a> {
@@ -102,7 +105,7 @@ fn value(
 }
 
 /// A texture-valued parameter: a `"texture"` name of the right namespace, or a value.
-fn texture_param(
+pub(super) fn texture_param(
     params: &mut ParamSet,
     name: &str,
     spectrum: bool,
@@ -199,7 +202,8 @@ fn image_map(
         "bilinear",
         |s| match s {
             "point" => Some(Filter::Point),
-            "bilinear" | "trilinear" | "ewa" => Some(Filter::Bilinear),
+            "bilinear" => Some(Filter::Bilinear),
+            "trilinear" | "ewa" => Some(Filter::Trilinear),
             _ => None,
         },
         "point, bilinear, trilinear or ewa",
@@ -209,16 +213,18 @@ fn image_map(
     let scale = params.get_float("scale", 1.0)?;
     let invert = params.get_bool("invert", false)?;
     let key = (path.clone(), encoding_name);
-    let image = match cx.images.get(&key) {
-        Some(im) => im.clone(),
-        None => {
-            let im = Arc::new(read_image(&path, encoding).map_err(|m| {
+    if !cx.images.contains_key(&key) {
+        let im =
+            Arc::new(read_image(&path, encoding).map_err(|m| {
                 SceneError::at(at, format!("imagemap \"{}\": {m}", path.display()))
             })?);
-            cx.images.insert(key, im.clone());
-            im
-        }
-    };
+        cx.images.insert(key.clone(), (im, None));
+    }
+    let (image, pyramid) = cx.images.get_mut(&key).expect("inserted above");
+    if filter == Filter::Trilinear && pyramid.is_none() {
+        *pyramid = Some(Arc::new(Pyramid::build(image)));
+    }
+    let (image, pyramid) = (image.clone(), pyramid.clone());
     Ok(ImageMap {
         image,
         mapping,
@@ -227,6 +233,7 @@ fn image_map(
         scale,
         invert,
         float,
+        pyramid: pyramid.filter(|_| filter == Filter::Trilinear),
     })
 }
 

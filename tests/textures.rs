@@ -1,0 +1,290 @@
+//! Textures and bump mapping in renders, against analytic answers.
+//!
+//! A 10 x 10 floor at y = 0 with uv = ((x + 5) / 10, (z + 5) / 10), lit by a distant light
+//! straight down (irradiance E = L) and seen from above by the direct-lighting integrator,
+//! has radiance albedo(uv) E / pi at every point; a bump map of slope g along u tilts the
+//! shading normal to normalize(-g, 1, 0) (per world unit), so the radiance there is
+//! albedo E cos / pi with cos = 1 / sqrt(1 + g^2).
+use photon::accel::{Accel, AccelOptions, BackendKind, RayQuery};
+use photon::camera::Camera;
+use photon::integrator::{self, IntegratorKind, RenderSettings};
+use photon::interaction::SurfaceInteraction;
+use photon::math::{Ray, Vec2, Vec3};
+use photon::scene::{loader, Scene};
+use std::f32::consts::PI;
+use std::path::Path;
+
+mod common;
+use common::TempDir;
+
+/// Irradiance of the distant light (radiance `L` arriving straight down).
+const E: f32 = 3.0;
+
+/// The scene: camera at height `height` looking down, `res` pixels, `spp` samples, the floor
+/// with material line `material`, after the `Texture` lines `textures`.
+fn floor_scene(height: f32, res: u32, spp: u32, textures: &str, material: &str) -> String {
+    format!(
+        r#"LookAt 0 {height} 0  0 0 0  0 0 1
+Camera "perspective" "float fov" [ 60 ]
+Film "rgb" "integer xresolution" [ {res} ] "integer yresolution" [ {res} ]
+PixelFilter "box" "float xradius" [ 0.0001 ] "float yradius" [ 0.0001 ]
+Sampler "independent" "integer pixelsamples" [ {spp} ]
+Integrator "path" "integer maxdepth" [ 1 ]
+WorldBegin
+LightSource "distant" "point3 from" [ 0 1 0 ] "point3 to" [ 0 0 0 ] "rgb L" [ {E} {E} {E} ]
+{textures}
+{material}
+Shape "trianglemesh" "point3 P" [ -5 0 -5  5 0 -5  5 0 5  -5 0 5 ]
+    "integer indices" [ 0 2 1 0 3 2 ] "point2 uv" [ 0 0  1 0  1 1  0 1 ]
+"#
+    )
+}
+
+/// Renders `path` with the direct integrator; per pixel (rendered radiance, floor uv seen
+/// through the pixel centre).
+fn render(path: &Path) -> (Scene, Vec<(Vec3, Vec2)>) {
+    let scene = loader::load(path).unwrap_or_else(|e| panic!("{e}"));
+    let accel = Accel::build(&scene, BackendKind::Embree, AccelOptions::default()).expect("accel");
+    let settings = RenderSettings::from_scene(&scene).expect("settings");
+    let out = integrator::render(
+        &scene,
+        &accel,
+        &settings,
+        IntegratorKind::Direct,
+        &|_, _| {},
+    );
+    let cam = Camera::new(&scene.camera, settings.width, settings.height);
+    let mut px = Vec::new();
+    for y in 0..settings.height {
+        for x in 0..settings.width {
+            let ray = cam.generate_ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
+            let p = ray.at(-ray.o.y / ray.d.y);
+            let uv = Vec2::new((p.x + 5.0) / 10.0, (p.z + 5.0) / 10.0);
+            let v = out.image.pixels[(y * settings.width + x) as usize];
+            px.push((Vec3::from_array(v), uv));
+        }
+    }
+    (scene, px)
+}
+
+/// sRGB-encoded 8-bit value to linear (IEC 61966-2-1), computed here independently.
+fn srgb(b: u8) -> f32 {
+    let v = b as f64 / 255.0;
+    (if v <= 0.04045 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }) as f32
+}
+
+/// A 4x4 PNG of distinct colours; texel (i, j) (column, row from the top).
+fn texel_bytes(i: u32, j: u32) -> [u8; 3] {
+    [
+        (30 + 60 * i) as u8,
+        (20 + 70 * j) as u8,
+        (200 - 15 * (i + 4 * j)) as u8,
+    ]
+}
+
+fn write_png(dir: &TempDir) {
+    let mut img = image::RgbImage::new(4, 4);
+    for j in 0..4 {
+        for i in 0..4 {
+            img.put_pixel(i, j, image::Rgb(texel_bytes(i, j)));
+        }
+    }
+    img.save(dir.0.join("grid.png")).unwrap();
+}
+
+#[test]
+fn image_texture_reflectance_is_albedo_times_e_over_pi() {
+    let dir = TempDir::new("photon-tex-image");
+    write_png(&dir);
+    let scene = floor_scene(
+        6.0,
+        48,
+        1,
+        r#"Texture "grid" "spectrum" "imagemap" "string filename" "grid.png" "string filter" "point""#,
+        r#"Material "diffuse" "texture reflectance" "grid""#,
+    );
+    let (_, px) = render(&dir.write("s.pbrt", scene));
+    let (mut worst, mut n) = (0.0f32, 0);
+    for (got, uv) in px {
+        // Texel (i, j): s = u, t = 1 - v (image rows run downwards); skip texel edges.
+        let (s, t) = (uv.x * 4.0, (1.0 - uv.y) * 4.0);
+        if !(0.0..4.0).contains(&s) || !(0.0..4.0).contains(&t) {
+            continue;
+        }
+        if (s - s.round()).abs() < 0.1 || (t - t.round()).abs() < 0.1 {
+            continue;
+        }
+        let b = texel_bytes(s as u32, t as u32);
+        let albedo = Vec3::new(srgb(b[0]), srgb(b[1]), srgb(b[2]));
+        let want = albedo * E / PI;
+        worst = worst.max(((got - want) / want).abs().max_element());
+        n += 1;
+    }
+    assert!(n > 1000, "{n} pixels checked");
+    assert!(worst < 1e-3, "worst relative error {worst} over {n} pixels");
+}
+
+#[test]
+fn checkerboard_and_scale_textures() {
+    let dir = TempDir::new("photon-tex-checks");
+    // 4 x 4 cells: tex1 0.8 (scaled by 0.5 -> 0.4 red), tex2 0.2 grey.
+    let scene = floor_scene(
+        6.0,
+        48,
+        1,
+        r#"Texture "red" "spectrum" "constant" "rgb value" [ 0.8 0.1 0.1 ]
+Texture "half" "spectrum" "scale" "texture tex" "red" "float scale" 0.5
+Texture "checks" "spectrum" "checkerboard" "float uscale" 4 "float vscale" 4
+    "texture tex1" "half" "rgb tex2" [ 0.2 0.2 0.2 ]"#,
+        r#"Material "diffuse" "texture reflectance" "checks""#,
+    );
+    let (_, px) = render(&dir.write("s.pbrt", scene));
+    let (mut worst, mut n) = (0.0f32, 0);
+    for (got, uv) in px {
+        let st = uv * 4.0;
+        if !(0.0..4.0).contains(&st.x) || !(0.0..4.0).contains(&st.y) {
+            continue;
+        }
+        // The filter averages over about 1.5 pixel steps (0.17 of a cell here): skip edges.
+        if (st.x - st.x.round()).abs() < 0.25 || (st.y - st.y.round()).abs() < 0.25 {
+            continue;
+        }
+        let even = (st.x.floor() as i32 + st.y.floor() as i32) % 2 == 0;
+        let albedo = if even {
+            Vec3::new(0.4, 0.05, 0.05)
+        } else {
+            Vec3::splat(0.2)
+        };
+        let want = albedo * E / PI;
+        worst = worst.max(((got - want) / want).abs().max_element());
+        n += 1;
+    }
+    assert!(n > 300, "{n} pixels checked");
+    assert!(worst < 1e-3, "worst relative error {worst} over {n} pixels");
+}
+
+/// A 2x1 float PFM [0, 1]: with `clamp` and bilinear filtering it is linear in s on
+/// [0.25, 0.75] (slope 2), so `scale k` gives a height field of slope 2k per unit u.
+fn write_ramp(dir: &TempDir) {
+    let mut bytes = b"Pf\n2 1\n-1.0\n".to_vec();
+    for v in [0.0f32, 1.0] {
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    dir.write("ramp.pfm", bytes);
+}
+
+/// Slope of the height field per world unit: 2 k per unit u, u spans 10 units.
+const K: f32 = 2.5;
+const SLOPE: f32 = 2.0 * K / 10.0;
+
+fn bump_scene(dir: &TempDir) -> std::path::PathBuf {
+    write_ramp(dir);
+    let scene = floor_scene(
+        6.0,
+        48,
+        1,
+        &format!(
+            r#"Texture "h" "float" "imagemap" "string filename" "ramp.pfm" "string wrap" "clamp" "float scale" {K}"#
+        ),
+        r#"Material "diffuse" "rgb reflectance" [ 0.5 0.5 0.5 ] "texture displacement" "h""#,
+    );
+    dir.write("s.pbrt", scene)
+}
+
+#[test]
+fn linear_height_field_tilts_the_shading_normal() {
+    let dir = TempDir::new("photon-bump");
+    let path = bump_scene(&dir);
+    let scene = loader::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let accel = Accel::build(&scene, BackendKind::Embree, AccelOptions::default()).unwrap();
+    // Height h = 2K (u - 1/4) along the normal +y: dp/du' = (10, 2K, 0), dp/dv = (0, 0, 10),
+    // so n = normalize(-2K/10, 1, 0) = normalize(-SLOPE, 1, 0).
+    let want = Vec3::new(-SLOPE, 1.0, 0.0).normalize();
+    for x in [-2.0f32, -0.5, 0.0, 1.3, 2.0] {
+        let ray = Ray::new(Vec3::new(x, 3.0, 0.7), Vec3::new(0.0, -1.0, 0.0));
+        let hit = accel.intersect(&ray).expect("hits the floor");
+        let mut si = SurfaceInteraction::new(&scene, &hit, &ray);
+        // The winding makes the normal +y (displacement goes up).
+        assert!(
+            (si.ns - Vec3::Y).length() < 1e-6,
+            "unbumped before the BSDF"
+        );
+        let _ = si.bsdf(&scene);
+        assert!((si.ns - want).length() < 1e-4, "x {x}: {} != {want}", si.ns);
+        assert!((si.frame.n - want).length() < 1e-4);
+        assert!((si.wo - si.frame.to_local(Vec3::Y)).length() < 1e-6);
+    }
+    // Outside [0.25, 0.75] in u the clamped ramp is flat: no tilt.
+    let ray = Ray::new(Vec3::new(4.0, 3.0, 0.0), Vec3::new(0.0, -1.0, 0.0));
+    let hit = accel.intersect(&ray).unwrap();
+    let mut si = SurfaceInteraction::new(&scene, &hit, &ray);
+    let _ = si.bsdf(&scene);
+    assert!((si.ns - Vec3::Y).length() < 1e-6, "{}", si.ns);
+}
+
+#[test]
+fn bumped_floor_radiance_follows_the_tilted_normal() {
+    let dir = TempDir::new("photon-bump-render");
+    let (_, px) = render(&bump_scene(&dir));
+    let cos = 1.0 / (1.0 + SLOPE * SLOPE).sqrt();
+    let (mut worst, mut n) = (0.0f32, 0);
+    for (got, uv) in px {
+        // The linear part of the ramp, away from its kinks (the bump step looks 0.0005 ahead).
+        if !(0.3..0.7).contains(&uv.x) || !(0.05..0.95).contains(&uv.y) {
+            continue;
+        }
+        let want = 0.5 * E * cos / PI;
+        worst = worst.max((got.x - want).abs() / want);
+        n += 1;
+    }
+    assert!(n > 300, "{n}");
+    assert!(
+        worst < 1e-3,
+        "worst relative error {worst} over {n} pixels (cos {cos})"
+    );
+}
+
+/// A floor of one-texel black and white checks, 512 texels across, seen from far enough that
+/// a pixel covers about 18 texels: bilinear lookups alias (pixel values scatter between
+/// black and white), trilinear ones average (grey, smooth).
+#[test]
+fn trilinear_filtering_removes_aliasing() {
+    let dir = TempDir::new("photon-mip");
+    let mut img = image::RgbImage::new(512, 512);
+    for (x, y, p) in img.enumerate_pixels_mut() {
+        let v = if (x + y) % 2 == 0 { 255 } else { 0 };
+        *p = image::Rgb([v, v, v]);
+    }
+    img.save(dir.0.join("fine.png")).unwrap();
+    let stats = |filter: &str| {
+        let scene = floor_scene(
+            20.0,
+            64,
+            1,
+            &format!(
+                r#"Texture "fine" "spectrum" "imagemap" "string filename" "fine.png" "string filter" "{filter}" "string encoding" "linear""#
+            ),
+            r#"Material "diffuse" "texture reflectance" "fine""#,
+        );
+        let (_, px) = render(&dir.write(&format!("{filter}.pbrt"), scene));
+        let v: Vec<f32> = px
+            .iter()
+            .filter(|(_, uv)| (0.05..0.95).contains(&uv.x) && (0.05..0.95).contains(&uv.y))
+            .map(|(c, _)| c.x * PI / E)
+            .collect();
+        let mean = v.iter().sum::<f32>() / v.len() as f32;
+        let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f32>() / v.len() as f32;
+        (mean, var.sqrt(), v.len())
+    };
+    let (mb, sb, n) = stats("bilinear");
+    let (mt, st, _) = stats("trilinear");
+    assert!(n > 500, "{n}");
+    // The texture's mean albedo is 1/2.
+    assert!((mt - 0.5).abs() < 0.02, "trilinear mean {mt}");
+    assert!(sb > 0.1, "bilinear should alias: std {sb} (mean {mb})");
+    assert!(st < 0.1 * sb, "trilinear std {st} vs bilinear {sb}");
+}
