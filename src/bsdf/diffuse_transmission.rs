@@ -90,3 +90,77 @@ impl DiffuseTransmission {
         ))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bsdf::testutil::{chi2_sampler, sampled_albedo, spherical, Rng, SphereBins};
+    use std::f32::consts::PI;
+
+    fn wos() -> [Vec3; 4] {
+        let (a, b) = (spherical(0.3, 0.2), spherical(1.3, 2.0));
+        [a, b, -a, Vec3::new(b.x, b.y, -b.z)]
+    }
+
+    #[test]
+    fn white_furnace_gives_r_plus_t() {
+        let mut rng = Rng::new(41);
+        let (r, t) = (Vec3::new(0.2, 0.5, 0.7), Vec3::new(0.8, 0.3, 0.0));
+        let b = DiffuseTransmission::new(r, t);
+        for wo in wos() {
+            for c in 0..3 {
+                let (m, se, _) = sampled_albedo(
+                    100_000,
+                    || b.sample(wo, rng.f32(), rng.vec2(), Lobes::All),
+                    c,
+                );
+                let want = (r[c] + t[c]) as f64;
+                println!("diffuse transmission furnace channel {c} wo {wo:?}: {m:.5} +- {se:.5} (R + T = {want})");
+                assert!((m - want).abs() < 4.0 * se + 1e-6, "{m} vs {want}");
+            }
+        }
+        // A lossless one: R + T = 1 in every channel gives albedo 1, sample by sample.
+        let lossless = DiffuseTransmission::new(Vec3::splat(0.3), Vec3::splat(0.7));
+        for _ in 0..1000 {
+            let s = lossless
+                .sample(wos()[1], rng.f32(), rng.vec2(), Lobes::All)
+                .unwrap();
+            assert!((s.f.x * s.wi.z.abs() / s.pdf - 1.0).abs() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn chi_square_reciprocity_and_consistency() {
+        let mut rng = Rng::new(42);
+        let b = DiffuseTransmission::new(Vec3::new(0.2, 0.6, 0.1), Vec3::new(0.5, 0.1, 0.3));
+        let bins = SphereBins { n_z: 20, n_phi: 40 };
+        for wo in wos() {
+            println!("diffuse transmission wo {wo:?}:");
+            let p = chi2_sampler(
+                200_000,
+                bins,
+                || {
+                    b.sample(wo, rng.f32(), rng.vec2(), Lobes::All)
+                        .map(|s| s.wi)
+                },
+                |wi| b.pdf(wo, wi, Lobes::All) as f64,
+            );
+            assert!(p > 0.01 / 4.0, "p = {p}");
+            for _ in 0..1000 {
+                let s = b.sample(wo, rng.f32(), rng.vec2(), Lobes::All).unwrap();
+                assert_eq!(s.f, b.f(wo, s.wi));
+                assert!((s.pdf - b.pdf(wo, s.wi, Lobes::All)).abs() < 1e-6);
+                assert_eq!(s.transmission, s.wi.z * wo.z < 0.0);
+                assert_eq!(b.f(wo, s.wi), b.f(s.wi, wo));
+            }
+        }
+        let up = spherical(0.5, 1.0);
+        let down = -spherical(0.2, 3.0);
+        assert_eq!(b.f(up, down), b.transmittance / PI);
+        assert_eq!(b.f(up, spherical(1.0, 0.0)), b.reflectance / PI);
+        let f = b.flags();
+        assert!(f.has_diffuse() && f.contains(BxdfFlags::REFLECTION | BxdfFlags::TRANSMISSION));
+        let t_only = DiffuseTransmission::new(Vec3::ZERO, Vec3::ONE).flags();
+        assert!(!t_only.contains(BxdfFlags::REFLECTION) && t_only.has_diffuse());
+    }
+}
