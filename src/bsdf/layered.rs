@@ -563,3 +563,368 @@ enum Step {
     Interface,
     Lost,
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bsdf::testutil::{mean_and_stderr, sampled_albedo, spherical, Rng, SphereBins};
+    use crate::bsdf::Bsdf;
+    use crate::math::Frame;
+    use crate::sampling::warp::square_to_cosine_hemisphere;
+
+    const RAD: TransportMode = TransportMode::Radiance;
+
+    fn coated_diffuse(r: f32, alpha: f32, thickness: f32, albedo: f32, g: f32) -> CoatedDiffuse {
+        let top = Dielectric::rough(1.5, alpha, alpha);
+        Layered::new(
+            top,
+            Diffuse::new(Vec3::splat(r)),
+            thickness,
+            Vec3::splat(albedo),
+            g,
+            10,
+            1,
+        )
+    }
+
+    /// A perfect reflector (eta 1, k huge: F = 1 within 1e-3) of roughness `alpha`.
+    fn mirror(alpha: f32) -> Conductor {
+        Conductor::new(Vec3::ONE, Vec3::splat(1e4), alpha, alpha)
+    }
+
+    #[test]
+    fn flags_follow_pbrt() {
+        use BxdfFlags as F;
+        let smooth = coated_diffuse(0.5, 0.0, 0.01, 0.0, 0.0);
+        assert_eq!(smooth.flags(), F::REFLECTION | F::SPECULAR | F::DIFFUSE);
+        let rough = coated_diffuse(0.5, 0.3, 0.01, 0.0, 0.0);
+        assert_eq!(rough.flags(), F::REFLECTION | F::DIFFUSE);
+        let top = Dielectric::new(1.5);
+        let cc = |base: Conductor, albedo: f32| {
+            Layered::new(top, base, 0.01, Vec3::splat(albedo), 0.0, 10, 1).flags()
+        };
+        assert_eq!(cc(mirror(0.0), 0.0), F::REFLECTION | F::SPECULAR);
+        assert_eq!(
+            cc(mirror(0.2), 0.0),
+            F::REFLECTION | F::SPECULAR | F::GLOSSY
+        );
+        assert_eq!(
+            cc(mirror(0.2), 0.5),
+            F::REFLECTION | F::SPECULAR | F::DIFFUSE
+        );
+    }
+
+    #[test]
+    fn f_and_pdf_are_deterministic_per_pair() {
+        let b = coated_diffuse(0.6, 0.2, 0.1, 0.5, 0.3);
+        let (wo, wi) = (spherical(0.4, 0.1), spherical(0.9, 2.0));
+        assert_eq!(b.f(wo, wi, RAD), b.f(wo, wi, RAD));
+        assert_eq!(b.pdf(wo, wi, RAD), b.pdf(wo, wi, RAD));
+        let wi2 = spherical(0.9, 2.001);
+        assert_ne!(b.f(wo, wi, RAD), b.f(wo, wi2, RAD));
+        let s = b.sample(wo, 0.7, Vec2::new(0.2, 0.9), RAD);
+        assert_eq!(s, b.sample(wo, 0.7, Vec2::new(0.2, 0.9), RAD));
+        // Opaque: nothing through the surface; two-sided.
+        assert_eq!(b.f(wo, -wi, RAD), Vec3::ZERO);
+        assert_eq!(b.f(-wo, -wi, RAD), b.f(wo, wi, RAD));
+    }
+
+    /// `integral f(wo, wi) |cos wi| dwi` over the upper hemisphere by cosine-weighted `wi`
+    /// (the stochastic f averaged over many directions), green channel.
+    fn albedo_from_f<B: Layer + Copy>(
+        b: &Layered<B>,
+        wo: Vec3,
+        n: usize,
+        rng: &mut Rng,
+    ) -> (f64, f64) {
+        let xs: Vec<f64> = (0..n)
+            .map(|_| {
+                let wi = square_to_cosine_hemisphere(rng.vec2());
+                (b.f(wo, wi, RAD).y * std::f32::consts::PI) as f64
+            })
+            .collect();
+        mean_and_stderr(&xs)
+    }
+
+    #[test]
+    fn white_furnace_lossless_coats_reflect_everything() {
+        let mut rng = Rng::new(51);
+        let deep = |b: CoatedDiffuse| Layered {
+            max_depth: 100,
+            ..b
+        };
+        let cases: Vec<(&str, Bsdf)> = vec![
+            (
+                "smooth coat, white diffuse",
+                Bsdf::CoatedDiffuse(deep(coated_diffuse(1.0, 0.0, 1e-6, 0.0, 0.0))),
+            ),
+            (
+                "smooth coat, white diffuse, white medium g 0.5",
+                Bsdf::CoatedDiffuse(deep(coated_diffuse(1.0, 0.0, 0.5, 1.0, 0.5))),
+            ),
+            (
+                "smooth coat, smooth mirror",
+                Bsdf::CoatedConductor(Layered::new(
+                    Dielectric::new(1.5),
+                    mirror(0.0),
+                    1e-6,
+                    Vec3::ZERO,
+                    0.0,
+                    100,
+                    1,
+                )),
+            ),
+        ];
+        for (name, b) in cases {
+            for theta in [0.1f32, 0.8, 1.3] {
+                let wo = spherical(theta, 0.5);
+                let (m, se, _) =
+                    sampled_albedo(200_000, || b.sample(wo, rng.f32(), rng.vec2(), RAD), 1);
+                println!("layered furnace {name}, theta {theta}: albedo {m:.5} +- {se:.5}");
+                assert!(
+                    (m - 1.0).abs() < 4.0 * se + 2e-3,
+                    "{name} theta {theta}: {m} +- {se}"
+                );
+            }
+        }
+        // The same through f: the coat's specular reflectance plus integral f cos.
+        let b = deep(coated_diffuse(1.0, 0.0, 1e-6, 0.0, 0.0));
+        for theta in [0.1f32, 0.8, 1.3] {
+            let wo = spherical(theta, 0.5);
+            let (m, se) = albedo_from_f(&b, wo, 200_000, &mut rng);
+            let r = super::super::fresnel::fr_dielectric(wo.z, 1.5) as f64;
+            println!(
+                "layered furnace via f, theta {theta}: R {r:.5} + {m:.5} +- {se:.5} = {:.5}",
+                r + m
+            );
+            assert!((r + m - 1.0).abs() < 4.0 * se + 2e-3, "{}", r + m);
+        }
+    }
+
+    #[test]
+    fn lossy_coats_stay_below_one() {
+        let mut rng = Rng::new(52);
+        let cases: Vec<(&str, Bsdf)> = vec![
+            (
+                "rough coat 0.3, white diffuse",
+                Bsdf::CoatedDiffuse(coated_diffuse(1.0, 0.3, 1e-6, 0.0, 0.0)),
+            ),
+            (
+                "smooth coat, rough mirror 0.3",
+                Bsdf::CoatedConductor(Layered::new(
+                    Dielectric::new(1.5),
+                    mirror(0.3),
+                    1e-6,
+                    Vec3::ZERO,
+                    0.0,
+                    10,
+                    1,
+                )),
+            ),
+            (
+                "rough coat 0.2, gold 0.2, medium",
+                Bsdf::CoatedConductor(Layered::new(
+                    Dielectric::rough(1.5, 0.2, 0.2),
+                    Conductor::new(
+                        Vec3::new(0.143, 0.374, 1.442),
+                        Vec3::new(3.983, 2.385, 1.603),
+                        0.2,
+                        0.2,
+                    ),
+                    0.1,
+                    Vec3::splat(0.8),
+                    0.3,
+                    10,
+                    1,
+                )),
+            ),
+        ];
+        for (name, b) in cases {
+            for theta in [0.1f32, 0.8, 1.3] {
+                let wo = spherical(theta, 0.5);
+                let (m, se, _) =
+                    sampled_albedo(100_000, || b.sample(wo, rng.f32(), rng.vec2(), RAD), 1);
+                println!("layered furnace {name}, theta {theta}: albedo {m:.5} +- {se:.5}");
+                assert!(m < 1.0 + 3.0 * se, "{name}: {m}");
+                assert!(m > 0.3, "{name}: {m}");
+            }
+        }
+    }
+
+    /// Unpolarised Fresnel reflectance from Hecht's amplitude formulas, in f64, from index
+    /// `n1` into `n2`.
+    fn hecht(cos_i: f64, n1: f64, n2: f64) -> f64 {
+        let sin_t = n1 / n2 * (1.0 - cos_i * cos_i).max(0.0).sqrt();
+        if sin_t >= 1.0 {
+            return 1.0;
+        }
+        let cos_t = (1.0 - sin_t * sin_t).sqrt();
+        let rs = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t);
+        let rp = (n2 * cos_i - n1 * cos_t) / (n2 * cos_i + n1 * cos_t);
+        0.5 * (rs * rs + rp * rp)
+    }
+
+    /// Snell's law for a flat interface: the direction `d` (propagation) continues with its
+    /// tangential part scaled by `n1 / n2`.
+    fn snell(d: [f64; 3], n1: f64, n2: f64) -> [f64; 3] {
+        let (x, y) = (d[0] * n1 / n2, d[1] * n1 / n2);
+        let z = (1.0 - x * x - y * y).max(0.0).sqrt();
+        [x, y, z.copysign(d[2])]
+    }
+
+    /// A textbook Henyey-Greenstein deflection of the propagation direction `d` (cosine
+    /// between old and new propagation direction; g > 0 forward).
+    fn hg_deflect(d: [f64; 3], g: f64, u: (f64, f64)) -> [f64; 3] {
+        let cos = if g.abs() < 1e-3 {
+            1.0 - 2.0 * u.0
+        } else {
+            let s = (1.0 - g * g) / (1.0 - g + 2.0 * g * u.0);
+            (1.0 + g * g - s * s) / (2.0 * g)
+        };
+        let sin = (1.0 - cos * cos).max(0.0).sqrt();
+        let phi = 2.0 * std::f64::consts::PI * u.1;
+        let f = Frame::from_normal(Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32));
+        let t = [f.s, f.t];
+        let mut out = [0.0; 3];
+        for k in 0..3 {
+            out[k] =
+                sin * phi.cos() * t[0][k] as f64 + sin * phi.sin() * t[1][k] as f64 + cos * d[k];
+        }
+        out
+    }
+
+    /// A photon-by-photon simulation of the slab (smooth coat of index `eta` over a Lambertian
+    /// floor of reflectance `r`, medium of unit extinction, `albedo`, `g`, height
+    /// `thickness`): light arrives along `-wo`; returns the exit directions of the light that
+    /// leaves through the coat after entering it (the coat's own mirror reflection excluded),
+    /// each with weight 1 (absorption by roulette).
+    fn brute_force_slab(
+        wo: Vec3,
+        eta: f64,
+        r: f64,
+        thickness: f64,
+        albedo: f64,
+        g: f64,
+        n: usize,
+        rng: &mut Rng,
+    ) -> Vec<Vec3> {
+        let mut exits = vec![];
+        let mut u = || rng.f32() as f64;
+        let cos_o = wo.z as f64;
+        for _ in 0..n {
+            if u() < hecht(cos_o, 1.0, eta) {
+                continue; // the coat's specular reflection
+            }
+            let mut d = snell([-wo.x as f64, -wo.y as f64, -cos_o], 1.0, eta);
+            let mut z = thickness;
+            loop {
+                // Free flight along d (unit extinction), vertical distance t |d.z|.
+                let t = -(1.0 - u()).ln();
+                let zn = z + t * d[2];
+                if zn > 0.0 && zn < thickness {
+                    if u() >= albedo {
+                        break; // absorbed in the medium
+                    }
+                    z = zn;
+                    d = hg_deflect(d, g, (u(), u()));
+                    continue;
+                }
+                if zn <= 0.0 {
+                    if u() >= r {
+                        break; // absorbed by the floor
+                    }
+                    let c = square_to_cosine_hemisphere(Vec2::new(u() as f32, u() as f32));
+                    d = [c.x as f64, c.y as f64, c.z as f64];
+                    z = 0.0;
+                    continue;
+                }
+                // At the coat from inside.
+                if u() < hecht(d[2].abs(), eta, 1.0) {
+                    d[2] = -d[2];
+                    z = thickness;
+                    continue;
+                }
+                let out = snell(d, eta, 1.0);
+                exits.push(Vec3::new(out[0] as f32, out[1] as f32, out[2] as f32));
+                break;
+            }
+        }
+        exits
+    }
+
+    /// pbrt-v4's layered BSDF against the brute-force slab: the directional albedo of the
+    /// light that entered the coat, and f averaged over coarse bins of exit directions.
+    #[test]
+    fn coated_diffuse_matches_a_brute_force_slab() {
+        let mut rng = Rng::new(53);
+        let bins = SphereBins { n_z: 10, n_phi: 4 };
+        for (r, thickness, albedo, g) in [(0.7f32, 0.3f32, 0.0f32, 0.0f32), (0.5, 0.5, 0.8, 0.4)] {
+            let mut b = coated_diffuse(r, 0.0, thickness, albedo, g);
+            b.max_depth = 100;
+            for theta in [0.3f32, 1.1] {
+                let wo = spherical(theta, 0.7);
+                let n = 400_000;
+                let exits = brute_force_slab(
+                    wo,
+                    1.5,
+                    r as f64,
+                    thickness as f64,
+                    albedo as f64,
+                    g as f64,
+                    n,
+                    &mut rng,
+                );
+                let brute_albedo = exits.len() as f64 / n as f64;
+                let brute_se = (brute_albedo * (1.0 - brute_albedo) / n as f64).sqrt();
+                let (f_albedo, f_se) = albedo_from_f(&b, wo, 200_000, &mut rng);
+                // The sampler's non-specular part (paths through the slab).
+                let (s_albedo, s_se, _) = sampled_albedo(
+                    n,
+                    || {
+                        b.sample(wo, rng.f32(), rng.vec2(), RAD)
+                            .filter(|s| !s.specular)
+                    },
+                    1,
+                );
+                println!(
+                    "slab r {r} thickness {thickness} albedo {albedo} g {g} theta {theta}: brute force {brute_albedo:.5} +- {brute_se:.5}, integral f cos {f_albedo:.5} +- {f_se:.5}, sample() {s_albedo:.5} +- {s_se:.5}"
+                );
+                let close = |a: f64, sa: f64| {
+                    (a - brute_albedo).abs() < 4.0 * (sa * sa + brute_se * brute_se).sqrt() + 1e-3
+                };
+                assert!(close(f_albedo, f_se), "f: {f_albedo} vs {brute_albedo}");
+                assert!(
+                    close(s_albedo, s_se),
+                    "sample: {s_albedo} vs {brute_albedo}"
+                );
+                // f averaged over the upper bins (|cos|-weighted) against the exit histogram.
+                let mut counts = vec![0.0f64; bins.count()];
+                for w in &exits {
+                    counts[bins.index(*w)] += 1.0;
+                }
+                // Each f is a one-walk estimate: average 64 walks per point.
+                let b64 = Layered { n_samples: 64, ..b };
+                let cos_area = bins.integrate(4, |w| w.z.max(0.0) as f64);
+                let f_cos = bins.integrate(4, |w| {
+                    if w.z > 0.0 {
+                        (b64.f(wo, w, RAD).y * w.z) as f64
+                    } else {
+                        0.0
+                    }
+                });
+                let mut worst = 0.0f64;
+                for k in (0..bins.count()).filter(|&k| cos_area[k] > 0.0 && counts[k] > 2000.0) {
+                    let brute_f = counts[k] / n as f64 / cos_area[k];
+                    let se = counts[k].sqrt() / n as f64 / cos_area[k];
+                    let ours = f_cos[k] / cos_area[k];
+                    worst = worst.max((ours - brute_f).abs() / se);
+                    assert!(
+                        (ours - brute_f).abs() < 4.0 * se + 0.02 * brute_f,
+                        "bin {k}: f {ours} vs brute force {brute_f} +- {se}"
+                    );
+                }
+                println!("  binned f: worst difference {worst:.2} standard errors");
+            }
+        }
+    }
+}
