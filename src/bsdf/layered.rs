@@ -793,21 +793,14 @@ mod tests {
         out
     }
 
-    /// A photon-by-photon simulation of the slab (smooth coat of index `eta` over a Lambertian
+    /// A photon-by-photon simulation of the slab `[eta, r, thickness, albedo, g]` (smooth coat
+    /// of index `eta` over a Lambertian
     /// floor of reflectance `r`, medium of unit extinction, `albedo`, `g`, height
     /// `thickness`): light arrives along `-wo`; returns the exit directions of the light that
     /// leaves through the coat after entering it (the coat's own mirror reflection excluded),
     /// each with weight 1 (absorption by roulette).
-    fn brute_force_slab(
-        wo: Vec3,
-        eta: f64,
-        r: f64,
-        thickness: f64,
-        albedo: f64,
-        g: f64,
-        n: usize,
-        rng: &mut Rng,
-    ) -> Vec<Vec3> {
+    fn brute_force_slab(wo: Vec3, slab: [f64; 5], n: usize, rng: &mut Rng) -> Vec<Vec3> {
+        let [eta, r, thickness, albedo, g] = slab;
         let mut exits = vec![];
         let mut u = || rng.f32() as f64;
         let cos_o = wo.z as f64;
@@ -864,16 +857,8 @@ mod tests {
             for theta in [0.3f32, 1.1] {
                 let wo = spherical(theta, 0.7);
                 let n = 400_000;
-                let exits = brute_force_slab(
-                    wo,
-                    1.5,
-                    r as f64,
-                    thickness as f64,
-                    albedo as f64,
-                    g as f64,
-                    n,
-                    &mut rng,
-                );
+                let slab = [1.5, r as f64, thickness as f64, albedo as f64, g as f64];
+                let exits = brute_force_slab(wo, slab, n, &mut rng);
                 let brute_albedo = exits.len() as f64 / n as f64;
                 let brute_se = (brute_albedo * (1.0 - brute_albedo) / n as f64).sqrt();
                 let (f_albedo, f_se) = albedo_from_f(&b, wo, 200_000, &mut rng);
