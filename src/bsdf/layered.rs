@@ -11,6 +11,14 @@
 //! set). The random numbers of `f` and `pdf` are a hash of `(wo, wi)` and those of `sample`
 //! a hash of `(wo, uc, u)`, so the same query always gives the same answer.
 //!
+//! One deviation from pbrt-v4, found by the tests: where `f` leaves through a rough coat
+//! after a bounce at the base (or a scattering event), pbrt-v4 weighs that strategy by MIS
+//! against the presampled direction `wis` using the coat's density of sampling `wi` from
+//! inside, `PDF(-w, wi)`, but `wis` was sampled from `wi`, so the competing density is
+//! `PDF(wi, -w)`; with pbrt-v4's weight, `f` came out 6-15% above the throughput of `sample()`
+//! over whole bins of directions for a rough coat (`sample_reproduces_f_bin_by_bin`), with
+//! the matching weight they agree.
+//!
 //! Both coated materials are two-sided (a `wo` below the surface sees the mirror image) and
 //! opaque (the base transmits nothing, so `f` across the surface is 0). Flags follow pbrt-v4:
 //! reflection, plus specular when the coat is smooth, plus diffuse when the base is diffuse or
@@ -35,8 +43,9 @@ use std::f32::consts::PI;
 pub trait Layer {
     fn flags(&self) -> BxdfFlags;
     fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3;
-    /// A sample among `lobes`, only if it is usable ([`BsdfSample::is_valid`]).
-    fn sample(
+    /// A sample among `lobes`, only if it is usable ([`BsdfSample::is_valid`]). (Not named
+    /// `sample`: the interfaces' own `sample` methods would shadow it.)
+    fn sample_valid(
         &self,
         wo: Vec3,
         uc: f32,
@@ -54,7 +63,7 @@ impl Layer for Dielectric {
     fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
         Dielectric::f(self, wo, wi, mode)
     }
-    fn sample(
+    fn sample_valid(
         &self,
         wo: Vec3,
         uc: f32,
@@ -76,7 +85,14 @@ impl Layer for Diffuse {
     fn f(&self, wo: Vec3, wi: Vec3, _: TransportMode) -> Vec3 {
         Diffuse::f(self, wo, wi)
     }
-    fn sample(&self, wo: Vec3, _: f32, u: Vec2, _: TransportMode, l: Lobes) -> Option<BsdfSample> {
+    fn sample_valid(
+        &self,
+        wo: Vec3,
+        _: f32,
+        u: Vec2,
+        _: TransportMode,
+        l: Lobes,
+    ) -> Option<BsdfSample> {
         (l != Lobes::Transmission)
             .then(|| Diffuse::sample(self, wo, u))?
             .filter(BsdfSample::is_valid)
@@ -100,7 +116,14 @@ impl Layer for Conductor {
     fn f(&self, wo: Vec3, wi: Vec3, _: TransportMode) -> Vec3 {
         Conductor::f(self, wo, wi)
     }
-    fn sample(&self, wo: Vec3, _: f32, u: Vec2, _: TransportMode, l: Lobes) -> Option<BsdfSample> {
+    fn sample_valid(
+        &self,
+        wo: Vec3,
+        _: f32,
+        u: Vec2,
+        _: TransportMode,
+        l: Lobes,
+    ) -> Option<BsdfSample> {
         (l != Lobes::Transmission)
             .then(|| Conductor::sample(self, wo, u))?
             .filter(BsdfSample::is_valid)
@@ -279,10 +302,10 @@ impl<B: Layer + Copy> Layered<B> {
     fn f_walk(&self, wo: Vec3, wi: Vec3, mode: TransportMode, rng: &mut WalkRng) -> Vec3 {
         let top = &self.top;
         let t = Lobes::Transmission;
-        let Some(wos) = top.sample(wo, rng.next(), rng.next2(), mode, t) else {
+        let Some(wos) = top.sample_valid(wo, rng.next(), rng.next2(), mode, t) else {
             return Vec3::ZERO;
         };
-        let Some(wis) = top.sample(wi, rng.next(), rng.next2(), mode.flip(), t) else {
+        let Some(wis) = top.sample_valid(wi, rng.next(), rng.next2(), mode.flip(), t) else {
             return Vec3::ZERO;
         };
         let mut walk = Walk {
@@ -366,7 +389,7 @@ impl<B: Layer + Copy> Layered<B> {
         if top_rough && w_new.z > 0.0 {
             let f_exit = self.top.f(-w_new, wi, mode);
             if f_exit.max_element() > 0.0 {
-                let exit_pdf = self.top.pdf(-w_new, wi, Lobes::Transmission);
+                let exit_pdf = self.top.pdf(wi, -w_new, Lobes::Transmission);
                 let wt = power_heuristic(p, exit_pdf);
                 *f += walk.beta * tr(zp - exit_z, w_new) * f_exit * wt;
             }
@@ -377,7 +400,10 @@ impl<B: Layer + Copy> Layered<B> {
     /// Internal reflection at the coat (no NEE there: the NEE happened below).
     fn reflect_at_top(&self, walk: &mut Walk, mode: TransportMode, rng: &mut WalkRng) -> bool {
         let r = Lobes::Reflection;
-        let Some(bs) = self.top.sample(-walk.w, rng.next(), rng.next2(), mode, r) else {
+        let Some(bs) = self
+            .top
+            .sample_valid(-walk.w, rng.next(), rng.next2(), mode, r)
+        else {
             return false;
         };
         walk.beta *= bs.f * bs.wi.z.abs() / bs.pdf;
@@ -412,7 +438,7 @@ impl<B: Layer + Copy> Layered<B> {
                 * wis.f;
         }
         let r = Lobes::Reflection;
-        let Some(bs) = bottom.sample(-w, rng.next(), rng.next2(), mode, r) else {
+        let Some(bs) = bottom.sample_valid(-w, rng.next(), rng.next2(), mode, r) else {
             return false;
         };
         walk.beta *= bs.f * bs.wi.z.abs() / bs.pdf;
@@ -421,7 +447,7 @@ impl<B: Layer + Copy> Layered<B> {
             let f_exit = top.f(-bs.wi, wi, mode);
             if f_exit.max_element() > 0.0 {
                 let wt = if bottom_rough {
-                    power_heuristic(bs.pdf, top.pdf(-bs.wi, wi, Lobes::Transmission))
+                    power_heuristic(bs.pdf, top.pdf(wi, -bs.wi, Lobes::Transmission))
                 } else {
                     1.0
                 };
@@ -437,7 +463,7 @@ impl<B: Layer + Copy> Layered<B> {
         let flip = wo.z < 0.0;
         let wo = if flip { -wo } else { wo };
         let unflip = |w: Vec3| if flip { -w } else { w };
-        let bs = self.top.sample(wo, uc, u, mode, Lobes::All)?;
+        let bs = self.top.sample_valid(wo, uc, u, mode, Lobes::All)?;
         if !bs.transmission {
             return Some(BsdfSample {
                 wi: unflip(bs.wi),
@@ -492,9 +518,9 @@ impl<B: Layer + Copy> Layered<B> {
             }
             let (uc, u) = (rng.next(), rng.next2());
             let bs = if z == 0.0 {
-                self.bottom.sample(-w, uc, u, mode, Lobes::All)
+                self.bottom.sample_valid(-w, uc, u, mode, Lobes::All)
             } else {
-                self.top.sample(-w, uc, u, mode, Lobes::All)
+                self.top.sample_valid(-w, uc, u, mode, Lobes::All)
             }?;
             f *= bs.f;
             pdf *= bs.pdf;
@@ -530,15 +556,16 @@ impl<B: Layer + Copy> Layered<B> {
     fn pdf_trt(&self, wo: Vec3, wi: Vec3, mode: TransportMode, rng: &mut WalkRng) -> f32 {
         let (top, bottom) = (&self.top, &self.bottom);
         let t = Lobes::Transmission;
-        let wos = top.sample(wo, rng.next(), rng.next2(), mode, t);
-        let wis = top.sample(wi, rng.next(), rng.next2(), mode.flip(), t);
+        let wos = top.sample_valid(wo, rng.next(), rng.next2(), mode, t);
+        let wis = top.sample_valid(wi, rng.next(), rng.next2(), mode.flip(), t);
         let (Some(wos), Some(wis)) = (wos, wis) else {
             return 0.0;
         };
         if !top.flags().has_non_specular() {
             return bottom.pdf(-wos.wi, -wis.wi, Lobes::All);
         }
-        let Some(rs) = bottom.sample(-wos.wi, rng.next(), rng.next2(), mode, Lobes::All) else {
+        let Some(rs) = bottom.sample_valid(-wos.wi, rng.next(), rng.next2(), mode, Lobes::All)
+        else {
             return 0.0;
         };
         if !bottom.flags().has_non_specular() {
@@ -909,6 +936,185 @@ mod tests {
                     );
                 }
                 println!("  binned f: worst difference {worst:.2} standard errors");
+            }
+        }
+    }
+
+    /// The three rough cases of the distribution tests.
+    fn rough_cases() -> Vec<(&'static str, Bsdf)> {
+        let gold = Conductor::new(
+            Vec3::new(0.143, 0.374, 1.442),
+            Vec3::new(3.983, 2.385, 1.603),
+            0.4,
+            0.4,
+        );
+        vec![
+            (
+                "rough coat 0.3 over diffuse",
+                Bsdf::CoatedDiffuse(coated_diffuse(0.8, 0.3, 0.1, 0.0, 0.0)),
+            ),
+            (
+                "rough coat 0.5 over diffuse, medium",
+                Bsdf::CoatedDiffuse(coated_diffuse(0.5, 0.5, 0.3, 0.7, 0.3)),
+            ),
+            (
+                "smooth coat over diffuse",
+                Bsdf::CoatedDiffuse(coated_diffuse(0.8, 0.0, 0.1, 0.0, 0.0)),
+            ),
+            (
+                "rough coat 0.3 over gold 0.4",
+                Bsdf::CoatedConductor(Layered::new(
+                    Dielectric::rough(1.5, 0.3, 0.3),
+                    gold,
+                    0.01,
+                    Vec3::ZERO,
+                    0.0,
+                    10,
+                    1,
+                )),
+            ),
+        ]
+    }
+
+    /// `bsdf` with walks of up to 100 events.
+    fn deep(b: &Bsdf) -> Bsdf {
+        match b {
+            Bsdf::CoatedDiffuse(l) => Bsdf::CoatedDiffuse(Layered {
+                max_depth: 100,
+                ..*l
+            }),
+            Bsdf::CoatedConductor(l) => Bsdf::CoatedConductor(Layered {
+                max_depth: 100,
+                ..*l
+            }),
+            other => *other,
+        }
+    }
+
+    /// `bsdf` with `n` walks per evaluation.
+    fn with_walks(b: &Bsdf, n: u32) -> Bsdf {
+        match b {
+            Bsdf::CoatedDiffuse(l) => Bsdf::CoatedDiffuse(Layered { n_samples: n, ..*l }),
+            Bsdf::CoatedConductor(l) => Bsdf::CoatedConductor(Layered { n_samples: n, ..*l }),
+            other => *other,
+        }
+    }
+
+    /// What `sample()` returns is distributed as `f` says: in every bin of directions, the
+    /// sampled throughput `sum f |cos| / pdf / n` estimates the same `integral f |cos|` as the
+    /// (independently estimated) BSDF value. Aggregated as a chi-square of the per-bin
+    /// z-scores (sampling noise of both sides; the delta coat reflection excluded).
+    #[test]
+    fn sample_reproduces_f_bin_by_bin() {
+        let mut rng = Rng::new(55);
+        let bins = SphereBins { n_z: 10, n_phi: 8 };
+        for (name, b) in rough_cases() {
+            let b = deep(&b);
+            for theta in [0.3f32, 1.1] {
+                let wo = spherical(theta, 0.7);
+                let n = 400_000;
+                let mut sum = vec![0.0f64; bins.count()];
+                let mut sum2 = vec![0.0f64; bins.count()];
+                for _ in 0..n {
+                    let Some(s) = b.sample(wo, rng.f32(), rng.vec2(), RAD) else {
+                        continue;
+                    };
+                    if s.specular {
+                        continue;
+                    }
+                    let w = (s.f.y * s.wi.z.abs() / s.pdf) as f64;
+                    let k = bins.index(s.wi);
+                    sum[k] += w;
+                    sum2[k] += w * w;
+                }
+                // f with 8 walks per point, at 4 x 4 x (>= 16) points per bin; the spread of
+                // the per-point values gives f's own error.
+                let b8 = with_walks(&b, 8);
+                let cells = bins.integrate(4, |_| 1.0);
+                // Weighted by sin(theta): the quadrature nodes are equally spaced in theta. Each
+                // node averages f at two directions 1e-6 apart (independent walks: the random
+                // numbers hash the direction), whose difference measures f's noise.
+                let mut sw = vec![0.0f64; bins.count()];
+                let mut f1 = vec![0.0f64; bins.count()];
+                let mut f2 = vec![0.0f64; bins.count()];
+                let _ = bins.integrate(4, |w| {
+                    let w2 = Vec3::new(w.x + 1e-6, w.y, w.z).normalize();
+                    let (v1, v2) = if w.z > 0.0 {
+                        (
+                            (b8.f(wo, w, RAD).y * w.z) as f64,
+                            (b8.f(wo, w2, RAD).y * w2.z) as f64,
+                        )
+                    } else {
+                        (0.0, 0.0)
+                    };
+                    assert!(
+                        v1.is_finite() && v2.is_finite() && v1.min(v2) >= 0.0,
+                        "f at {w:?}"
+                    );
+                    let k = bins.index(w);
+                    let s = (1.0 - (w.z as f64).powi(2)).max(0.0).sqrt();
+                    sw[k] += s;
+                    f1[k] += s * 0.5 * (v1 + v2);
+                    f2[k] += s * s * 0.25 * (v1 - v2) * (v1 - v2);
+                    0.0
+                });
+                let (mut chi2, mut dof) = (0.0, 0usize);
+                for k in (0..bins.count()).filter(|&k| sw[k] > 0.0 && (sum[k] > 0.0 || f1[k] > 0.0))
+                {
+                    let mean_s = sum[k] / n as f64;
+                    let var_s = (sum2[k] / n as f64 - mean_s * mean_s).max(0.0) / n as f64;
+                    let int_f = f1[k] / sw[k] * cells[k];
+                    let se_f = f2[k].sqrt() / sw[k] * cells[k];
+                    let se = (var_s + se_f * se_f).sqrt();
+                    if se == 0.0 {
+                        continue;
+                    }
+                    let z = (mean_s - int_f) / se;
+                    chi2 += z * z;
+                    dof += 1;
+                }
+                let p = crate::bsdf::testutil::gamma_q(dof as f64 / 2.0, chi2 / 2.0);
+                println!("{name}, theta {theta}: sample() against f over {dof} bins: chi2 {chi2:.1}, p {p:.4}");
+                assert!(p > 0.001, "{name} theta {theta}: p = {p}");
+            }
+        }
+    }
+
+    /// pbrt-v4's layered `pdf` is an estimate for MIS, not the density of `sample()`: it adds
+    /// a 10% uniform part and counts the slab's paths by one bounce, in the slab's solid
+    /// angle (off by up to eta^2 after refraction), and counts the coat's reflection lobe as
+    /// if it were always chosen, so it integrates to about 2. Checked here: it is positive
+    /// wherever samples land, and within a factor 8 of the sampled density in every
+    /// well-populated bin (measured: 2.3 to 5.9 times).
+    #[test]
+    fn pdf_is_a_usable_estimate_of_the_sample_density() {
+        let mut rng = Rng::new(56);
+        let bins = SphereBins { n_z: 10, n_phi: 8 };
+        for (name, b) in rough_cases()
+            .into_iter()
+            .filter(|(n, _)| !n.starts_with("smooth"))
+        {
+            for theta in [0.3f32, 1.1] {
+                let wo = spherical(theta, 0.7);
+                let n = 200_000;
+                let mut counts = vec![0.0f64; bins.count()];
+                for _ in 0..n {
+                    if let Some(s) = b.sample(wo, rng.f32(), rng.vec2(), RAD) {
+                        assert!(b.pdf(wo, s.wi) > 0.0);
+                        counts[bins.index(s.wi)] += 1.0;
+                    }
+                }
+                let b16 = with_walks(&b, 16);
+                let pdf = bins.integrate(4, |w| b16.pdf(wo, w) as f64);
+                let total: f64 = pdf.iter().sum();
+                let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
+                for k in (0..bins.count()).filter(|&k| counts[k] > 1000.0) {
+                    let ratio = pdf[k] / (counts[k] / n as f64);
+                    lo = lo.min(ratio);
+                    hi = hi.max(ratio);
+                }
+                println!("{name}, theta {theta}: integral of pdf {total:.3}; pdf / sampled density in [{lo:.2}, {hi:.2}]");
+                assert!(lo > 1.0 / 8.0 && hi < 8.0, "{name}: [{lo}, {hi}]");
             }
         }
     }
