@@ -1118,4 +1118,36 @@ mod tests {
             }
         }
     }
+
+    /// A reflection BSDF is reciprocal: the estimates of f(wo, wi) (radiance) and f(wi, wo)
+    /// (importance, the adjoint) agree within their noise (512 walks each).
+    #[test]
+    fn reciprocal_in_expectation() {
+        let mut rng = Rng::new(57);
+        for (name, b) in rough_cases() {
+            let b = with_walks(&b, 512);
+            let mut worst = 0.0f64;
+            for _ in 0..12 {
+                let (wo, wi) = (rng.hemisphere(), rng.hemisphere());
+                let a = b.f(wo, wi, RAD).y as f64;
+                let r = b.f(wi, wo, TransportMode::Importance).y as f64;
+                // Noise of a 512-walk mean: from 8 further 64-walk estimates at nearby pairs.
+                let b64 = with_walks(&b, 64);
+                let xs: Vec<f64> = (1..=8)
+                    .map(|i| {
+                        let d = Vec3::new(1e-6 * i as f32, 0.0, 0.0);
+                        b64.f((wo + d).normalize(), wi, RAD).y as f64
+                    })
+                    .collect();
+                let (_, se64) = mean_and_stderr(&xs);
+                let se = se64 * (8.0f64 * 64.0 / 512.0).sqrt() * std::f64::consts::SQRT_2;
+                worst = worst.max((a - r).abs() / se.max(1e-12));
+                assert!(
+                    (a - r).abs() < 5.0 * se + 1e-4 * a.max(r),
+                    "{name}: {a} vs {r} (se {se})"
+                );
+            }
+            println!("{name}: f(wo, wi) vs f(wi, wo): worst {worst:.2} standard errors");
+        }
+    }
 }
