@@ -445,6 +445,20 @@ impl Bsdf {
         s.is_valid().then_some(s)
     }
 
+    /// The density to weigh a sample `s` of this BSDF by in multiple importance sampling: 0
+    /// for a delta lobe, [`Self::pdf`] when the sample's own pdf is only proportional (the
+    /// coated BSDFs: the light-sampling side uses [`Self::pdf`] too, so the weights still sum
+    /// to one), else the sample's pdf.
+    pub fn mis_pdf(&self, wo: Vec3, s: &BsdfSample) -> f32 {
+        if s.specular {
+            0.0
+        } else if s.pdf_is_proportional {
+            self.pdf(wo, s.wi)
+        } else {
+            s.pdf
+        }
+    }
+
     /// The lobes this BSDF has.
     pub fn flags(&self) -> BxdfFlags {
         use BxdfFlags as F;

@@ -199,7 +199,7 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<Ga
         ray: si.spawn_ray(si.frame.to_world(bs.wi)),
         beta,
         depth: path.depth + 1,
-        prev_pdf: if bs.specular { 0.0 } else { bs.pdf },
+        prev_pdf: bsdf.mis_pdf(wo, &bs),
         prev_p: si.p,
         prev_delta: path.prev_delta && bs.specular,
         ..path
