@@ -47,6 +47,9 @@ pub const MAX_RADIUS: f32 = 4.0;
 pub const MAX_EXPOSURE: f32 = 64.0;
 /// Largest scene or included file, in bytes.
 pub const MAX_SCENE_FILE: u64 = 1 << 30;
+/// Most pixels an image file may have (EXR, PFM, PNG, ...), checked from its header before it
+/// is decoded: 2^28 pixels is 3.2 GB as linear RGB f32.
+pub const MAX_IMAGE_PIXELS: u64 = 1 << 28;
 /// Largest PLY file, in bytes.
 pub const MAX_PLY_FILE: u64 = 4 << 30;
 /// Largest input read from something that is not a regular file (a FIFO, a device such as
@@ -282,6 +285,8 @@ pub fn estimate(
     let tris = scene.triangle_count() as u64;
     e.parts
         .push(("geometry", tris.saturating_mul(triangle_bytes(backend))));
+    // Already decoded by the loader (each image checked against MAX_IMAGE_PIXELS first).
+    e.parts.push(("textures", scene.textures.decoded_bytes()));
     e.parts.push((
         "threads",
         (threads.max(1) as u64).saturating_mul(THREAD_BYTES),

@@ -288,3 +288,91 @@ fn trilinear_filtering_removes_aliasing() {
     assert!(sb > 0.1, "bilinear should alias: std {sb} (mean {mb})");
     assert!(st < 0.1 * sb, "trilinear std {st} vs bilinear {sb}");
 }
+
+/// CRC-32 (IEEE) of `bytes`, bit by bit, for hand-made PNG chunks.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut c = 0xffff_ffffu32;
+    for &b in bytes {
+        c ^= b as u32;
+        for _ in 0..8 {
+            c = if c & 1 != 0 {
+                0xedb8_8320 ^ (c >> 1)
+            } else {
+                c >> 1
+            };
+        }
+    }
+    !c
+}
+
+/// A PNG whose header claims 100000 x 100000 pixels (40 GB as RGB f32) with no image data is
+/// refused from its header, with the file and line of the texture, before any decoding.
+#[test]
+fn huge_image_header_is_refused_before_decoding() {
+    let dir = TempDir::new("photon-tex-huge");
+    let mut ihdr = b"IHDR".to_vec();
+    ihdr.extend_from_slice(&100_000u32.to_be_bytes());
+    ihdr.extend_from_slice(&100_000u32.to_be_bytes());
+    ihdr.extend_from_slice(&[8, 2, 0, 0, 0]); // 8-bit RGB
+    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
+    png.extend_from_slice(&13u32.to_be_bytes());
+    png.extend_from_slice(&ihdr);
+    png.extend_from_slice(&crc32(&ihdr).to_be_bytes());
+    for chunk in [&b"IDAT"[..], b"IEND"] {
+        png.extend_from_slice(&0u32.to_be_bytes());
+        png.extend_from_slice(chunk);
+        png.extend_from_slice(&crc32(chunk).to_be_bytes());
+    }
+    dir.write("huge.png", png);
+    let scene = floor_scene(
+        6.0,
+        8,
+        1,
+        r#"Texture "big" "spectrum" "imagemap" "string filename" "huge.png""#,
+        r#"Material "diffuse" "texture reflectance" "big""#,
+    );
+    let e = loader::load(&dir.write("s.pbrt", scene))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("s.pbrt:9:"), "{e}");
+    assert!(
+        e.contains("100000x100000 pixels is more than the 268435456"),
+        "{e}"
+    );
+}
+
+/// scenes/cornell-textured.pbrt (a checkerboard floor and an sRGB image on the back wall)
+/// against Mitsuba 3's rendering of its transcription (scenes/mitsuba/cornell-textured.xml,
+/// 49152 spp at 64x64, its own relMSE about 3.6e-5): the photon mapper at 16 spp measured
+/// 0.0038. Mistakes in the texture conventions are far above the bound: the same render with
+/// the back wall's image flipped in v gave 0.073, with a plain grey floor 0.014.
+#[test]
+fn textured_cornell_box_matches_mitsuba() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = TempDir::new("photon-tex-mitsuba");
+    let out = dir.0.join("tex.exr");
+    let run = common::photon()
+        .args(["render", "--res", "64x64", "--spp", "16", "--no-png", "-o"])
+        .arg(&out)
+        .arg(root.join("scenes/cornell-textured.pbrt"))
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let cmp = common::photon()
+        .args(["compare", "--max-relmse", "0.006"])
+        .arg(&out)
+        .arg(root.join("scenes/mitsuba/cornell-textured-reference-64.exr"))
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&cmp.stdout);
+    assert!(
+        cmp.status.success(),
+        "{text}{}",
+        String::from_utf8_lossy(&cmp.stderr)
+    );
+    assert!(text.contains("relMSE 0.00"), "{text}");
+}

@@ -53,6 +53,31 @@ pub struct Textures {
     pub float: HashMap<String, Arc<Texture>>,
 }
 
+impl Textures {
+    /// Bytes the decoded images and their MIP pyramids take, each image counted once however
+    /// many textures share it (12 bytes a texel).
+    pub fn decoded_bytes(&self) -> u64 {
+        let mut images: Vec<(Arc<Image>, bool)> = Vec::new();
+        for t in self.spectrum.values().chain(self.float.values()) {
+            t.for_each_image(&mut |m| images.push((m.image.clone(), m.pyramid.is_some())));
+        }
+        images.sort_by_key(|(im, p)| (Arc::as_ptr(im), !p));
+        images.dedup_by_key(|(im, _)| Arc::as_ptr(im));
+        images
+            .iter()
+            .map(|(im, pyramid)| {
+                let (w, h) = (im.width, im.height);
+                let extra = if *pyramid {
+                    Pyramid::texel_count(w, h)
+                } else {
+                    0
+                };
+                (w * h + extra) as u64 * 12
+            })
+            .sum()
+    }
+}
+
 /// How texel addresses outside the image are treated.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Wrap {
@@ -456,6 +481,27 @@ impl Texture {
             Texture::Mix { tex1, tex2, amount } => {
                 let a = amount.eval_at(tc);
                 (Vec3::ONE - a) * tex1.eval_at(tc) + a * tex2.eval_at(tc)
+            }
+        }
+    }
+
+    /// Calls `f` on every image texture in this texture's tree.
+    pub fn for_each_image(&self, f: &mut impl FnMut(&ImageMap)) {
+        match self {
+            Texture::Constant(_) => {}
+            Texture::Image(m) => f(m),
+            Texture::Checkerboard { tex1, tex2, .. } => {
+                tex1.for_each_image(f);
+                tex2.for_each_image(f);
+            }
+            Texture::Scale { tex, scale } => {
+                tex.for_each_image(f);
+                scale.for_each_image(f);
+            }
+            Texture::Mix { tex1, tex2, amount } => {
+                tex1.for_each_image(f);
+                tex2.for_each_image(f);
+                amount.for_each_image(f);
             }
         }
     }

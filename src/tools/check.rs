@@ -19,11 +19,9 @@ use super::ToolError;
 use crate::integrator::RenderSettings;
 use crate::scene::loader::load_collecting;
 use crate::scene::{Scene, SceneError};
-use crate::texture::{Image, Texture};
 use clap::Args;
 use std::fmt;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
 /// `photon check` options.
 #[derive(Args, Debug, Clone)]
@@ -44,9 +42,6 @@ const PIXEL_BYTES: u64 = 5 * 12;
 /// (leaves of 32), rounded up.
 const PHOTON_BYTES: u64 = 20 + 12 + 4 + 1;
 
-/// Bytes per decoded texture texel (linear RGB f32).
-const TEXEL_BYTES: u64 = 12;
-
 /// A rough memory estimate of a render, in bytes: what stays resident. It leaves out the
 /// ray-tracing BVH (which depends on the backend), the irradiance cache, per-thread buffers and
 /// the photon buffers of the map build, and counts one stored photon per emitted photon (the
@@ -62,7 +57,8 @@ pub struct MemoryEstimate {
     /// The global and caustic maps at the photon counts the file asks for (or the defaults);
     /// no caustic map in a scene without specular surfaces.
     pub photons: u64,
-    /// The decoded texture images, each counted once however many textures share it.
+    /// The decoded texture images and MIP pyramids, each counted once however many textures
+    /// share it.
     pub textures: u64,
 }
 
@@ -76,23 +72,11 @@ impl MemoryEstimate {
                 m.positions.len() as u64 * VERTEX_BYTES + m.indices.len() as u64 * TRIANGLE_BYTES
             })
             .sum();
-        let t = &scene.textures;
-        let mut images: Vec<&Arc<Image>> = t
-            .spectrum
-            .values()
-            .chain(t.float.values())
-            .filter_map(|t| match t.as_ref() {
-                Texture::Image(m) => Some(&m.image),
-                _ => None,
-            })
-            .collect();
-        images.sort_by_key(|im| Arc::as_ptr(im));
-        images.dedup_by_key(|im| Arc::as_ptr(im));
         MemoryEstimate {
             geometry,
             film: scene.film.xres as u64 * scene.film.yres as u64 * PIXEL_BYTES,
             photons: photons * PHOTON_BYTES,
-            textures: images.iter().map(|im| im.texels.len() as u64).sum::<u64>() * TEXEL_BYTES,
+            textures: scene.textures.decoded_bytes(),
         }
     }
 

@@ -243,7 +243,9 @@ fn image_map(
 pub fn read_image(path: &Path, encoding: Encoding) -> Result<Image, String> {
     let ext = |x: &str| path.extension().is_some_and(|e| e.eq_ignore_ascii_case(x));
     if ext("pfm") {
-        let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+        // A colour PFM holds 12 bytes per pixel after a short header.
+        let cap = crate::resources::MAX_IMAGE_PIXELS * 12 + 4096;
+        let bytes = super::read_capped(path, cap).map_err(|e| e.to_string())?;
         return read_pfm(&bytes);
     }
     if ext("exr") {
@@ -253,6 +255,14 @@ pub fn read_image(path: &Path, encoding: Encoding) -> Result<Image, String> {
             height: im.height,
             texels: im.pixels.into_iter().map(Vec3::from_array).collect(),
         });
+    }
+    // The header first: no decode of an image larger than the limit.
+    let (w, h) = image::image_dimensions(path).map_err(|e| e.to_string())?;
+    if w as u64 * h as u64 > crate::resources::MAX_IMAGE_PIXELS {
+        return Err(format!(
+            "{w}x{h} pixels is more than the {} an image may have",
+            crate::resources::MAX_IMAGE_PIXELS
+        ));
     }
     let dynamic = image::open(path).map_err(|e| e.to_string())?;
     let linear = matches!(
