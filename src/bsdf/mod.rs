@@ -14,7 +14,17 @@
 //! Material "conductor"  "rgb reflectance" [ .9 .6 .3 ]
 //!                       "float uroughness" [ .1 ] "float vroughness" [ .3 ]
 //!                                                               -> Bsdf::Conductor (GGX)
+//! Material "dielectric" "float roughness" [ .05 ]               -> Bsdf::Dielectric (GGX)
+//! Material "thindielectric" "float eta" [ 1.5 ]                 -> Bsdf::ThinDielectric
+//! Material "diffusetransmission" "rgb transmittance" [ .5 .5 .5 ]
+//!                                                               -> Bsdf::DiffuseTransmission
+//! Material "coateddiffuse" "rgb reflectance" [ .5 .5 .5 ]       -> Bsdf::CoatedDiffuse
+//! Material "coatedconductor" "float conductor.roughness" [ .1 ] -> Bsdf::CoatedConductor
 //! ```
+//!
+//! The coated BSDFs ([`layered`]) are stochastic: `f` and `pdf` are deterministic Monte Carlo
+//! estimates (random numbers hashed from the query), and their samples carry
+//! `pdf_is_proportional` (use [`Bsdf::mis_pdf`] for multiple importance sampling).
 //!
 //! Delta lobes (smooth glass, mirrors) follow pbrt-v4: `f` is the Fresnel weight divided by
 //! `|cos wi|` (and by `eta^2` for radiance through a refraction), `pdf` the discrete lobe
