@@ -612,4 +612,80 @@ mod tests {
                 .is_none());
         }
     }
+
+    /// Every model, with ordinary and extreme parameters, at random and grazing directions:
+    /// f and pdf are finite and non-negative, samples are valid or None (never NaN).
+    #[test]
+    fn no_nan_anywhere() {
+        use crate::bsdf::testutil::Rng;
+        let mut rng = Rng::new(61);
+        let coat = |eta: f32, a: f32, thick: f32, albedo: f32, g: f32| {
+            layered::Layered::new(
+                Dielectric::rough(eta, a, a),
+                Diffuse::new(Vec3::splat(0.7)),
+                thick,
+                Vec3::splat(albedo),
+                g,
+                10,
+                1,
+            )
+        };
+        let mut all = vec![];
+        for eta in [1.0f32, 1.0001, 1.5, 3.0, 0.7] {
+            for a in [0.0f32, 1e-4, 0.02, 0.5, 2.0] {
+                all.push(Bsdf::Dielectric(Dielectric::rough(eta, a, a * 0.5)));
+                all.push(Bsdf::CoatedDiffuse(coat(eta, a, 0.01, 0.5, 0.3)));
+                all.push(Bsdf::CoatedConductor(layered::Layered::new(
+                    Dielectric::rough(eta, a, a),
+                    Conductor::new(Vec3::splat(0.2), Vec3::splat(3.0), a, 0.3),
+                    1e-3,
+                    Vec3::ZERO,
+                    0.0,
+                    10,
+                    1,
+                )));
+            }
+            all.push(Bsdf::ThinDielectric(ThinDielectric::new(eta)));
+        }
+        all.push(Bsdf::CoatedDiffuse(coat(1.5, 0.1, 0.0, 1.0, 0.99)));
+        all.push(Bsdf::CoatedDiffuse(coat(1.5, 0.1, 1e6, 1.0, -0.99)));
+        all.push(Bsdf::DiffuseTransmission(DiffuseTransmission::new(
+            Vec3::ONE,
+            Vec3::ZERO,
+        )));
+        all.push(Bsdf::DiffuseTransmission(DiffuseTransmission::new(
+            Vec3::ZERO,
+            Vec3::ZERO,
+        )));
+        let grazing = [
+            Vec3::new(1.0, 0.0, 1e-7).normalize(),
+            Vec3::new(0.0, 1.0, -1e-7).normalize(),
+            Vec3::Z,
+            -Vec3::Z,
+        ];
+        for b in &all {
+            for i in 0..400 {
+                let wo = if i < 4 { grazing[i] } else { rng.sphere() };
+                let wi = if i % 7 == 0 {
+                    grazing[i % 4]
+                } else {
+                    rng.sphere()
+                };
+                for mode in [TransportMode::Radiance, TransportMode::Importance] {
+                    let f = b.f(wo, wi, mode);
+                    assert!(
+                        f.is_finite() && f.min_element() >= 0.0,
+                        "{b:?} f {f:?} at {wo:?} {wi:?}"
+                    );
+                    if let Some(s) = b.sample(wo, rng.f32(), rng.vec2(), mode) {
+                        assert!(s.is_valid(), "{b:?}: {s:?}");
+                        let m = b.mis_pdf(wo, &s);
+                        assert!(m.is_finite() && m >= 0.0, "{b:?}: mis pdf {m}");
+                    }
+                }
+                let p = b.pdf(wo, wi);
+                assert!(p.is_finite() && p >= 0.0, "{b:?} pdf {p} at {wo:?} {wi:?}");
+            }
+        }
+    }
 }
