@@ -1150,4 +1150,50 @@ mod tests {
             println!("{name}: f(wo, wi) vs f(wi, wo): worst {worst:.2} standard errors");
         }
     }
+
+    /// A smooth coat over a smooth metal is a stack of two mirrors: every path is specular,
+    /// and the albedo is a geometric series, `R + T^2 Fc tr^2 / (1 - R Fc tr^2)` with `R`, `T`
+    /// the coat's Fresnel terms at the incident angle (the same from inside at the refracted
+    /// angle), `Fc` the metal's reflectance at the refracted angle relative to the coat, and
+    /// `tr = exp(-thickness / cos)` per crossing. `sample()`'s mean weight must equal it per
+    /// channel.
+    #[test]
+    fn smooth_coat_over_smooth_metal_is_a_geometric_series() {
+        let mut rng = Rng::new(58);
+        let (eta_c, k_c) = (
+            Vec3::new(0.143, 0.374, 1.442),
+            Vec3::new(3.983, 2.385, 1.603),
+        );
+        let eta = 1.5f32;
+        let thickness = 0.05f32;
+        let base = Conductor::new(eta_c / eta, k_c / eta, 0.0, 0.0);
+        let b = Bsdf::CoatedConductor(Layered::new(
+            Dielectric::new(eta),
+            base,
+            thickness,
+            Vec3::ZERO,
+            0.0,
+            100,
+            1,
+        ));
+        for theta in [0.2f32, 0.9, 1.4] {
+            let wo = spherical(theta, 1.0);
+            let cos_o = wo.z as f64;
+            let r = hecht(cos_o, 1.0, eta as f64);
+            let sin_in = (1.0 - cos_o * cos_o).sqrt() / eta as f64;
+            let cos_in = (1.0 - sin_in * sin_in).sqrt();
+            let tr2 = (-2.0 * thickness as f64 / cos_in).exp();
+            let fc = super::super::fresnel::fr_complex(cos_in as f32, eta_c / eta, k_c / eta);
+            for c in 0..3 {
+                let f = fc[c] as f64 * tr2;
+                let want = r + (1.0 - r) * (1.0 - r) * f / (1.0 - r * f);
+                let (m, se, _) =
+                    sampled_albedo(100_000, || b.sample(wo, rng.f32(), rng.vec2(), RAD), c);
+                println!("coated gold theta {theta} channel {c}: sampled {m:.5} +- {se:.5}, series {want:.5}");
+                assert!((m - want).abs() < 4.0 * se + 1e-4, "{m} vs {want}");
+            }
+            let s = b.sample(wo, rng.f32(), rng.vec2(), RAD).unwrap();
+            assert!(s.specular && (s.wi - Vec3::new(-wo.x, -wo.y, wo.z)).length() < 1e-5);
+        }
+    }
 }
