@@ -1196,4 +1196,48 @@ mod tests {
             assert!(s.specular && (s.wi - Vec3::new(-wo.x, -wo.y, wo.z)).length() < 1e-5);
         }
     }
+
+    /// Chi-square test of `sample()`'s directions where their density is known in closed
+    /// form: under a smooth coat without a medium, a path that leaves through the slab left
+    /// the Lambertian base last along a cosine-distributed inside direction and got out with
+    /// probability `T(theta_in)` (absorption changes weights, not directions), so after
+    /// refraction the exit density is proportional to `T(theta_in(wi)) cos(wi)`.
+    /// (pbrt-v4's `pdf()` is not this density; see `pdf_is_a_usable_estimate_...`.)
+    #[test]
+    fn smooth_coat_exit_directions_pass_chi_square() {
+        use crate::bsdf::testutil::chi2_sampler;
+        let mut rng = Rng::new(59);
+        let bins = SphereBins { n_z: 20, n_phi: 40 };
+        let eta = 1.5f64;
+        let t_in = |w: Vec3| {
+            let c = w.z.max(0.0) as f64;
+            let sin_in = (1.0 - c * c).sqrt() / eta;
+            1.0 - hecht((1.0 - sin_in * sin_in).sqrt(), eta, 1.0)
+        };
+        let unnormalised = |w: Vec3| if w.z > 0.0 { t_in(w) * w.z as f64 } else { 0.0 };
+        let z: f64 = bins.integrate(10, unnormalised).iter().sum();
+        for (r, thickness) in [(0.8f32, 0.05f32), (0.3, 0.5)] {
+            let b = Layered {
+                max_depth: 100,
+                ..coated_diffuse(r, 0.0, thickness, 0.0, 0.0)
+            };
+            for theta in [0.3f32, 1.2] {
+                let wo = spherical(theta, 0.4);
+                let n = 200_000;
+                let mut exits = Vec::with_capacity(n);
+                while exits.len() < n {
+                    let Some(s) = b.sample(wo, rng.f32(), rng.vec2(), RAD) else {
+                        continue;
+                    };
+                    if !s.specular {
+                        exits.push(s.wi);
+                    }
+                }
+                let mut it = exits.into_iter();
+                println!("smooth coat r {r} thickness {thickness} theta {theta}:");
+                let p = chi2_sampler(n, bins, || it.next(), |w| unnormalised(w) / z);
+                assert!(p > 0.01 / 4.0, "p = {p}");
+            }
+        }
+    }
 }
