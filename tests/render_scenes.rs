@@ -128,3 +128,44 @@ Shape "trianglemesh" "point3 P" [ 0.4 0.2 0  0.4 1 0  0.9 1 0  0.9 0.2 0 ] "inte
         "photon map mean {pm} against path tracer {pt}"
     );
 }
+
+/// A white room whose floor is a smoothly coated white diffuse (flags diffuse + specular):
+/// the photon mapper must not count the light under the coat twice (once by shadow rays and
+/// photons, again by continuing the through-coat sample as if it were the coat's mirror
+/// reflection). Measured on the floor rows at 256 spp: photon map 0.0678 against the path
+/// tracer's 0.0473 before the fix (+43%), 0.0520 after (+10%; a plain diffuse floor: +9%).
+#[test]
+fn smooth_coat_is_not_counted_twice() {
+    let room = r#"LookAt 0 1 3.5  0 0.6 0  0 1 0
+Camera "perspective" "float fov" [ 45 ]
+Film "rgb" "integer xresolution" [ 32 ] "integer yresolution" [ 32 ]
+WorldBegin
+Material "diffuse" "rgb reflectance" [ 0.8 0.8 0.8 ]
+Shape "trianglemesh" "point3 P" [ -1 0 -1  -1 2 -1  1 2 -1  1 0 -1 ] "integer indices" [ 0 1 2 0 2 3 ]
+Shape "trianglemesh" "point3 P" [ -1 0 -1  -1 0 1  -1 2 1  -1 2 -1 ] "integer indices" [ 0 1 2 0 2 3 ]
+Shape "trianglemesh" "point3 P" [ 1 0 -1  1 2 -1  1 2 1  1 0 1 ] "integer indices" [ 0 1 2 0 2 3 ]
+Shape "trianglemesh" "point3 P" [ -1 2 -1  -1 2 1  1 2 1  1 2 -1 ] "integer indices" [ 0 1 2 0 2 3 ]
+AttributeBegin
+AreaLightSource "diffuse" "rgb L" [ 8 8 8 ]
+Shape "trianglemesh" "point3 P" [ -0.3 1.99 -0.3  0.3 1.99 -0.3  0.3 1.99 0.3  -0.3 1.99 0.3 ] "integer indices" [ 0 1 2 0 2 3 ]
+AttributeEnd
+Material "coateddiffuse" "rgb reflectance" [ 0.8 0.8 0.8 ]
+Shape "trianglemesh" "point3 P" [ -1 0 -1  1 0 -1  1 0 1  -1 0 1 ] "integer indices" [ 0 1 2 0 2 3 ]
+"#;
+    let dir = common::TempDir::new("photon-coat-twice");
+    let scene = loader::load(&dir.write("room.pbrt", room)).expect("scene loads");
+    let floor = |kind| {
+        let img = render_with(&scene, BackendKind::Embree, (32, 32, 256), 0, kind);
+        let rows = &img.pixels[img.pixels.len() - 8 * 32..];
+        rows.iter().flatten().map(|&v| v as f64).sum::<f64>() / (3 * rows.len()) as f64
+    };
+    let (pm, pt) = (
+        floor(IntegratorKind::Photonmap),
+        floor(IntegratorKind::Path),
+    );
+    println!("floor rows: photon map {pm:.4}, path tracer {pt:.4}");
+    assert!(
+        (pm / pt - 1.0).abs() < 0.2,
+        "photon map {pm} against path {pt}"
+    );
+}

@@ -188,7 +188,10 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<Ga
     let Some(bs) = bsdf.sample(wo, uc, u, TransportMode::Radiance) else {
         return;
     };
-    if bs.pdf <= 0.0 {
+    // Where the BSDF has a diffuse lobe too (a smoothly coated diffuse surface), shadow rays
+    // and the photon estimates above already cover every non-delta part: only a delta sample
+    // (the coat's mirror reflection) continues, else it would be counted twice.
+    if bs.pdf <= 0.0 || (flags.has_diffuse() && !bs.specular) {
         return;
     }
     let beta = path.beta * bs.f * (bs.wi.z.abs() / bs.pdf);
