@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
-"""Evaluates Mitsuba 3's `roughdielectric` (GGX, visible-normal sampling) and `thindielectric`
-at a fixed set of direction pairs and writes scenes/mitsuba/bsdfs.json, the independent values
-that src/bsdf/dielectric.rs and src/bsdf/thin_dielectric.rs compare against.
+"""Evaluates Mitsuba 3's `roughdielectric` (GGX, visible-normal sampling), `roughconductor` (GGX,
+gold) and `thindielectric` at a fixed set of direction pairs and writes scenes/mitsuba/bsdfs.json,
+the independent values that src/bsdf/dielectric.rs, conductor.rs and thin_dielectric.rs compare
+against.
 
 Run with a Python that has `pip install mitsuba` (the scalar_rgb variant needs no LLVM):
 
@@ -76,6 +77,39 @@ def rough_dielectric_rows():
     return rows
 
 
+GOLD_ETA = [0.143, 0.374, 1.442]
+GOLD_K = [3.983, 2.385, 1.603]
+
+
+def rough_conductor_rows():
+    rows = []
+    frame = mi.Frame3f(mi.Vector3f(1, 0, 0), mi.Vector3f(0, 1, 0), mi.Vector3f(0, 0, 1))
+    ctx = mi.BSDFContext()
+    for au, av in [(0.1, 0.1), (0.4, 0.4), (0.2, 0.6)]:
+        bsdf = mi.load_dict({
+            "type": "roughconductor", "distribution": "ggx", "alpha_u": au, "alpha_v": av,
+            "eta": {"type": "rgb", "value": GOLD_ETA}, "k": {"type": "rgb", "value": GOLD_K},
+            "sample_visible": True,
+        })
+        distr = mi.MicrofacetDistribution(mi.MicrofacetType.GGX, au, av, True)
+        for to, po in [(0.2, 0.3), (0.9, 1.5), (1.35, 4.0)]:
+            for ti, pi_ in [(0.1, 3.3), (0.5, 3.0), (1.0, 4.4), (1.4, 0.2)]:
+                wo, wi = unit(to, po), unit(ti, pi_)
+                si = mi.SurfaceInteraction3f()
+                si.sh_frame = frame
+                si.wi = mi.Vector3f(wo)
+                val = bsdf.eval(ctx, si, mi.Vector3f(wi))
+                m = mi.Vector3f(half_vector(wo, wi, 1.0))
+                rows.append({
+                    "alpha_u": au, "alpha_v": av, "eta": GOLD_ETA, "k": GOLD_K,
+                    "wo": wo, "wi": wi, "f_cos": [float(val[c]) for c in range(3)],
+                    "pdf": float(bsdf.pdf(ctx, si, mi.Vector3f(wi))),
+                    "g1_wo": float(distr.smith_g1(mi.Vector3f(wo), m)),
+                    "g1_wi": float(distr.smith_g1(mi.Vector3f(wi), m)),
+                })
+    return rows
+
+
 def thin_dielectric_rows():
     rows = []
     bsdf = mi.load_dict({"type": "thindielectric", "int_ior": ETA, "ext_ior": 1.0})
@@ -102,15 +136,17 @@ def main():
     data = {
         "generator": f"scripts/mitsuba_bsdfs.py, Mitsuba {mi.__version__} scalar_rgb",
         "roughdielectric": rough_dielectric_rows(),
+        "roughconductor": rough_conductor_rows(),
         "thindielectric": thin_dielectric_rows(),
     }
     with open(out, "w") as f:  # one row per line
         f.write("{\n" + f' "generator": {json.dumps(data["generator"])}')
-        for key in ["roughdielectric", "thindielectric"]:
+        for key in ["roughdielectric", "roughconductor", "thindielectric"]:
             rows = ",\n  ".join(json.dumps(r) for r in data[key])
             f.write(f',\n "{key}": [\n  {rows}\n ]')
         f.write("\n}\n")
-    print(f"wrote {out}: {len(data['roughdielectric'])} rough, {len(data['thindielectric'])} thin")
+    counts = ", ".join(f"{len(data[k])} {k}" for k in data if k != "generator")
+    print(f"wrote {out}: {counts}")
 
 
 if __name__ == "__main__":
