@@ -225,6 +225,16 @@ pub type CoatedDiffuse = Layered<Diffuse>;
 /// `coatedconductor`.
 pub type CoatedConductor = Layered<Conductor>;
 
+/// The state of one random walk in `sample`: path throughput and density, direction, height
+/// and whether every event so far was a delta one.
+struct PathWalk {
+    f: Vec3,
+    pdf: f32,
+    w: Vec3,
+    z: f32,
+    specular: bool,
+}
+
 /// The state of one random walk in `f`.
 struct Walk {
     beta: Vec3,
@@ -472,68 +482,81 @@ impl<B: Layer + Copy> Layered<B> {
             });
         }
         let mut rng = WalkRng::new(wo, Vec3::new(uc, u.x, u.y), 0.0, 0x5341_4D50_4C45);
-        let mut specular = bs.specular;
-        let mut f = bs.f * bs.wi.z.abs();
-        let mut pdf = bs.pdf;
-        let mut w = bs.wi;
-        let mut z = self.thickness;
+        let mut p = PathWalk {
+            f: bs.f * bs.wi.z.abs(),
+            pdf: bs.pdf,
+            w: bs.wi,
+            z: self.thickness,
+            specular: bs.specular,
+        };
         for depth in 0..self.max_depth {
-            let rr_beta = f.max_element() / pdf;
+            let rr_beta = p.f.max_element() / p.pdf;
             if depth > 3 && rr_beta < 0.25 {
                 let q = (1.0 - rr_beta).max(0.0);
                 if rng.next() < q {
                     return None;
                 }
-                pdf *= 1.0 - q;
+                p.pdf *= 1.0 - q;
             }
-            if w.z == 0.0 {
+            if p.w.z == 0.0 {
                 return None;
             }
             if self.has_medium() {
-                let dz = -(1.0 - rng.next()).ln() * w.z.abs();
-                let zp = if w.z > 0.0 { z + dz } else { z - dz };
-                if zp == z {
-                    return None;
-                }
-                if 0.0 < zp && zp < self.thickness {
-                    let (wi, p) = self.phase().sample(-w, rng.next2());
-                    if p == 0.0 || wi.z == 0.0 {
-                        return None;
-                    }
-                    f *= self.albedo * p;
-                    pdf *= p;
-                    specular = false;
-                    w = wi;
-                    z = zp;
+                if self.sample_medium(&mut p, &mut rng)? {
                     continue;
                 }
-                z = zp.clamp(0.0, self.thickness);
             } else {
-                z = if z == self.thickness {
+                p.z = if p.z == self.thickness {
                     0.0
                 } else {
                     self.thickness
                 };
-                f *= tr(self.thickness, w);
+                p.f *= tr(self.thickness, p.w);
             }
             let (uc, u) = (rng.next(), rng.next2());
-            let bs = if z == 0.0 {
-                self.bottom.sample_valid(-w, uc, u, mode, Lobes::All)
+            let bs = if p.z == 0.0 {
+                self.bottom.sample_valid(-p.w, uc, u, mode, Lobes::All)
             } else {
-                self.top.sample_valid(-w, uc, u, mode, Lobes::All)
+                self.top.sample_valid(-p.w, uc, u, mode, Lobes::All)
             }?;
-            f *= bs.f;
-            pdf *= bs.pdf;
-            specular &= bs.specular;
-            w = bs.wi;
+            p.f *= bs.f;
+            p.pdf *= bs.pdf;
+            p.specular &= bs.specular;
+            p.w = bs.wi;
             if bs.transmission {
-                let mut s = BsdfSample::new(unflip(w), f, pdf, specular, w.z < 0.0, 1.0);
+                let w = unflip(p.w);
+                let mut s = BsdfSample::new(w, p.f, p.pdf, p.specular, p.w.z < 0.0, 1.0);
                 s.pdf_is_proportional = true;
                 return Some(s);
             }
-            f *= bs.wi.z.abs();
+            p.f *= bs.wi.z.abs();
         }
         None
+    }
+
+    /// A free flight of `sample`'s walk in the slab medium: `Some(true)` after a scattering
+    /// event inside, `Some(false)` on reaching an interface (`z` set to it), `None` when the
+    /// path is lost.
+    fn sample_medium(&self, p: &mut PathWalk, rng: &mut WalkRng) -> Option<bool> {
+        let dz = -(1.0 - rng.next()).ln() * p.w.z.abs();
+        let zp = if p.w.z > 0.0 { p.z + dz } else { p.z - dz };
+        if zp == p.z {
+            return None;
+        }
+        if !(0.0 < zp && zp < self.thickness) {
+            p.z = zp.clamp(0.0, self.thickness);
+            return Some(false);
+        }
+        let (wi, phase) = self.phase().sample(-p.w, rng.next2());
+        if phase == 0.0 || wi.z == 0.0 {
+            return None;
+        }
+        p.f *= self.albedo * phase;
+        p.pdf *= phase;
+        p.specular = false;
+        p.w = wi;
+        p.z = zp;
+        Some(true)
     }
 
     /// Stochastic estimate of the density of `wi` (pbrt-v4's: the coat's reflection, the
