@@ -75,6 +75,18 @@ fn both(scene: &Scene) -> [(BackendKind, Accel); 2] {
         .map(|k| (k, Accel::build(scene, k, AccelOptions::default()).unwrap()))
 }
 
+/// [`both`] plus Embree in robust mode (`--robust`).
+fn all_three(scene: &Scene) -> Vec<(String, Accel)> {
+    let robust = AccelOptions { robust: true };
+    let mut v: Vec<(String, Accel)> = both(scene)
+        .into_iter()
+        .map(|(k, a)| (k.to_string(), a))
+        .collect();
+    let accel = Accel::build(scene, BackendKind::Embree, robust).unwrap();
+    v.push(("embree --robust".into(), accel));
+    v
+}
+
 /// A unit direction towards the distant light (tilted, so the shadow is shifted).
 fn light_dir() -> Vec3 {
     Vec3::new(0.3, 1.0, -0.2).normalize()
@@ -114,7 +126,7 @@ fn answers(accel: &Accel, rays: &[Ray]) -> (Vec<bool>, Vec<Option<Hit>>) {
 /// backends, and that each closest hit is the screen exactly when the ray is occluded.
 fn assert_grid_blocked(scene: &Scene, closed: usize, what: &str) {
     let rays = grid_rays();
-    for (kind, accel) in both(scene) {
+    for (kind, accel) in all_three(scene) {
         let (occ, hit) = answers(&accel, &rays);
         let blocked = occ.iter().filter(|&&o| o).count();
         println!(
@@ -298,7 +310,7 @@ fn rejected_hits_let_traversal_reach_the_next_surface() {
     );
     let scene = load_world(&dir, 8, 1, &world);
     let rays = random_up_rays(2000);
-    for (kind, accel) in both(&scene) {
+    for (kind, accel) in all_three(&scene) {
         let (occ, hit) = answers(&accel, &rays);
         for (r, (o, h)) in rays.iter().zip(occ.iter().zip(&hit)) {
             let h = h.expect("every ray reaches y = 2");
@@ -512,4 +524,44 @@ fn bad_alpha_is_an_error_at_its_location() {
     );
     common::assert_error(&run, &["bad.pbrt:9:", "unknown float texture \"nope\""]);
     assert!(!dir.0.join("out.exr").exists());
+}
+
+#[test]
+fn memory_estimate_counts_the_alpha_masks() {
+    // The screen's copy for the backend: 2 triangles x 12 bytes of indices, 4 uvs x 8 bytes.
+    let dir = TempDir::new("photon-alpha");
+    let with = load_world(
+        &dir,
+        8,
+        1,
+        &format!("{FLOOR}\n{}", screen(1.0, r#""float alpha" 0.5"#)),
+    );
+    let without = load_world(&dir, 8, 1, &format!("{FLOOR}\n{}", screen(1.0, "")));
+    assert_eq!(photon::resources::alpha_mask_bytes(&with), 2 * 12 + 4 * 8);
+    assert_eq!(photon::resources::alpha_mask_bytes(&without), 0);
+    let settings = RenderSettings::from_scene(&with).unwrap();
+    let e = photon::resources::estimate(
+        &with,
+        &settings,
+        IntegratorKind::Direct,
+        BackendKind::Embree,
+        1,
+    );
+    assert!(e.parts.contains(&("alpha masks", 56)), "{:?}", e.parts);
+}
+
+#[test]
+fn alpha_is_part_of_the_scene_hash() {
+    // Partial images of scenes that differ only in alpha must not merge.
+    let dir = TempDir::new("photon-alpha");
+    let hash = |alpha: &str| {
+        load_world(&dir, 8, 1, &format!("{FLOOR}\n{}", screen(1.0, alpha))).content_hash()
+    };
+    let (none, half, quarter) = (
+        hash(""),
+        hash(r#""float alpha" 0.5"#),
+        hash(r#""float alpha" 0.25"#),
+    );
+    assert!(none != half && half != quarter && none != quarter);
+    assert_eq!(hash(r#""float alpha" 1"#), none, "alpha 1 is no alpha");
 }

@@ -12,7 +12,8 @@
 //! - Alpha cut-outs (see [`super`]): a candidate hit on a mesh with alpha that
 //!   [`AlphaMask::keeps`] rejects is answered as a miss inside obvhs's per-primitive callback,
 //!   so traversal goes on to the next-closest candidate (and an occlusion query to the next
-//!   candidate at all). Scenes without alpha skip the test with one branch per candidate.
+//!   candidate at all). Scenes without alpha run a copy of the traversal compiled without the
+//!   test.
 //! - obvhs's node test clamps the entry distance to `1e-4` (in units of the ray direction),
 //!   which would cull boxes lying entirely closer than that. We therefore hand obvhs the ray
 //!   with its origin moved back by [`ORIGIN_SHIFT`] along the direction (and the interval moved
@@ -242,8 +243,11 @@ fn traversal_ray(o: Vec3A, d: Vec3A, tmax: f32) -> ORay {
     ORay::new(o - d * ORIGIN_SHIFT, d, 0.0, tmax + ORIGIN_SHIFT)
 }
 
-impl RayQuery for BvhAccel {
-    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+impl BvhAccel {
+    /// The closest hit that `keep(slot, hit)` accepts; rejected candidates leave the interval
+    /// as it was, so traversal goes on to the next one.
+    #[inline(always)]
+    fn closest(&self, ray: &Ray, keep: impl Fn(usize, &TriHit) -> bool) -> Option<Hit> {
         let bvh = self.bvh.as_ref()?;
         let (tmin, tmax) = query_interval(ray)?;
         let (o, d) = (Vec3A::from(ray.o), Vec3A::from(ray.d));
@@ -254,7 +258,7 @@ impl RayQuery for BvhAccel {
             traversal_ray(o, d, tmax),
             &mut unused,
             |_, slot| match self.tris[slot].intersect(o, d, tmin, cur_tmax) {
-                Some(h) if self.keeps(slot, &h, ray.o, ray.d) => {
+                Some(h) if keep(slot, &h) => {
                     cur_tmax = h.t;
                     best = Some((slot, h));
                     h.t + ORIGIN_SHIFT
@@ -265,7 +269,9 @@ impl RayQuery for BvhAccel {
         best.map(|(slot, h)| self.to_hit(slot, h))
     }
 
-    fn occluded(&self, ray: &Ray) -> bool {
+    /// Whether any hit that `keep(slot, hit)` accepts lies in the ray's interval.
+    #[inline(always)]
+    fn any(&self, ray: &Ray, keep: impl Fn(usize, &TriHit) -> bool) -> bool {
         let (Some(bvh), Some((tmin, tmax))) = (self.bvh.as_ref(), query_interval(ray)) else {
             return false;
         };
@@ -273,9 +279,27 @@ impl RayQuery for BvhAccel {
         // Any hit stops the traversal: report it as distance 0, inside every interval.
         !bvh.ray_traverse_miss(traversal_ray(o, d, tmax), |_, slot| {
             match self.tris[slot].intersect(o, d, tmin, tmax) {
-                Some(h) if self.keeps(slot, &h, ray.o, ray.d) => 0.0,
+                Some(h) if keep(slot, &h) => 0.0,
                 _ => f32::INFINITY,
             }
         })
+    }
+}
+
+/// Without alpha the traversal is compiled with an always-true test (the code of a scene
+/// without alpha is the code before alpha existed); with alpha, [`BvhAccel::keeps`].
+impl RayQuery for BvhAccel {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        match self.alpha {
+            None => self.closest(ray, |_, _| true),
+            Some(_) => self.closest(ray, |slot, h| self.keeps(slot, h, ray.o, ray.d)),
+        }
+    }
+
+    fn occluded(&self, ray: &Ray) -> bool {
+        match self.alpha {
+            None => self.any(ray, |_, _| true),
+            Some(_) => self.any(ray, |slot, h| self.keeps(slot, h, ray.o, ray.d)),
+        }
     }
 }

@@ -456,8 +456,11 @@ impl Scene {
                 m.material as u64,
                 m.area_light.map_or(u64::MAX, |l| l as u64),
                 m.flip_normals as u64,
-                text(format!("{:?}", m.alpha)),
             ]);
+            // Only with alpha, so that the hash of a scene without alpha is what it was.
+            if let Some(a) = &m.alpha {
+                h = hash(&[h, text(format!("{a:?}"))]);
+            }
         }
         h
     }
