@@ -225,7 +225,10 @@ pub fn ray_hash(o: Vec3, d: Vec3) -> f32 {
 /// it is kept when [`ray_hash`]`(o, d) <= a` (probability `a`).
 #[inline]
 pub fn alpha_keeps(a: f32, o: Vec3, d: Vec3) -> bool {
-    !(a < 1.0) || (a > 0.0 && ray_hash(o, d) <= a)
+    if a.is_nan() || a >= 1.0 {
+        return true;
+    }
+    a > 0.0 && ray_hash(o, d) <= a
 }
 
 /// One mesh's alpha cut-out, as both backends test it: the texture and what the hit's uv is
