@@ -439,7 +439,8 @@ fn alpha_parameters_load_as_pbrt_reads_them() {
          Shape \"sphere\" \"float radius\" 0.5 \"texture alpha\" \"checks\"",
         screen(1.0, r#""float alpha" 1"#),
         screen(2.0, r#""float alpha" [ 0.25 ]"#),
-        screen(3.0, r#""texture alpha" "checks""#),
+        // Bracketed, as pbrt-v4-scenes' sanmiguel leaves write it.
+        screen(3.0, r#""texture alpha" [ "checks" ]"#),
         screen(4.0, r#""float alpha" 0"#),
     );
     let s = load_world(&dir, 8, 1, &world);
