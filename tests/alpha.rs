@@ -566,3 +566,50 @@ fn alpha_is_part_of_the_scene_hash() {
     assert!(none != half && half != quarter && none != quarter);
     assert_eq!(hash(r#""float alpha" 1"#), none, "alpha 1 is no alpha");
 }
+
+#[test]
+fn a_triangle_without_uv_uses_pbrts_default_uv() {
+    // pbrt-v4 gives a triangle without "point2 uv" the vertex uvs (0, 0), (1, 0), (1, 1), so
+    // the hit at barycentrics (b1, b2) has uv (b1 + b2, b2). The triangle (0,1,0) (1,1,0)
+    // (0,1,1) is hit at (x, 1, z) with b1 = x, b2 = z; a checkerboard with uscale 2 is closed
+    // (tex1 = 1) where floor(2 (x + z)) + floor(z) is even, i.e. where x + z < 1/2.
+    let dir = TempDir::new("photon-alpha");
+    let world = format!(
+        "{FLOOR}\nTexture \"half\" \"float\" \"checkerboard\" \"float uscale\" [ 2 ] \
+         \"float tex1\" [ 1 ] \"float tex2\" [ 0 ]\n\
+         Shape \"trianglemesh\" \"point3 P\" [ 0 1 0  1 1 0  0 1 1 ] \"texture alpha\" \"half\""
+    );
+    let scene = load_world(&dir, 8, 1, &world);
+    let mut rays = Vec::new();
+    let mut closed = Vec::new();
+    for i in 0..40 {
+        for j in 0..40 {
+            let (x, z) = ((i as f32 + 0.5) / 40.0, (j as f32 + 0.5) / 40.0);
+            if x + z < 0.97 && (x + z - 0.5).abs() > 0.01 {
+                rays.push(Ray::new(Vec3::new(x, 0.5, z), Vec3::Y));
+                closed.push(x + z < 0.5);
+            }
+        }
+    }
+    for (kind, accel) in all_three(&scene) {
+        let (occ, _) = answers(&accel, &rays);
+        assert_eq!(occ, closed, "{kind}");
+    }
+    // The interaction sees the same uv.
+    let h = both(&scene)[1]
+        .1
+        .intersect(&Ray::new(Vec3::new(0.2, 0.5, 0.1), Vec3::Y));
+    let si = photon::interaction::SurfaceInteraction::new(
+        &scene,
+        &h.unwrap(),
+        &Ray::new(Vec3::ZERO, Vec3::Y),
+    );
+    assert!(
+        (si.uv - photon::math::Vec2::new(0.3, 0.1))
+            .abs()
+            .max_element()
+            < 1e-6,
+        "{}",
+        si.uv
+    );
+}

@@ -233,7 +233,7 @@ pub fn alpha_keeps(a: f32, o: Vec3, d: Vec3) -> bool {
 
 /// One mesh's alpha cut-out, as both backends test it: the texture and what the hit's uv is
 /// computed from (the mesh's uvs and indices, copied so the backends need not borrow the
-/// scene; without uvs the barycentrics are the uv and nothing is copied).
+/// scene; without uvs the uv comes from the barycentrics and nothing is copied).
 #[derive(Debug)]
 pub struct AlphaMask {
     texture: Arc<Texture>,
