@@ -1,13 +1,15 @@
 //! Shape `alpha` cut-outs on both backends, checked against answers computed here:
 //! - a checkerboard (and an image) alpha screen stops exactly its closed fraction of a grid of
 //!   rays (the fraction counted from the pattern, not from the renderer), for single rays and
-//!   8-wide packets on Embree and obvhs;
+//!   8-wide packets on Embree (also `--robust`) and obvhs; a triangle without uv takes
+//!   pbrt-v4's default uv (b1 + b2, b2);
 //! - a floor under that screen, lit by a distant light, shows E = L cos(theta) times the open
 //!   fraction in a direct-lighting render;
 //! - alpha 0 hides a shape from every ray (the photon-mapped image is the same as without it);
 //! - alpha 0.5 stops about half of rays of differing origins (binomial bound), the very same
 //!   rays on both backends; rejected hits let traversal reach the next surface;
-//! - bad `alpha` parameters are errors at their `file:line:column`.
+//! - bad `alpha` parameters are errors at their `file:line:column`; alpha enters the scene hash
+//!   and the memory estimate.
 mod common;
 
 use common::TempDir;
