@@ -20,9 +20,8 @@
 //! [`FOREIGN_INTEGRATORS`]), the `Option`s that cannot change photon's image. `ColorSpace
 //! "srgb"` is photon's own space; other color spaces, participating media (`MakeNamedMedium`,
 //! a non-empty `MediumInterface`), curves and hair are errors. `Texture`s are parsed and
-//! stored ([`super::textures`]); a shape's `alpha` may name a float texture (see
-//! [`super::shapes`]), but a material that names one is an error until the integrators apply
-//! them.
+//! stored ([`super::textures`]); materials ([`super::materials`]) and a shape's `alpha` (see
+//! [`super::shapes`]) name them.
 //!
 //! Object instancing (`ObjectBegin "tree"` ... `ObjectEnd`, `ObjectInstance "tree"`) copies
 //! the object's meshes per instance (photon's accelerators hold flat meshes), each moved by the
