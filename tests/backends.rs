@@ -8,8 +8,8 @@ use photon::accel::bvh::BvhAccel;
 use photon::accel::embree::{self, Device, EmbreeAccel, Geometry, SceneBuilder, SceneConfig};
 use photon::accel::{AccelOptions, Hit, RayQuery};
 use photon::math::{Ray, Vec3};
+use photon::scene::generate::bumpy_sphere;
 use photon::scene::{FilmDesc, Mesh, Scene};
-use photon::tools::meshgen::bumpy_sphere;
 use std::path::Path;
 use std::time::Instant;
 
@@ -580,29 +580,51 @@ fn obvhs_presets() {
 }
 
 /// The committed scenes are shared across threads: rayon's answers equal sequential ones,
-/// through the `Accel` enum the renderer uses.
+/// through the `Accel` enum the renderer uses, and a recording wrapper answers exactly as the
+/// backend it wraps.
 #[test]
 fn parallel_queries_match_sequential() {
-    use photon::accel::{Accel, BackendKind};
+    use photon::accel::record::Query;
+    use photon::accel::{Accel, BackendKind, RayKind};
     use rayon::prelude::*;
     let scene = scene_of(vec![bumpy_sphere(64, 64)]);
     let rays = random_rays(&scene, 20_000, 5);
+    let cam = RayKind::Camera;
     for kind in [BackendKind::Embree, BackendKind::Obvhs] {
         let accel = Accel::build(&scene, kind, AccelOptions::default()).unwrap();
         assert_eq!(accel.kind(), kind);
-        let seq: Vec<Option<Hit>> = rays.iter().map(|r| accel.intersect(r)).collect();
-        let par: Vec<Option<Hit>> = rays.par_iter().map(|r| accel.intersect(r)).collect();
+        let seq: Vec<Option<Hit>> = rays.iter().map(|r| accel.intersect(cam, r)).collect();
+        let par: Vec<Option<Hit>> = rays.par_iter().map(|r| accel.intersect(cam, r)).collect();
         assert_eq!(seq, par, "{kind}");
         assert!(seq.iter().filter(|h| h.is_some()).count() > rays.len() / 10);
-        let par_chunks: Vec<Option<Hit>> = rays
-            .par_chunks(64)
-            .flat_map_iter(|c| {
-                let mut out = vec![None; c.len()];
-                accel.intersect_batch(c, &mut out);
-                out
-            })
+        let batches = |accel: &Accel| -> Vec<Option<Hit>> {
+            rays.par_chunks(64)
+                .flat_map_iter(|c| {
+                    let mut out = vec![None; c.len()];
+                    accel.intersect_batch(cam, c, &mut out);
+                    out
+                })
+                .collect()
+        };
+        assert_eq!(seq, batches(&accel), "{kind} batches");
+        let occ: Vec<bool> = rays.iter().map(|r| accel.occluded(cam, r)).collect();
+        let rec = Accel::recording(accel, 1000, 3);
+        assert_eq!(rec.kind(), kind);
+        assert_eq!(seq, batches(&rec), "{kind} recording");
+        let rec_occ: Vec<bool> = rays
+            .iter()
+            .map(|r| rec.occluded(RayKind::Shadow, r))
             .collect();
-        assert_eq!(seq, par_chunks, "{kind} batches");
+        assert_eq!(occ, rec_occ, "{kind} recording");
+        let (_, got) = rec.finish_recording();
+        // Whole chunks of the 64-ray batches: at most 1000, at most one chunk fewer.
+        let kept = got.get(cam, Query::Closest).len();
+        assert!(kept <= 1000 && kept > 1000 - 64, "{kept}");
+        assert_eq!(got.get(RayKind::Shadow, Query::Occlusion).len(), 1000);
+        assert_eq!(
+            got.sets.iter().map(|s| s.seen).sum::<u64>(),
+            2 * rays.len() as u64
+        );
     }
 }
 

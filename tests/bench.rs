@@ -2,8 +2,8 @@
 //! table, the CSV and the JSON, for a shared scene and a generated mesh. It never asserts a
 //! speed. The kiddo baseline runs too, so the harness's own check that both kd-trees find the
 //! same k-th distances is exercised.
+use photon::scene::generate as meshgen;
 use photon::tools::bench::{run_with, BenchOptions, Row};
-use photon::tools::meshgen;
 use std::path::{Path, PathBuf};
 
 #[path = "../benches/common/kiddo.rs"]

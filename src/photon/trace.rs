@@ -18,7 +18,7 @@
 //! - Photons trapped by total internal reflection end at `max_bounces`.
 use super::projection::ProjectionMap;
 use super::{Photon, PhotonMap};
-use crate::accel::{Accel, RayQuery};
+use crate::accel::{Accel, RayKind};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::interaction::SurfaceInteraction;
 use crate::light::{bounding_sphere, Lights};
@@ -325,7 +325,7 @@ fn trace_one(
     let mut first_specular = false;
     for bounce in 0..s.max_bounces {
         rays += 1;
-        let Some(hit) = accel.intersect(&ray) else {
+        let Some(hit) = accel.intersect(RayKind::Photon, &ray) else {
             break;
         };
         let si = SurfaceInteraction::new(scene, &hit, &ray);
@@ -432,7 +432,7 @@ fn unrestricted_efficiency(
             } else {
                 spawn_origin(e.p, e.err, e.n)
             };
-            if let Some(h) = accel.intersect(&Ray::new(o, e.dir)) {
+            if let Some(h) = accel.intersect(RayKind::Photon, &Ray::new(o, e.dir)) {
                 hits += bsdfs[scene.meshes[h.mesh as usize].material as usize]
                     .flags()
                     .has_specular() as u64;

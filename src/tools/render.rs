@@ -371,7 +371,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
             let given =
                 opts.photon.global_photons.is_some() || opts.photon.caustic_photons.is_some();
             if !given && !settings.photon.progressive {
-                super::converge::scale_photons(&mut settings, budget, 200_000);
+                settings.photon.scale_for_budget(budget, 200_000);
             }
             let (out, spp) = pool.install(|| {
                 integrator::render_for_time(&scene, &accel, &settings, opts.integrator, budget)
@@ -409,7 +409,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     );
     if opts.stats {
         print_stats(&out, pool.current_num_threads());
-        print_raw_rate(&scene, &accel, &settings, &out);
+        print_raw_rate(&scene, accel, &settings, &out, &pool);
     }
     let bad = out.image.count_nonfinite();
     if bad > 0 {
@@ -499,28 +499,55 @@ pub fn parse_duration(s: &str) -> Result<f64, String> {
     }
 }
 
-/// The raw rate of the same backend on the same kinds of rays outside the render loop (rays
-/// recorded as `photon crosscheck` does, queried in 8-wide batches on one thread), next to the
-/// rate measured inside the render.
+/// The raw rate of the same backend on the rays a render casts, outside the render loop: a
+/// small render with these settings is recorded (as `photon crosscheck` does, 20,000 rays per
+/// kind, see [`crate::integrator::record`]) and its camera, bounce and gather rays (closest
+/// hit) and shadow rays (occlusion), the kinds the render loop's counters count, are queried
+/// again in their recorded batches on one thread; printed next to the rate measured inside
+/// the render.
 fn print_raw_rate(
     scene: &crate::scene::Scene,
-    accel: &Accel,
+    accel: Accel,
     settings: &RenderSettings,
     out: &crate::integrator::RenderOutput,
+    pool: &rayon::ThreadPool,
 ) {
-    use crate::accel::RayQuery;
+    use crate::accel::record::{Query, CHUNK};
+    use crate::accel::RayKind;
     use std::sync::atomic::Ordering::Relaxed;
-    let rec = super::rays::record(scene, accel, settings, 20_000, 1);
+    let recorded =
+        pool.install(|| crate::integrator::record::record(scene, accel, settings, 20_000, 1));
+    let (accel, rec) = match recorded {
+        Ok(r) => r,
+        Err(e) => {
+            println!("raw rate: not measured: {e}");
+            return;
+        }
+    };
     let t = Instant::now();
     let mut n = 0usize;
-    for rays in [&rec.camera, &rec.gather] {
-        let mut hits = vec![None; rays.len()];
-        accel.intersect_batch(rays, &mut hits);
-        n += rays.len();
+    for kind in [
+        RayKind::Camera,
+        RayKind::Bounce,
+        RayKind::Gather,
+        RayKind::Shadow,
+    ] {
+        let query = match kind {
+            RayKind::Shadow => Query::Occlusion,
+            _ => Query::Closest,
+        };
+        for batch in rec.rays.get(kind, query).chunks(CHUNK) {
+            match query {
+                Query::Closest => {
+                    accel.intersect_batch(kind, batch, &mut [None; CHUNK][..batch.len()])
+                }
+                Query::Occlusion => {
+                    accel.occluded_batch(kind, batch, &mut [false; CHUNK][..batch.len()])
+                }
+            }
+            n += batch.len();
+        }
     }
-    let mut occ = vec![false; rec.shadow.len()];
-    accel.occluded_batch(&rec.shadow, &mut occ);
-    n += rec.shadow.len();
     let raw = n as f64 / t.elapsed().as_secs_f64().max(1e-9) / 1e6;
     let c = &out.counters;
     let rays = (c.camera_rays.load(Relaxed)
@@ -528,7 +555,7 @@ fn print_raw_rate(
         + c.shadow_rays.load(Relaxed)) as f64;
     let inside = rays / (c.ray_ns.load(Relaxed) as f64 * 1e-9).max(1e-9) / 1e6;
     println!(
-        "raw rate on {n} recorded camera/gather/shadow rays, 1 thread, 8-wide batches: {raw:.2} Mrays/s; inside the render {inside:.2} Mrays/s per thread ({:.0}% of raw)",
+        "raw rate on {n} recorded camera/bounce/gather/shadow rays, 1 thread, in their recorded batches: {raw:.2} Mrays/s; inside the render {inside:.2} Mrays/s per thread ({:.0}% of raw)",
         100.0 * inside / raw.max(1e-9)
     );
 }
