@@ -4,6 +4,9 @@
 //!
 //! Run with `cargo test --release --test backends -- --nocapture --test-threads=1` to see the
 //! numbers undisturbed.
+mod common;
+
+use common::Rng;
 use photon::accel::bvh::BvhAccel;
 use photon::accel::embree::{self, Device, EmbreeAccel, Geometry, SceneBuilder, SceneConfig};
 use photon::accel::{AccelOptions, Hit, RayQuery};
@@ -12,33 +15,6 @@ use photon::scene::generate::bumpy_sphere;
 use photon::scene::{FilmDesc, Mesh, Scene};
 use std::path::Path;
 use std::time::Instant;
-
-/// SplitMix64: a small seeded generator, enough for test rays.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [0, 1).
-    fn f(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.f()
-    }
-    /// Uniform direction on the unit sphere.
-    fn dir(&mut self) -> Vec3 {
-        let z = self.range(-1.0, 1.0);
-        let phi = self.range(0.0, std::f32::consts::TAU);
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        Vec3::new(r * phi.cos(), r * phi.sin(), z)
-    }
-}
 
 /// A scene holding `meshes`, everything else simple.
 fn scene_of(meshes: Vec<Mesh>) -> Scene {

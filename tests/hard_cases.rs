@@ -25,6 +25,9 @@
 //! prints one `summary |` line with its measured answer (also appended to
 //! `$CARGO_TARGET_TMPDIR/hard_cases/summary.txt`): run with
 //! `cargo test --release --test hard_cases -- --nocapture | grep '^summary'`.
+mod common;
+
+use common::CUBE;
 use photon::accel::{Accel, AccelOptions, BackendKind, Hit};
 use photon::bsdf::{BsdfSample, TransportMode};
 use photon::camera::Camera;
@@ -699,12 +702,6 @@ fn total_internal_reflection_along_shared_edges() {
     let leaks = tir_cases(&fast, 0.0);
     summary(format!("TIR along shared edges, fast modes (known limitation, not asserted): {} of 8 runs escape: {leaks:?}", leaks.len()));
 }
-
-/// The cube [-1, 1]^3 with outward faces.
-const CUBE: &str = r#"Shape "trianglemesh" "point3 P" [
-  -1 -1 -1  1 -1 -1  1 1 -1  -1 1 -1
-  -1 -1 1  1 -1 1  1 1 1  -1 1 1 ]
-  "integer indices" [ 0 2 1 0 3 2  4 5 6 4 6 7  0 1 5 0 5 4  3 7 6 3 6 2  0 4 7 0 7 3  1 2 6 1 6 5 ]"#;
 
 /// A point light at the centre of a glass cube (eta 1.5) inside a black diffuse box. A photon
 /// whose direction has every |d_i| < c = sqrt(1 - 1/eta^2) is totally reflected at every face

@@ -1,10 +1,13 @@
 //! End-to-end renders of the shared scenes: they load, render at reduced resolution with both
 //! backends, and every pixel is finite; the image does not depend on the thread count; the two
 //! backends give the same image up to noise.
-use photon::accel::{Accel, AccelOptions, BackendKind};
+mod common;
+
+use common::render_with;
+use photon::accel::BackendKind;
 use photon::imageio::metrics::{compare, MaskOptions};
 use photon::imageio::RgbImage;
-use photon::integrator::{self, IntegratorKind, RenderSettings};
+use photon::integrator::IntegratorKind;
 use photon::scene::{loader, Scene};
 use std::path::Path;
 
@@ -16,13 +19,15 @@ fn render(
     spp: u32,
     threads: usize,
 ) -> RgbImage {
-    let accel = Accel::build(scene, backend, AccelOptions::default()).expect("accel builds");
-    let mut settings = RenderSettings::from_scene(scene).expect("integrator settings");
-    (settings.width, settings.height, settings.spp) = (w, h, spp);
-    let pool = photon::tools::thread_pool(threads).unwrap();
-    pool.install(|| {
-        integrator::render(scene, &accel, &settings, IntegratorKind::Direct, &|_, _| {}).image
-    })
+    render_with(
+        scene,
+        IntegratorKind::Direct,
+        backend,
+        (w, h, spp),
+        threads,
+        0,
+    )
+    .image
 }
 
 fn check_scene(path: &str, w: u32, h: u32) {
