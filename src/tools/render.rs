@@ -503,8 +503,9 @@ pub fn parse_duration(s: &str) -> Result<f64, String> {
 /// small render with these settings is recorded (as `photon crosscheck` does, 20,000 rays per
 /// kind, see [`crate::integrator::record`]) and its camera, bounce and gather rays (closest
 /// hit) and shadow rays (occlusion), the kinds the render loop's counters count, are queried
-/// again in their recorded batches on one thread; printed next to the rate measured inside
-/// the render.
+/// again on one thread in batches of up to 256 consecutive recorded rays (the recording keeps
+/// the render's calls in chunks of that size); printed next to the rate measured inside the
+/// render.
 fn print_raw_rate(
     scene: &crate::scene::Scene,
     accel: Accel,
@@ -555,7 +556,7 @@ fn print_raw_rate(
         + c.shadow_rays.load(Relaxed)) as f64;
     let inside = rays / (c.ray_ns.load(Relaxed) as f64 * 1e-9).max(1e-9) / 1e6;
     println!(
-        "raw rate on {n} recorded camera/bounce/gather/shadow rays, 1 thread, in their recorded batches: {raw:.2} Mrays/s; inside the render {inside:.2} Mrays/s per thread ({:.0}% of raw)",
+        "raw rate on {n} recorded camera/bounce/gather/shadow rays, 1 thread, batches of <= 256: {raw:.2} Mrays/s; inside the render {inside:.2} Mrays/s per thread ({:.0}% of raw)",
         100.0 * inside / raw.max(1e-9)
     );
 }
