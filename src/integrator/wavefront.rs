@@ -177,8 +177,9 @@ pub fn render_tile<S: Shade>(
     acc.into_iter().map(|r| r * inv).collect()
 }
 
-/// Traces the rays of `b.paths` (all of `kind`) as one batch, shades the hits, resolves their shadow rays and
-/// deferred work in bounded batches, and leaves the continuing paths in `b.paths`.
+/// Traces the rays of `b.paths` (all of `kind`) as one batch, shades the hits, resolves their
+/// shadow rays and deferred work in bounded batches, and leaves the continuing paths in
+/// `b.paths`.
 fn wave<S: Shade>(
     ctx: &RenderContext,
     shader: &S,

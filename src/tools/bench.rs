@@ -11,8 +11,9 @@
 //!   its 8-wide packet calls (`x8`) and obvhs, on 1 and 2 threads;
 //! - **photon**: global photons traced per second per backend and thread count; kd-tree build
 //!   time and k-nearest queries per second (k = 50, 200; unbounded radius, one thread) at the
-//!   diffuse points the recorded camera rays hit, ours against a [`KnnBaseline`] over the same points and
-//!   queries; radiance (irradiance) estimates per second with the scene's lookup settings.
+//!   diffuse points the recorded camera rays hit, ours against a [`KnnBaseline`] over the
+//!   same points and queries; radiance (irradiance) estimates per second with the scene's
+//!   lookup settings.
 //!
 //! Every number is the median of `--runs` timed runs. Output: a table on stdout; `--csv` and
 //! `--json` write every row. `--quick` runs a reduced set in about a minute.
