@@ -94,6 +94,21 @@ pub fn alpha_mask_bytes(scene: &Scene) -> u64 {
 }
 /// Per worker thread: gather and shadow batches, path states, k-nearest buffers, stack.
 pub const THREAD_BYTES: u64 = 16 << 20;
+/// Bytes per recorded ray, at most (`accel::record`): the 32-byte ray, and when every chunk
+/// holds a single ray (photon paths) its 32-byte heap entry and its allocation's rounding and
+/// header (32).
+pub const RECORDED_RAY_BYTES: u64 = 96;
+
+/// Memory of a recording that keeps up to `per_kind` rays per (kind, query): every pair may
+/// hold `per_kind` rays plus the one chunk being inserted.
+pub fn recording_bytes(per_kind: usize) -> u64 {
+    use crate::accel::{record, RayKind};
+    let pairs = (RayKind::ALL.len() * record::Query::ALL.len()) as u64;
+    let rays = (per_kind as u64).saturating_add(record::CHUNK as u64);
+    pairs
+        .saturating_mul(rays)
+        .saturating_mul(RECORDED_RAY_BYTES)
+}
 
 /// The parts of an estimate, in bytes.
 #[derive(Clone, Debug, Default)]

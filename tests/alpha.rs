@@ -13,7 +13,7 @@
 mod common;
 
 use common::TempDir;
-use photon::accel::{alpha_keeps, ray_hash, Accel, AccelOptions, BackendKind, Hit, RayQuery};
+use photon::accel::{alpha_keeps, ray_hash, Accel, AccelOptions, BackendKind, Hit, RayKind};
 use photon::integrator::{self, IntegratorKind, RenderSettings};
 use photon::math::{Ray, Vec3};
 use photon::scene::{loader, Scene};
@@ -113,12 +113,13 @@ fn grid_rays() -> Vec<Ray> {
 
 /// Occlusion and closest hit of every ray, singly and in batches (Embree: 8-wide packets).
 fn answers(accel: &Accel, rays: &[Ray]) -> (Vec<bool>, Vec<Option<Hit>>) {
-    let single_occ: Vec<bool> = rays.iter().map(|r| accel.occluded(r)).collect();
-    let single_hit: Vec<Option<Hit>> = rays.iter().map(|r| accel.intersect(r)).collect();
+    let k = RayKind::Shadow;
+    let single_occ: Vec<bool> = rays.iter().map(|r| accel.occluded(k, r)).collect();
+    let single_hit: Vec<Option<Hit>> = rays.iter().map(|r| accel.intersect(k, r)).collect();
     let mut occ = vec![false; rays.len()];
     let mut hit = vec![None; rays.len()];
-    accel.occluded_batch(rays, &mut occ);
-    accel.intersect_batch(rays, &mut hit);
+    accel.occluded_batch(k, rays, &mut occ);
+    accel.intersect_batch(k, rays, &mut hit);
     assert_eq!(occ, single_occ, "{}: packets and single rays", accel.kind());
     assert_eq!(hit, single_hit, "{}: packets and single rays", accel.kind());
     (occ, hit)
@@ -598,9 +599,10 @@ fn a_triangle_without_uv_uses_pbrts_default_uv() {
         assert_eq!(occ, closed, "{kind}");
     }
     // The interaction sees the same uv.
-    let h = both(&scene)[1]
-        .1
-        .intersect(&Ray::new(Vec3::new(0.2, 0.5, 0.1), Vec3::Y));
+    let h = both(&scene)[1].1.intersect(
+        RayKind::Camera,
+        &Ray::new(Vec3::new(0.2, 0.5, 0.1), Vec3::Y),
+    );
     let si = photon::interaction::SurfaceInteraction::new(
         &scene,
         &h.unwrap(),

@@ -4,41 +4,17 @@
 //!
 //! Run with `cargo test --release --test backends -- --nocapture --test-threads=1` to see the
 //! numbers undisturbed.
+mod common;
+
+use common::Rng;
 use photon::accel::bvh::BvhAccel;
 use photon::accel::embree::{self, Device, EmbreeAccel, Geometry, SceneBuilder, SceneConfig};
 use photon::accel::{AccelOptions, Hit, RayQuery};
 use photon::math::{Ray, Vec3};
+use photon::scene::generate::bumpy_sphere;
 use photon::scene::{FilmDesc, Mesh, Scene};
-use photon::tools::meshgen::bumpy_sphere;
 use std::path::Path;
 use std::time::Instant;
-
-/// SplitMix64: a small seeded generator, enough for test rays.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [0, 1).
-    fn f(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.f()
-    }
-    /// Uniform direction on the unit sphere.
-    fn dir(&mut self) -> Vec3 {
-        let z = self.range(-1.0, 1.0);
-        let phi = self.range(0.0, std::f32::consts::TAU);
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        Vec3::new(r * phi.cos(), r * phi.sin(), z)
-    }
-}
 
 /// A scene holding `meshes`, everything else simple.
 fn scene_of(meshes: Vec<Mesh>) -> Scene {
@@ -582,29 +558,51 @@ fn obvhs_presets() {
 }
 
 /// The committed scenes are shared across threads: rayon's answers equal sequential ones,
-/// through the `Accel` enum the renderer uses.
+/// through the `Accel` enum the renderer uses, and a recording wrapper answers exactly as the
+/// backend it wraps.
 #[test]
 fn parallel_queries_match_sequential() {
-    use photon::accel::{Accel, BackendKind};
+    use photon::accel::record::Query;
+    use photon::accel::{Accel, BackendKind, RayKind};
     use rayon::prelude::*;
     let scene = scene_of(vec![bumpy_sphere(64, 64)]);
     let rays = random_rays(&scene, 20_000, 5);
+    let cam = RayKind::Camera;
     for kind in [BackendKind::Embree, BackendKind::Obvhs] {
         let accel = Accel::build(&scene, kind, AccelOptions::default()).unwrap();
         assert_eq!(accel.kind(), kind);
-        let seq: Vec<Option<Hit>> = rays.iter().map(|r| accel.intersect(r)).collect();
-        let par: Vec<Option<Hit>> = rays.par_iter().map(|r| accel.intersect(r)).collect();
+        let seq: Vec<Option<Hit>> = rays.iter().map(|r| accel.intersect(cam, r)).collect();
+        let par: Vec<Option<Hit>> = rays.par_iter().map(|r| accel.intersect(cam, r)).collect();
         assert_eq!(seq, par, "{kind}");
         assert!(seq.iter().filter(|h| h.is_some()).count() > rays.len() / 10);
-        let par_chunks: Vec<Option<Hit>> = rays
-            .par_chunks(64)
-            .flat_map_iter(|c| {
-                let mut out = vec![None; c.len()];
-                accel.intersect_batch(c, &mut out);
-                out
-            })
+        let batches = |accel: &Accel| -> Vec<Option<Hit>> {
+            rays.par_chunks(64)
+                .flat_map_iter(|c| {
+                    let mut out = vec![None; c.len()];
+                    accel.intersect_batch(cam, c, &mut out);
+                    out
+                })
+                .collect()
+        };
+        assert_eq!(seq, batches(&accel), "{kind} batches");
+        let occ: Vec<bool> = rays.iter().map(|r| accel.occluded(cam, r)).collect();
+        let rec = Accel::recording(accel, 1000, 3);
+        assert_eq!(rec.kind(), kind);
+        assert_eq!(seq, batches(&rec), "{kind} recording");
+        let rec_occ: Vec<bool> = rays
+            .iter()
+            .map(|r| rec.occluded(RayKind::Shadow, r))
             .collect();
-        assert_eq!(seq, par_chunks, "{kind} batches");
+        assert_eq!(occ, rec_occ, "{kind} recording");
+        let (_, got) = rec.finish_recording();
+        // Whole chunks of the 64-ray batches: at most 1000, at most one chunk fewer.
+        let kept = got.get(cam, Query::Closest).len();
+        assert!(kept <= 1000 && kept > 1000 - 64, "{kept}");
+        assert_eq!(got.get(RayKind::Shadow, Query::Occlusion).len(), 1000);
+        assert_eq!(
+            got.sets.iter().map(|s| s.seen).sum::<u64>(),
+            2 * rays.len() as u64
+        );
     }
 }
 

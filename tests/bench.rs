@@ -2,8 +2,8 @@
 //! table, the CSV and the JSON, for a shared scene and a generated mesh. It never asserts a
 //! speed. The kiddo baseline runs too, so the harness's own check that both kd-trees find the
 //! same k-th distances is exercised.
+use photon::scene::generate;
 use photon::tools::bench::{run_with, BenchOptions, Row};
-use photon::tools::meshgen;
 use std::path::{Path, PathBuf};
 
 #[path = "../benches/common/kiddo.rs"]
@@ -38,7 +38,7 @@ fn tiny_benchmark_reports_every_number() {
                 .unwrap()
                 .triangle_count(),
         ),
-        ("sphere-3k", meshgen::sphere_scene(3000).triangle_count()),
+        ("sphere-3k", generate::sphere_scene(3000).triangle_count()),
     ];
     let mut want: Vec<(String, String, usize)> = Vec::new();
     for t in [1, 2] {

@@ -1,15 +1,19 @@
 //! `photon crosscheck`: the shared Cornell box passes with the default thresholds; backends
 //! broken on purpose (t perturbed, hits dropped) are caught; the recorded rays are the rays a
-//! render casts (checked geometrically against the camera and the light, independently of
-//! the recorder); on the alpha scene every ray agrees and the images differ within noise.
+//! render casts (checked geometrically against the camera and the light, and by count against
+//! the render's own ray counters, independently of the recorder); the sample does not depend
+//! on the thread count; a sample too large for the memory budget is refused before any work;
+//! on the alpha scene every ray agrees and the images differ within noise.
 use photon::accel::bvh::BvhAccel;
-use photon::accel::{Accel, AccelOptions, BackendKind, Hit, RayQuery};
-use photon::integrator::RenderSettings;
+use photon::accel::record::Query;
+use photon::accel::{Accel, AccelOptions, BackendKind, Hit, RayKind, RayQuery};
+use photon::integrator::record::{self, Recorded};
+use photon::integrator::{self as integ, IntegratorKind, RenderSettings};
 use photon::math::{Ray, Vec3};
 use photon::scene::{loader, Light, Scene};
 use photon::tools::crosscheck::{self, failures, CrosscheckOptions, Thresholds};
-use photon::tools::rays::{record, RayKind, RecordedRays};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering::Relaxed;
 
 const CORNELL: &str = "../shared/scenes/cornell-box/scene-v4.pbrt";
 
@@ -85,26 +89,37 @@ impl RayQuery for DropHits {
     }
 }
 
-fn cornell() -> (Scene, Accel, RecordedRays) {
+/// The Cornell box and a recording of 20,000 rays per kind of a render on `threads` threads.
+fn cornell_on(threads: usize) -> (Scene, Accel, Recorded) {
     let scene = loader::load(Path::new(CORNELL)).unwrap();
     let embree = Accel::build(&scene, BackendKind::Embree, AccelOptions::default()).unwrap();
     let settings = RenderSettings::from_scene(&scene).unwrap();
-    let rays = record(&scene, &embree, &settings, 20_000, 1);
+    let pool = photon::tools::thread_pool(threads).unwrap();
+    let (embree, rays) = pool
+        .install(|| record::record(&scene, embree, &settings, 20_000, 1))
+        .unwrap();
     (scene, embree, rays)
+}
+
+fn cornell() -> (Scene, Accel, Recorded) {
+    cornell_on(2)
 }
 
 #[test]
 fn perturbed_t_is_caught() {
     let (scene, embree, rays) = cornell();
+    let (embree, rays) = (embree.backend(), &rays.rays);
     let obvhs = BvhAccel::build(&scene, AccelOptions::default()).unwrap();
-    let honest = crosscheck::compare_rays(&scene, &embree, &obvhs, &rays, 0);
+    let honest = crosscheck::compare_rays(&scene, embree, &obvhs, rays, 0);
     assert!(failures(&honest, None, &Thresholds::default()).is_empty());
     let broken = PerturbT {
         inner: BvhAccel::build(&scene, AccelOptions::default()).unwrap(),
         scale: 1e-3,
     };
-    let reports = crosscheck::compare_rays(&scene, &embree, &broken, &rays, 0);
+    let reports = crosscheck::compare_rays(&scene, embree, &broken, rays, 0);
     print!("{}", crosscheck::table(&reports));
+    // Camera, shadow, gather and photon rays (no specular surface: no bounce).
+    assert_eq!(reports.len(), 4);
     for r in &reports {
         // Every same-triangle hit is off by about 1e-3 relative.
         assert!((r.t_rel.p999 - 1e-3).abs() < 2e-5, "{:?}", r.kind);
@@ -117,15 +132,17 @@ fn perturbed_t_is_caught() {
 #[test]
 fn dropped_hits_are_caught_and_unexplained() {
     let (scene, embree, rays) = cornell();
+    let (embree, rays) = (embree.backend(), &rays.rays);
     let broken = DropHits {
         inner: BvhAccel::build(&scene, AccelOptions::default()).unwrap(),
         every: 200,
     };
-    let reports = crosscheck::compare_rays(&scene, &embree, &broken, &rays, 1);
+    let reports = crosscheck::compare_rays(&scene, embree, &broken, rays, 1);
     print!("{}", crosscheck::table(&reports));
+    assert_eq!(reports.len(), 4);
     for r in &reports {
         // The wrapper's own count of dropped rays that the reference hits: all must be found.
-        let rs = rays.get(r.kind.unwrap());
+        let rs = rays.get(r.kind.unwrap(), r.query.unwrap());
         let expected = rs
             .iter()
             .filter(|ray| broken.dropped(ray) && embree.intersect(ray).is_some())
@@ -142,7 +159,8 @@ fn dropped_hits_are_caught_and_unexplained() {
 #[test]
 fn a_backend_agrees_with_itself() {
     let (scene, embree, rays) = cornell();
-    let reports = crosscheck::compare_rays(&scene, &embree, &embree, &rays, 0);
+    let embree = embree.backend();
+    let reports = crosscheck::compare_rays(&scene, embree, embree, &rays.rays, 0);
     for r in &reports {
         assert_eq!((r.disagreeing, r.t_rel.max), (0, 0.0), "{:?}", r.kind);
         assert!(
@@ -158,9 +176,15 @@ fn a_backend_agrees_with_itself() {
 /// light or continue from where an earlier ray of the path hit; gather directions are unit.
 #[test]
 fn recorded_rays_have_the_render_geometry() {
-    let (scene, _, rays) = cornell();
+    let (scene, _, rec) = cornell();
+    let rays = &rec.rays;
     let cam = photon::camera::Camera::new(&scene.camera, scene.film.xres, scene.film.yres);
-    for r in &rays.camera {
+    let camera = rays.get(RayKind::Camera, Query::Closest);
+    let shadow = rays.get(RayKind::Shadow, Query::Occlusion);
+    let photon = rays.get(RayKind::Photon, Query::Closest);
+    let gather = rays.get(RayKind::Gather, Query::Closest);
+    assert!(camera.len() > 10_000 && camera.len() <= 20_000);
+    for r in camera {
         assert!((r.o - cam.position()).length() < 1e-6);
         assert!((r.d.length() - 1.0).abs() < 1e-5);
     }
@@ -178,27 +202,105 @@ fn recorded_rays_have_the_render_geometry() {
         })
     };
     let on_light = |p: Vec3| on_mesh(light, p);
-    assert!(rays.shadow.len() > 1000);
-    for r in &rays.shadow {
+    assert!(shadow.len() > 1000);
+    for r in shadow {
         assert!(
             on_light(r.o + r.d),
             "shadow ray does not end on the light: {r:?}"
         );
         assert!((r.tmax - (1.0 - 1e-4)).abs() < 1e-7);
     }
-    let from_light = rays.photon.iter().filter(|r| on_light(r.o)).count();
-    assert!(from_light > 0 && from_light < rays.photon.len());
-    for r in &rays.photon {
+    let from_light = photon.iter().filter(|r| on_light(r.o)).count();
+    assert!(from_light > 0 && from_light < photon.len());
+    for r in photon {
         // Every photon ray starts on a surface: the light, or where the previous ray hit.
         assert!(
             scene.meshes.iter().any(|m| on_mesh(m, r.o)),
             "photon ray not on a surface: {r:?}"
         );
     }
-    for r in &rays.gather {
+    assert!(gather.len() > 1000);
+    for r in gather {
         assert!((r.d.length() - 1.0).abs() < 1e-4);
     }
-    assert_eq!(rays.get(RayKind::Gather).len(), rays.gather.len());
+    // Every diffuse point lies on a surface and its normal is unit.
+    assert!(rec.diffuse_points.len() > 1000);
+    for d in &rec.diffuse_points {
+        assert!(scene.meshes.iter().any(|m| on_mesh(m, d.p)));
+        assert!((d.n.length() - 1.0).abs() < 1e-4);
+    }
+}
+
+/// The recording sees every query of the render, by kind: the counts it saw equal the ray
+/// counters the integrator and the photon tracer keep themselves, for a render with the
+/// recorded settings on a plain backend.
+#[test]
+fn recording_counts_every_ray_the_render_casts() {
+    let (scene, embree, rec) = cornell();
+    let seen = |k, q| {
+        rec.rays
+            .sets
+            .iter()
+            .find(|s| s.kind == k && s.query == q)
+            .map_or(0, |s| s.seen)
+    };
+    let s = &rec.settings;
+    assert_eq!(
+        seen(RayKind::Camera, Query::Closest),
+        s.width as u64 * s.height as u64 * s.spp as u64
+    );
+    let pool = photon::tools::thread_pool(2).unwrap();
+    let out =
+        pool.install(|| integ::render(&scene, &embree, s, IntegratorKind::Photonmap, &|_, _| {}));
+    let c = &out.counters;
+    assert_eq!(
+        seen(RayKind::Camera, Query::Closest),
+        c.camera_rays.load(Relaxed)
+    );
+    assert_eq!(
+        seen(RayKind::Shadow, Query::Occlusion),
+        c.shadow_rays.load(Relaxed)
+    );
+    assert_eq!(
+        seen(RayKind::Gather, Query::Closest) + seen(RayKind::Bounce, Query::Closest),
+        c.secondary_rays.load(Relaxed)
+    );
+    // The Cornell box has no specular surface: no caustic pass, so the photon rays are the
+    // global pass's own count.
+    let lights = photon::light::Lights::new(&scene);
+    let mut trace = s.photon.trace.clone();
+    trace.caustic_photons = 0;
+    let maps = photon::photon::trace::trace(&scene, &embree, &lights, &trace);
+    assert_eq!(seen(RayKind::Photon, Query::Closest), maps.stats.rays);
+    // Only the five (kind, query) pairs the render uses were queried.
+    assert_eq!(rec.rays.sets.len(), 4);
+}
+
+/// The sample is a function of the rays cast, not of the threads that cast them.
+#[test]
+fn sample_does_not_depend_on_threads() {
+    let (_, _, one) = cornell_on(1);
+    let (_, _, two) = cornell_on(2);
+    assert_eq!(one.rays.sets.len(), two.rays.sets.len());
+    for (a, b) in one.rays.sets.iter().zip(&two.rays.sets) {
+        assert_eq!((a.kind, a.query, a.seen), (b.kind, b.query, b.seen));
+        assert_eq!(a.rays, b.rays, "{:?}", a.kind);
+    }
+}
+
+/// A sample that does not fit the memory budget is an error before the render starts.
+#[test]
+fn oversized_recording_is_refused() {
+    let scene = loader::load(Path::new(CORNELL)).unwrap();
+    let embree = Accel::build(&scene, BackendKind::Embree, AccelOptions::default()).unwrap();
+    let settings = RenderSettings::from_scene(&scene).unwrap();
+    let t = std::time::Instant::now();
+    let Err(e) = record::record(&scene, embree, &settings, 100_000_000, 0) else {
+        panic!("10^8 rays per kind fit the budget");
+    };
+    println!("{e}");
+    assert!(e.contains("recorded rays"), "{e}");
+    assert!(t.elapsed().as_secs_f64() < 1.0);
 }
 
 const ALPHA: &str = "scenes/alpha-cutouts.pbrt";
@@ -226,15 +328,16 @@ fn alpha_cutouts_agree_and_an_alpha_blind_backend_is_caught() {
     assert_eq!(scene.meshes.iter().filter(|m| m.alpha.is_some()).count(), 3);
     let embree = Accel::build(&scene, BackendKind::Embree, AccelOptions::default()).unwrap();
     let settings = RenderSettings::from_scene(&scene).unwrap();
-    let rays = record(&scene, &embree, &settings, 20_000, 1);
+    let (embree, rec) = record::record(&scene, embree, &settings, 20_000, 1).unwrap();
+    let (embree, rays) = (embree.backend(), &rec.rays);
     let obvhs = BvhAccel::build(&scene, AccelOptions::default()).unwrap();
-    for r in crosscheck::compare_rays(&scene, &embree, &obvhs, &rays, 3) {
+    for r in crosscheck::compare_rays(&scene, embree, &obvhs, rays, 3) {
         assert_eq!(r.disagreeing, 0, "{:?}: {:?}", r.kind, r.examples);
     }
     let mut opaque = scene.clone();
     opaque.meshes.iter_mut().for_each(|m| m.alpha = None);
     let blind = BvhAccel::build(&opaque, AccelOptions::default()).unwrap();
-    let reports = crosscheck::compare_rays(&scene, &embree, &blind, &rays, 0);
+    let reports = crosscheck::compare_rays(&scene, embree, &blind, rays, 0);
     print!("{}", crosscheck::table(&reports));
     for r in &reports {
         assert!(r.disagreeing > 0, "{:?}: no ray meets a cut-out", r.kind);

@@ -24,23 +24,6 @@ const CASES: u64 = 2000;
 /// Case numbers of the long run start here (it never repeats the normal run's).
 const LONG_RUN_FIRST_CASE: u64 = 1 << 32;
 
-/// splitmix64: the case's random stream.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-}
-
 /// A seed: a scene file and, when fuzzing a PLY, which of its PLY files.
 #[derive(Clone, Debug)]
 struct Seed {
@@ -122,7 +105,7 @@ fn mutate(b: &mut Vec<u8>, rng: &mut Rng) {
     match rng.below(6) {
         0 => {
             let i = rng.below(b.len());
-            b[i] = rng.next() as u8;
+            b[i] = rng.next_u64() as u8;
         }
         1 => {
             let t = tokens(b);

@@ -25,7 +25,10 @@
 //! prints one `summary |` line with its measured answer (also appended to
 //! `$CARGO_TARGET_TMPDIR/hard_cases/summary.txt`): run with
 //! `cargo test --release --test hard_cases -- --nocapture | grep '^summary'`.
-use photon::accel::{Accel, AccelOptions, BackendKind, Hit, RayQuery};
+mod common;
+
+use common::CUBE;
+use photon::accel::{Accel, AccelOptions, BackendKind, Hit};
 use photon::bsdf::{BsdfSample, TransportMode};
 use photon::camera::Camera;
 use photon::imageio::metrics::{compare, MaskOptions};
@@ -133,7 +136,7 @@ struct Step {
 }
 
 fn step(scene: &Scene, accel: &Accel, ray: &Ray, uc: f32) -> Option<Step> {
-    let hit = accel.intersect(ray)?;
+    let hit = accel.backend().intersect(ray)?;
     let mut si = SurfaceInteraction::new(scene, &hit, ray);
     let sample = si
         .bsdf(scene)
@@ -251,10 +254,13 @@ fn floor_case((s, y0, tilt): (f32, f32, f32), check_down: bool) -> Result<(), St
             worst = worst.max(((got - want) / want).abs());
             (sum_got, sum_want) = (sum_got + got, sum_want + want);
             // The integrators' hit point and offset, towards lights above and below.
-            let hit = acc.intersect(&r).expect("camera ray hits the floor");
+            let hit = acc
+                .backend()
+                .intersect(&r)
+                .expect("camera ray hits the floor");
             let o = spawn(&sc, &hit, n.as_vec3());
-            blocked_up += usize::from(acc.occluded(&Ray::segment(o, light - o, 1.0)));
-            open_down += usize::from(!acc.occluded(&Ray::segment(o, below - o, 1.0)));
+            blocked_up += usize::from(acc.backend().occluded(&Ray::segment(o, light - o, 1.0)));
+            open_down += usize::from(!acc.backend().occluded(&Ray::segment(o, below - o, 1.0)));
         }
     }
     summary(format!(
@@ -392,7 +398,7 @@ fn secondary_rays_leave_a_sphere() {
                 let from = c + rng.dir() * (4.0 * s);
                 let to = c + rng.dir() * (0.9 * s);
                 let ray = Ray::new(from, (to - from).normalize());
-                let Some(hit) = acc.intersect(&ray) else {
+                let Some(hit) = acc.backend().intersect(&ray) else {
                     continue;
                 };
                 n += 1;
@@ -403,9 +409,9 @@ fn secondary_rays_leave_a_sphere() {
                     w = -w;
                 }
                 let out = Ray::new(spawn(&sc, &hit, ng), w);
-                rehit += usize::from(acc.intersect(&out).is_some());
+                rehit += usize::from(acc.backend().intersect(&out).is_some());
                 let inw = Ray::new(spawn(&sc, &hit, -ng), -w);
-                match acc.intersect(&inw) {
+                match acc.backend().intersect(&inw) {
                     None => missed_in += 1,
                     Some(h) => same_face += usize::from(h.prim == hit.prim),
                 }
@@ -537,7 +543,7 @@ fn glass_case(s: f32, c: Vec3, tol: [f64; 4]) -> Result<(), String> {
 }
 
 fn accel_hits(acc: &Accel, ray: &Ray) -> bool {
-    acc.intersect(ray).is_some()
+    acc.backend().intersect(ray).is_some()
 }
 
 /// Glass spheres of radius 1 and 1e4 refract at the analytic points: see [`glass_case`].
@@ -696,12 +702,6 @@ fn total_internal_reflection_along_shared_edges() {
     let leaks = tir_cases(&fast, 0.0);
     summary(format!("TIR along shared edges, fast modes (known limitation, not asserted): {} of 8 runs escape: {leaks:?}", leaks.len()));
 }
-
-/// The cube [-1, 1]^3 with outward faces.
-const CUBE: &str = r#"Shape "trianglemesh" "point3 P" [
-  -1 -1 -1  1 -1 -1  1 1 -1  -1 1 -1
-  -1 -1 1  1 -1 1  1 1 1  -1 1 1 ]
-  "integer indices" [ 0 2 1 0 3 2  4 5 6 4 6 7  0 1 5 0 5 4  3 7 6 3 6 2  0 4 7 0 7 3  1 2 6 1 6 5 ]"#;
 
 /// A point light at the centre of a glass cube (eta 1.5) inside a black diffuse box. A photon
 /// whose direction has every |d_i| < c = sqrt(1 - 1/eta^2) is totally reflected at every face
@@ -983,7 +983,7 @@ AttributeEnd
         for a in 0..3 {
             for b in 0..3 {
                 let target = mesh.positions[a] * 0.5 + mesh.positions[b] * 0.5;
-                let Some(h) = acc.intersect(&Ray::new(cam, target - cam)) else {
+                let Some(h) = acc.backend().intersect(&Ray::new(cam, target - cam)) else {
                     continue;
                 };
                 if h.mesh < 2 {

@@ -8,11 +8,14 @@
 //! - its `direct` component against the direct-lighting integrator (a different estimator:
 //!   no MIS on diffuse surfaces);
 //! - bit-identical images on 1 and 2 threads.
-use photon::accel::{Accel, AccelOptions, BackendKind};
+mod common;
+
+use common::render_with;
+use photon::accel::BackendKind;
 use photon::camera::Camera;
 use photon::imageio::metrics::{compare, match_sizes, MaskOptions, Metrics};
 use photon::imageio::{read_exr, RgbImage};
-use photon::integrator::{self, IntegratorKind, RenderOutput, RenderSettings};
+use photon::integrator::{IntegratorKind, RenderOutput};
 use photon::math::{Vec2, Vec3};
 use photon::scene::{loader, FilterDesc, Scene};
 use std::path::{Path, PathBuf};
@@ -28,24 +31,7 @@ fn render(
     (w, h, spp): (u32, u32, u32),
     threads: usize,
 ) -> RenderOutput {
-    render_seeded(scene, kind, backend, (w, h, spp), threads, 0)
-}
-
-/// [`render`] with sample streams of run `seed`.
-fn render_seeded(
-    scene: &Scene,
-    kind: IntegratorKind,
-    backend: BackendKind,
-    (w, h, spp): (u32, u32, u32),
-    threads: usize,
-    seed: u64,
-) -> RenderOutput {
-    let accel = Accel::build(scene, backend, AccelOptions::default()).expect("accel builds");
-    let mut settings = RenderSettings::from_scene(scene).expect("integrator settings");
-    (settings.width, settings.height, settings.spp) = (w, h, spp);
-    settings.seed = seed;
-    let pool = photon::tools::thread_pool(threads).expect("thread pool");
-    pool.install(|| integrator::render(scene, &accel, &settings, kind, &|_, _| {}))
+    render_with(scene, kind, backend, (w, h, spp), threads, 0)
 }
 
 /// The scene with a box pixel filter covering exactly one pixel (a pixel-area average, as a
@@ -283,7 +269,7 @@ fn cornell_direct_component_matches_direct_integrator() {
     let path = render(&scene, IntegratorKind::Path, BackendKind::Embree, size, 0);
     // Another seed, so that the two estimates are independent (with the same streams the
     // light samples at the first hit would coincide).
-    let direct = render_seeded(
+    let direct = render_with(
         &scene,
         IntegratorKind::Direct,
         BackendKind::Embree,

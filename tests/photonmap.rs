@@ -6,6 +6,9 @@
 //! - caustic focus: a glass ball (n = 1.5, radius R) under a distant light focuses at
 //!   f = n R / (2 (n - 1)) from its centre;
 //! - the shared Cornell box against its Tungsten reference.
+mod common;
+
+use common::CUBE;
 use photon::accel::{Accel, AccelOptions, BackendKind};
 use photon::imageio::metrics::{compare, match_sizes, MaskOptions};
 use photon::imageio::read_exr;
@@ -49,12 +52,6 @@ fn trace_settings(global: u64, caustic: u64, projection_maps: bool) -> TraceSett
         pattern: Pattern::Stratified,
     }
 }
-
-/// The six faces of the cube [-1, 1]^3, wound so their normals point outwards.
-const CUBE: &str = r#"Shape "trianglemesh" "point3 P" [
-  -1 -1 -1  1 -1 -1  1 1 -1  -1 1 -1
-  -1 -1 1  1 -1 1  1 1 1  -1 1 1 ]
-  "integer indices" [ 0 2 1 0 3 2  4 5 6 4 6 7  0 1 5 0 5 4  3 7 6 3 6 2  0 4 7 0 7 3  1 2 6 1 6 5 ]"#;
 
 #[test]
 fn furnace_radiance_is_le_over_one_minus_rho() {

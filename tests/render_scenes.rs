@@ -1,14 +1,15 @@
 //! End-to-end renders of the shared scenes: they load, render at reduced resolution with both
 //! backends, and every pixel is finite; the image does not depend on the thread count; the two
 //! backends give the same image up to noise.
-use photon::accel::{Accel, AccelOptions, BackendKind};
+mod common;
+
+use common::render_with;
+use photon::accel::BackendKind;
 use photon::imageio::metrics::{compare, MaskOptions};
 use photon::imageio::RgbImage;
-use photon::integrator::{self, IntegratorKind, RenderSettings};
+use photon::integrator::IntegratorKind;
 use photon::scene::{loader, Scene};
 use std::path::Path;
-
-mod common;
 
 fn render(
     scene: &Scene,
@@ -18,21 +19,15 @@ fn render(
     spp: u32,
     threads: usize,
 ) -> RgbImage {
-    render_with(scene, backend, (w, h, spp), threads, IntegratorKind::Direct)
-}
-
-fn render_with(
-    scene: &Scene,
-    backend: BackendKind,
-    (w, h, spp): (u32, u32, u32),
-    threads: usize,
-    kind: IntegratorKind,
-) -> RgbImage {
-    let accel = Accel::build(scene, backend, AccelOptions::default()).expect("accel builds");
-    let mut settings = RenderSettings::from_scene(scene).expect("integrator settings");
-    (settings.width, settings.height, settings.spp) = (w, h, spp);
-    let pool = photon::tools::thread_pool(threads).unwrap();
-    pool.install(|| integrator::render(scene, &accel, &settings, kind, &|_, _| {}).image)
+    render_with(
+        scene,
+        IntegratorKind::Direct,
+        backend,
+        (w, h, spp),
+        threads,
+        0,
+    )
+    .image
 }
 
 fn check_scene(path: &str, w: u32, h: u32) {
@@ -111,7 +106,7 @@ Shape "trianglemesh" "point3 P" [ 0.4 0.2 0  0.4 1 0  0.9 1 0  0.9 0.2 0 ] "inte
         IntegratorKind::Path,
         IntegratorKind::Direct,
     ] {
-        let img = render_with(&scene, BackendKind::Embree, (24, 24, 16), 0, kind);
+        let img = render_with(&scene, kind, BackendKind::Embree, (24, 24, 16), 0, 0).image;
         let mean: f64 = img.pixels.iter().flatten().map(|&v| v as f64).sum::<f64>()
             / (3 * img.pixels.len()) as f64;
         println!(
@@ -155,7 +150,7 @@ Shape "trianglemesh" "point3 P" [ -1 0 -1  1 0 -1  1 0 1  -1 0 1 ] "integer indi
     let dir = common::TempDir::new("photon-coat-twice");
     let scene = loader::load(&dir.write("room.pbrt", room)).expect("scene loads");
     let floor = |kind| {
-        let img = render_with(&scene, BackendKind::Embree, (32, 32, 256), 0, kind);
+        let img = render_with(&scene, kind, BackendKind::Embree, (32, 32, 256), 0, 0).image;
         let rows = &img.pixels[img.pixels.len() - 8 * 32..];
         rows.iter().flatten().map(|&v| v as f64).sum::<f64>() / (3 * rows.len()) as f64
     };

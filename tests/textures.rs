@@ -5,7 +5,7 @@
 //! has radiance albedo(uv) E / pi at every point; a bump map of slope g along u tilts the
 //! shading normal to normalize(-g, 1, 0) (per world unit), so the radiance there is
 //! albedo E cos / pi with cos = 1 / sqrt(1 + g^2).
-use photon::accel::{Accel, AccelOptions, BackendKind, RayQuery};
+use photon::accel::{Accel, AccelOptions, BackendKind};
 use photon::camera::Camera;
 use photon::integrator::{self, IntegratorKind, RenderSettings};
 use photon::interaction::SurfaceInteraction;
@@ -206,7 +206,7 @@ fn linear_height_field_tilts_the_shading_normal() {
     let want = Vec3::new(-SLOPE, 1.0, 0.0).normalize();
     for x in [-2.0f32, -0.5, 0.0, 1.3, 2.0] {
         let ray = Ray::new(Vec3::new(x, 3.0, 0.7), Vec3::new(0.0, -1.0, 0.0));
-        let hit = accel.intersect(&ray).expect("hits the floor");
+        let hit = accel.backend().intersect(&ray).expect("hits the floor");
         let mut si = SurfaceInteraction::new(&scene, &hit, &ray);
         // The winding makes the normal +y (displacement goes up).
         assert!(
@@ -220,7 +220,7 @@ fn linear_height_field_tilts_the_shading_normal() {
     }
     // Outside [0.25, 0.75] in u the clamped ramp is flat: no tilt.
     let ray = Ray::new(Vec3::new(4.0, 3.0, 0.0), Vec3::new(0.0, -1.0, 0.0));
-    let hit = accel.intersect(&ray).unwrap();
+    let hit = accel.backend().intersect(&ray).unwrap();
     let mut si = SurfaceInteraction::new(&scene, &hit, &ray);
     let _ = si.bsdf(&scene);
     assert!((si.ns - Vec3::Y).length() < 1e-6, "{}", si.ns);

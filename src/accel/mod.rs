@@ -5,7 +5,10 @@
 //! - `bvh`: the pure-Rust obvhs CWBVH, for cross-checking and benchmarking.
 //!
 //! Both answer with the same [`Hit`], so the renderer cannot tell which one answered. Hot loops
-//! dispatch through the closed enum [`Accel`], not a trait object.
+//! dispatch through the closed enum [`Accel`], not a trait object. Every query made through
+//! [`Accel`] names the [`RayKind`] it casts, so that a recording wrapper (`record.rs`,
+//! [`Accel::recording`]) can sample the rays of a real render by kind; the backends themselves
+//! ignore the kind.
 //!
 //! ## Alpha cut-outs
 //! A shape with `alpha` (`Shape "trianglemesh" ... "float alpha" 0.5` or `"texture alpha"
@@ -27,6 +30,7 @@
 //! not `1 - (1-a)^2`); a new ray (another sample, bounce or shadow ray) draws anew.
 pub mod bvh;
 pub mod embree;
+pub mod record;
 
 use crate::math::{Ray, Vec2, Vec3};
 use crate::scene::{interpolate_uv, Mesh, Scene};
@@ -83,6 +87,48 @@ impl fmt::Display for AccelError {
 
 impl std::error::Error for AccelError {}
 
+/// What a ray is cast for (the renderer names it with every query through [`Accel`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum RayKind {
+    /// From the camera through a pixel sample.
+    Camera,
+    /// A segment to a light sample (occlusion).
+    Shadow,
+    /// A final-gather ray from a diffuse point, and its specular continuations.
+    Gather,
+    /// The continuation of a camera path after a scattering event (specular and glossy bounces
+    /// of the photon mapper and the direct integrator, every bounce of the path tracer).
+    Bounce,
+    /// A leg of a photon path in pass 1.
+    Photon,
+}
+
+impl RayKind {
+    pub const ALL: [RayKind; 5] = [
+        RayKind::Camera,
+        RayKind::Shadow,
+        RayKind::Gather,
+        RayKind::Bounce,
+        RayKind::Photon,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            RayKind::Camera => "camera",
+            RayKind::Shadow => "shadow",
+            RayKind::Gather => "gather",
+            RayKind::Bounce => "bounce",
+            RayKind::Photon => "photon",
+        }
+    }
+}
+
+impl fmt::Display for RayKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// The method set every backend implements.
 pub trait RayQuery: Send + Sync {
     /// Closest hit with `t` in `[ray.tmin, ray.tmax]`, or `None`.
@@ -103,10 +149,11 @@ pub trait RayQuery: Send + Sync {
     }
 }
 
-/// The closed set of backends; what the renderer holds.
+/// The closed set of backends, or one of them recording its queries; what the renderer holds.
 pub enum Accel {
     Embree(embree::EmbreeAccel),
     Obvhs(bvh::BvhAccel),
+    Recording(Box<record::Recording>),
 }
 
 impl Accel {
@@ -122,39 +169,74 @@ impl Accel {
         })
     }
 
+    /// The backend that answers (through a recording: the wrapped one).
     pub fn kind(&self) -> BackendKind {
         match self {
             Accel::Embree(_) => BackendKind::Embree,
             Accel::Obvhs(_) => BackendKind::Obvhs,
+            Accel::Recording(r) => r.backend().kind(),
         }
     }
-}
 
-impl RayQuery for Accel {
+    /// `backend`, recording up to `capacity` rays per kind and query of the queries it answers,
+    /// chosen with `seed` (see [`record`]).
+    pub fn recording(backend: Accel, capacity: usize, seed: u64) -> Accel {
+        Accel::Recording(Box::new(record::Recording::new(backend, capacity, seed)))
+    }
+
+    /// Ends a recording: the wrapped backend and what was recorded (nothing when `self` was
+    /// not recording).
+    pub fn finish_recording(self) -> (Accel, record::RecordedRays) {
+        match self {
+            Accel::Recording(r) => r.finish(),
+            a => (a, record::RecordedRays::default()),
+        }
+    }
+
+    /// The backend itself, for tools that query it directly (nothing is recorded).
+    pub fn backend(&self) -> &dyn RayQuery {
+        match self {
+            Accel::Embree(a) => a,
+            Accel::Obvhs(a) => a,
+            Accel::Recording(r) => r.backend().backend(),
+        }
+    }
+
+    /// Closest hit of a ray of `kind` (see [`RayQuery::intersect`]).
     #[inline]
-    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+    pub fn intersect(&self, kind: RayKind, ray: &Ray) -> Option<Hit> {
         match self {
             Accel::Embree(a) => a.intersect(ray),
             Accel::Obvhs(a) => a.intersect(ray),
+            Accel::Recording(r) => r.intersect(kind, ray),
         }
     }
+
+    /// Occlusion of a ray of `kind` (see [`RayQuery::occluded`]).
     #[inline]
-    fn occluded(&self, ray: &Ray) -> bool {
+    pub fn occluded(&self, kind: RayKind, ray: &Ray) -> bool {
         match self {
             Accel::Embree(a) => a.occluded(ray),
             Accel::Obvhs(a) => a.occluded(ray),
+            Accel::Recording(r) => r.occluded(kind, ray),
         }
     }
-    fn intersect_batch(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+
+    /// Closest hits of a batch of rays of `kind`; `out.len() == rays.len()`.
+    pub fn intersect_batch(&self, kind: RayKind, rays: &[Ray], out: &mut [Option<Hit>]) {
         match self {
             Accel::Embree(a) => a.intersect_batch(rays, out),
             Accel::Obvhs(a) => a.intersect_batch(rays, out),
+            Accel::Recording(r) => r.intersect_batch(kind, rays, out),
         }
     }
-    fn occluded_batch(&self, rays: &[Ray], out: &mut [bool]) {
+
+    /// Occlusion of a batch of rays of `kind`; `out.len() == rays.len()`.
+    pub fn occluded_batch(&self, kind: RayKind, rays: &[Ray], out: &mut [bool]) {
         match self {
             Accel::Embree(a) => a.occluded_batch(rays, out),
             Accel::Obvhs(a) => a.occluded_batch(rays, out),
+            Accel::Recording(r) => r.occluded_batch(kind, rays, out),
         }
     }
 }

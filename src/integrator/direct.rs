@@ -12,7 +12,7 @@
 use super::photonmap::{self, Gather};
 use super::wavefront::{self, add, Component, PathState, Shade, Shadow, Wave, CAMERA_DIMS};
 use super::{charge, power_heuristic, RenderContext};
-use crate::accel::Hit;
+use crate::accel::{Hit, RayKind};
 use crate::bsdf::TransportMode;
 use crate::film::Radiance;
 use crate::interaction::SurfaceInteraction;
@@ -237,7 +237,7 @@ fn trace_gathers(ctx: &RenderContext, g: &mut Gathers, acc: &mut [Radiance]) {
     }
     g.rays.clear();
     g.rays.extend(g.pending.iter().map(|x| x.ray));
-    wavefront::intersect_batch(ctx, &g.rays, &mut g.hits);
+    wavefront::intersect_batch(ctx, RayKind::Gather, &g.rays, &mut g.hits);
     ctx.counters
         .secondary_rays
         .fetch_add(g.rays.len() as u64, Ordering::Relaxed);

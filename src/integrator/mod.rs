@@ -11,6 +11,7 @@ pub mod direct;
 pub mod passes;
 pub mod path;
 pub mod photonmap;
+pub mod record;
 pub mod wavefront;
 
 use crate::accel::Accel;

@@ -24,7 +24,7 @@
 //! in 2.8 s; hence the default of 2. Only what the scene needs is
 //! built: no caustic map without specular surfaces, no global map without diffuse ones.
 use super::{charge, RenderContext};
-use crate::accel::{Accel, Hit, RayQuery};
+use crate::accel::{Accel, Hit, RayKind};
 use crate::bsdf::TransportMode;
 use crate::interaction::SurfaceInteraction;
 use crate::light::Lights;
@@ -112,6 +112,15 @@ impl PhotonSettings {
         if !self.bounces_given {
             self.trace.max_bounces = max_depth.saturating_sub(1).max(1);
         }
+    }
+
+    /// Photon counts for a time budget of `budget_s` seconds: `base` photons per map at 4 s,
+    /// in proportion to the budget between 1 s and 32 s (pass 1 should stay a modest share of
+    /// the time), constant outside.
+    pub fn scale_for_budget(&mut self, budget_s: f64, base: u64) {
+        let n = (base as f64 * (budget_s / 4.0).clamp(0.25, 8.0)) as u64;
+        self.trace.global_photons = n;
+        self.trace.caustic_photons = n;
     }
 
     /// Reads the `photonmap` parameters (each marked used); others stay for the caller.
@@ -540,7 +549,7 @@ fn reflected(
         };
         throughput *= bs.f * (bs.wi.z.abs() / bs.pdf);
         ray = si.spawn_ray(si.frame.to_world(bs.wi));
-        hit = ctx.accel.intersect(&ray);
+        hit = ctx.accel.intersect(RayKind::Gather, &ray);
         ctx.counters
             .secondary_rays
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed);

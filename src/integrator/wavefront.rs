@@ -8,7 +8,7 @@
 //! [`BATCH`](crate::resources::BATCH) (and whatever the integrator defers, such as final-gather
 //! rays, is flushed the same way); then the continuations form the next wave.
 use super::{charge, tile_pixels, RenderContext};
-use crate::accel::{Hit, RayQuery};
+use crate::accel::{Hit, RayKind};
 use crate::film::Radiance;
 use crate::math::{Ray, Vec3};
 use crate::resources::BATCH;
@@ -116,12 +116,17 @@ pub trait Shade: Sync {
     fn flush(&self, _ctx: &RenderContext, _extra: &mut Self::Extra, _acc: &mut [Radiance]) {}
 }
 
-/// Closest hits of a batch, timed into `ray_ns`.
-pub fn intersect_batch(ctx: &RenderContext, rays: &[Ray], hits: &mut Vec<Option<Hit>>) {
+/// Closest hits of a batch of rays of `kind`, timed into `ray_ns`.
+pub fn intersect_batch(
+    ctx: &RenderContext,
+    kind: RayKind,
+    rays: &[Ray],
+    hits: &mut Vec<Option<Hit>>,
+) {
     hits.clear();
     hits.resize(rays.len(), None);
     let t = Instant::now();
-    ctx.accel.intersect_batch(rays, hits);
+    ctx.accel.intersect_batch(kind, rays, hits);
     charge(&ctx.counters.ray_ns, t);
 }
 
@@ -161,26 +166,31 @@ pub fn render_tile<S: Shade>(
         ctx.counters
             .camera_rays
             .fetch_add(b.paths.len() as u64, Ordering::Relaxed);
+        // The first wave is the camera rays, every later one their bounces.
+        let mut kind = RayKind::Camera;
         while !b.paths.is_empty() {
-            wave(ctx, shader, &mut b, &mut extra, &mut acc);
+            wave(ctx, shader, kind, &mut b, &mut extra, &mut acc);
+            kind = RayKind::Bounce;
         }
     }
     let inv = 1.0 / spp as f32;
     acc.into_iter().map(|r| r * inv).collect()
 }
 
-/// Traces the rays of `b.paths` as one batch, shades the hits, resolves their shadow rays and
-/// deferred work in bounded batches, and leaves the continuing paths in `b.paths`.
+/// Traces the rays of `b.paths` (all of `kind`) as one batch, shades the hits, resolves their
+/// shadow rays and deferred work in bounded batches, and leaves the continuing paths in
+/// `b.paths`.
 fn wave<S: Shade>(
     ctx: &RenderContext,
     shader: &S,
+    kind: RayKind,
     b: &mut Buffers,
     extra: &mut S::Extra,
     acc: &mut [Radiance],
 ) {
     b.rays.clear();
     b.rays.extend(b.paths.iter().map(|p| p.ray));
-    intersect_batch(ctx, &b.rays, &mut b.hits);
+    intersect_batch(ctx, kind, &b.rays, &mut b.hits);
     b.shadows.clear();
     b.next.clear();
     for (path, hit) in b.paths.drain(..).zip(b.hits.iter()) {
@@ -228,7 +238,7 @@ fn resolve_shadows(
     occluded.clear();
     occluded.resize(rays.len(), false);
     let t = Instant::now();
-    ctx.accel.occluded_batch(rays, occluded);
+    ctx.accel.occluded_batch(RayKind::Shadow, rays, occluded);
     charge(&ctx.counters.ray_ns, t);
     ctx.counters
         .shadow_rays

@@ -25,7 +25,7 @@
 //! - Photons trapped by total internal reflection end at `max_bounces`.
 use super::projection::ProjectionMap;
 use super::{Photon, PhotonMap};
-use crate::accel::{Accel, RayQuery};
+use crate::accel::{Accel, RayKind};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::interaction::SurfaceInteraction;
 use crate::light::{bounding_sphere, Lights};
@@ -346,7 +346,7 @@ fn trace_one(
     let mut first_specular = false;
     for bounce in 0..s.max_bounces {
         rays += 1;
-        let Some(hit) = accel.intersect(&ray) else {
+        let Some(hit) = accel.intersect(RayKind::Photon, &ray) else {
             break;
         };
         let mut si = SurfaceInteraction::new(scene, &hit, &ray);
@@ -458,7 +458,7 @@ fn unrestricted_efficiency(
             } else {
                 spawn_origin(e.p, e.err, e.n)
             };
-            if let Some(h) = accel.intersect(&Ray::new(o, e.dir)) {
+            if let Some(h) = accel.intersect(RayKind::Photon, &Ray::new(o, e.dir)) {
                 let material = &scene.materials[scene.meshes[h.mesh as usize].material as usize];
                 hits += material.kind.flags().has_specular() as u64;
             }

@@ -2,6 +2,7 @@
 //! film, sampler, pixel filter and integrator settings. Immutable once loaded.
 //!
 //! `loader` reads it from the pbrt-v4 scene format (see the README for the supported subset).
+pub mod generate;
 pub mod loader;
 
 use crate::math::{Mat4, Vec2, Vec3};

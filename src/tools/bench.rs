@@ -3,14 +3,17 @@
 //!
 //! Per scene (the shared scenes, `scenes/*.pbrt`, generated bumpy spheres of 100k and 1M
 //! triangles, or those named with `--scene` / `--generated`):
-//! - **accel**: build time per backend; rays/s on the rays of a real render (see
-//!   [`super::rays`]): coherent camera rays (closest hit), incoherent secondary rays taken
-//!   from photon paths (closest hit) and shadow rays (occlusion), for Embree's single-ray
-//!   calls (`x1`), its 8-wide packet calls (`x8`) and obvhs, on 1 and 2 threads;
+//! - **accel**: build time per backend; rays/s on the rays a real render casts, recorded
+//!   through a wrapper around Embree (a small photon-mapper render of the scene, see
+//!   [`crate::integrator::record`]; whole batches of up to 256 rays are kept, as coherent as
+//!   the render casts them): camera rays (closest hit), incoherent secondary rays of photon
+//!   paths (closest hit) and shadow rays (occlusion), for Embree's single-ray calls (`x1`),
+//!   its 8-wide packet calls (`x8`) and obvhs, on 1 and 2 threads;
 //! - **photon**: global photons traced per second per backend and thread count; kd-tree build
 //!   time and k-nearest queries per second (k = 50, 200; unbounded radius, one thread) at the
-//!   diffuse points the camera sees, ours against a [`KnnBaseline`] over the same points and
-//!   queries; radiance (irradiance) estimates per second with the scene's lookup settings.
+//!   diffuse points the recorded camera rays hit, ours against a [`KnnBaseline`] over the
+//!   same points and queries; radiance (irradiance) estimates per second with the scene's
+//!   lookup settings.
 //!
 //! Every number is the median of `--runs` timed runs. Output: a table on stdout; `--csv` and
 //! `--json` write every row. `--quick` runs a reduced set in about a minute.
@@ -18,18 +21,19 @@
 //! The baseline kd-tree is `kiddo`, a dev-dependency: `cargo bench` (the `benches/photon.rs`
 //! target) passes it in; `photon bench` itself has no baseline and leaves those columns
 //! empty, so the shipped binary does not depend on kiddo.
-use super::meshgen::{short_count, sphere_scene};
-use super::rays::{record, DiffusePoint, RecordedRays};
 use super::{thread_pool, ToolError};
 use crate::accel::bvh::BvhAccel;
 use crate::accel::embree::{Device, EmbreeAccel};
-use crate::accel::{Accel, AccelOptions, BackendKind, RayQuery};
+use crate::accel::record::Query;
+use crate::accel::{Accel, AccelOptions, BackendKind, RayKind};
+use crate::integrator::record::{self, DiffusePoint, Recorded};
 use crate::integrator::RenderSettings;
 use crate::light::Lights;
 use crate::math::{Ray, Vec3};
 use crate::photon::estimate::{irradiance_with, EstimateParams};
 use crate::photon::trace::{self, TraceSettings};
 use crate::photon::{KdTree, KnnResult};
+use crate::scene::generate::{short_count, sphere_scene};
 use crate::scene::{loader, Scene};
 use rayon::prelude::*;
 use std::fmt::Write as _;
@@ -248,28 +252,29 @@ enum Call {
     Packet,
 }
 
-/// Rays per second of `accel` on `rays` on the current pool: closest hits or occlusion.
-fn ray_rate(accel: &Accel, rays: &[Ray], closest: bool, call: Call) -> f64 {
+/// Rays per second of `accel` on `rays` (of `kind`) on the current pool: closest hits or
+/// occlusion.
+fn ray_rate(accel: &Accel, kind: RayKind, rays: &[Ray], query: Query, call: Call) -> f64 {
     let t = Instant::now();
     rays.par_chunks(CHUNK).for_each(|c| {
-        if closest {
+        if query == Query::Closest {
             let mut out = vec![None; c.len()];
             match call {
-                Call::Packet => accel.intersect_batch(c, &mut out),
+                Call::Packet => accel.intersect_batch(kind, c, &mut out),
                 Call::Single => c
                     .iter()
                     .zip(out.iter_mut())
-                    .for_each(|(r, o)| *o = accel.intersect(r)),
+                    .for_each(|(r, o)| *o = accel.intersect(kind, r)),
             }
             black_box(out);
         } else {
             let mut out = vec![false; c.len()];
             match call {
-                Call::Packet => accel.occluded_batch(c, &mut out),
+                Call::Packet => accel.occluded_batch(kind, c, &mut out),
                 Call::Single => c
                     .iter()
                     .zip(out.iter_mut())
-                    .for_each(|(r, o)| *o = accel.occluded(r)),
+                    .for_each(|(r, o)| *o = accel.occluded(kind, r)),
             }
             black_box(out);
         }
@@ -312,8 +317,12 @@ fn bench_scene(
         .iter()
         .map(|&t| thread_pool(t).map(|p| (t, p)))
         .collect::<Result<_, _>>()?;
-    let accels = bench_builds(&mut rec, scene, &pools)?;
-    let rays = record(scene, &accels[0], &settings, plan.rays, 0);
+    let [embree, obvhs] = bench_builds(&mut rec, scene, &pools)?;
+    let (embree, rays) = pools[0]
+        .1
+        .install(|| record::record(scene, embree, &settings, plan.rays, 0))
+        .map_err(ToolError)?;
+    let accels = [embree, obvhs];
     bench_rays(&mut rec, &accels, &rays, &pools);
     bench_photons(
         &mut rec, scene, &settings, &accels, &rays, plan, &pools, baseline,
@@ -326,7 +335,7 @@ fn bench_builds(
     rec: &mut Recorder,
     scene: &Scene,
     pools: &[(usize, rayon::ThreadPool)],
-) -> Result<Vec<Accel>, ToolError> {
+) -> Result<[Accel; 2], ToolError> {
     let (mut embree, mut obvhs) = (None, None);
     for (threads, pool) in pools {
         let device = Device::new(&format!("threads={threads}"))?;
@@ -344,7 +353,7 @@ fn bench_builds(
         });
     }
     let fail = |kind| ToolError(format!("{kind} build failed"));
-    Ok(vec![
+    Ok([
         Accel::Embree(embree.ok_or_else(|| fail("embree"))?),
         Accel::Obvhs(obvhs.ok_or_else(|| fail("obvhs"))?),
     ])
@@ -354,15 +363,16 @@ fn bench_builds(
 fn bench_rays(
     rec: &mut Recorder,
     accels: &[Accel],
-    rays: &RecordedRays,
+    rec_rays: &Recorded,
     pools: &[(usize, rayon::ThreadPool)],
 ) {
-    let sets: [(&str, &[Ray], bool); 3] = [
-        ("camera", &rays.camera, true),
-        ("secondary", &rays.photon, true),
-        ("shadow", &rays.shadow, false),
+    let sets = [
+        ("camera", RayKind::Camera, Query::Closest),
+        ("secondary", RayKind::Photon, Query::Closest),
+        ("shadow", RayKind::Shadow, Query::Occlusion),
     ];
-    for (metric, set, closest) in sets {
+    for (metric, kind, query) in sets {
+        let set = rec_rays.rays.get(kind, query);
         if set.is_empty() {
             continue;
         }
@@ -375,9 +385,9 @@ fn bench_rays(
                     BackendKind::Obvhs => &[(Call::Single, "obvhs")],
                 };
                 for &(call, imp) in calls {
-                    pool.install(|| ray_rate(accel, set, closest, call)); // warm-up
+                    pool.install(|| ray_rate(accel, kind, set, query, call)); // warm-up
                     rec.measure(metric, imp, *threads, "1/s", || {
-                        pool.install(|| ray_rate(accel, set, closest, call))
+                        pool.install(|| ray_rate(accel, kind, set, query, call))
                     });
                 }
             }
@@ -392,7 +402,7 @@ fn bench_photons(
     scene: &Scene,
     settings: &RenderSettings,
     accels: &[Accel],
-    rays: &RecordedRays,
+    rays: &Recorded,
     plan: &Plan,
     pools: &[(usize, rayon::ThreadPool)],
     baseline: &mut Option<&mut dyn KnnBaseline>,

@@ -52,26 +52,19 @@ pub struct Method {
     pub adjust: fn(&mut RenderSettings, f64),
 }
 
-/// Photon counts grow with the budget (pass 1 should stay a modest share of it).
-pub fn scale_photons(s: &mut RenderSettings, budget: f64, base: u64) {
-    let n = (base as f64 * (budget / 4.0).clamp(0.25, 8.0)) as u64;
-    s.photon.trace.global_photons = n;
-    s.photon.trace.caustic_photons = n;
-}
-
 /// The methods compared by default.
 pub fn methods() -> Vec<Method> {
     vec![
         Method {
             name: "photonmap",
             kind: IntegratorKind::Photonmap,
-            adjust: |s, b| scale_photons(s, b, 200_000),
+            adjust: |s, b| s.photon.scale_for_budget(b, 200_000),
         },
         Method {
             name: "photonmap-gather16",
             kind: IntegratorKind::Photonmap,
             adjust: |s, b| {
-                scale_photons(s, b, 200_000);
+                s.photon.scale_for_budget(b, 200_000);
                 s.photon.gather_samples = 16;
             },
         },
@@ -79,7 +72,7 @@ pub fn methods() -> Vec<Method> {
             name: "photonmap-lookup30",
             kind: IntegratorKind::Photonmap,
             adjust: |s, b| {
-                scale_photons(s, b, 200_000);
+                s.photon.scale_for_budget(b, 200_000);
                 s.photon.global_lookup = 30;
                 s.photon.caustic_lookup = 30;
             },
@@ -87,7 +80,7 @@ pub fn methods() -> Vec<Method> {
         Method {
             name: "photonmap-photons4x",
             kind: IntegratorKind::Photonmap,
-            adjust: |s, b| scale_photons(s, b, 800_000),
+            adjust: |s, b| s.photon.scale_for_budget(b, 800_000),
         },
         Method {
             name: "progressive",

@@ -1,7 +1,10 @@
 //! `photon crosscheck SCENE`: do Embree and obvhs answer the rays of a real render alike?
 //!
-//! 1. Records up to `--rays` rays of each kind (camera, shadow, photon paths, final gather)
-//!    of a render of the scene as the file sets it up (see [`super::rays`]).
+//! 1. Renders the scene (photon mapper, the file's settings made small: see
+//!    [`crate::integrator::record`]) through a recording wrapper around Embree and keeps up to
+//!    `--rays` of the rays it casts of each kind (camera, shadow, final gather, specular
+//!    bounce, photon path), chosen by a seeded hash of the rays; prints how many of each kind
+//!    the render cast and how many were kept.
 //! 2. Answers each ray with both backends (closest hit and occlusion) and reports, per kind:
 //!    hit/miss disagreements, hits on different triangles, occlusion disagreements, and the
 //!    |t| difference (absolute and relative; max and 99.9th percentile) where both hit the
@@ -20,11 +23,11 @@
 //! Exit code 1 when, for any kind, the unexplained disagreements or all disagreements exceed
 //! their fraction of the rays, or the 99.9th percentile of the relative |t| difference or the
 //! images' relMSE exceed their thresholds (defaults in `--help`).
-use super::rays::{self, RayKind, RecordedRays};
 use super::{parse_resolution, thread_pool, ToolError};
-use crate::accel::{Accel, AccelOptions, BackendKind, Hit, RayQuery};
+use crate::accel::record::{Query, RaySet, RecordedRays};
+use crate::accel::{Accel, AccelOptions, BackendKind, Hit, RayKind, RayQuery};
 use crate::imageio::metrics::{self, MaskOptions};
-use crate::integrator::{self, IntegratorKind, RenderSettings};
+use crate::integrator::{self, record, IntegratorKind, RenderSettings};
 use crate::math::Ray;
 use crate::scene::{loader, Scene};
 use rayon::prelude::*;
@@ -46,7 +49,8 @@ pub const DEFAULT_MAX_RELMSE: f64 = 1e-3;
 pub struct CrosscheckOptions {
     /// The pbrt-v4 scene file.
     pub scene: PathBuf,
-    /// Rays of each kind (camera, shadow, photon, gather) to record and compare (at most 10^8).
+    /// Rays of each kind (camera, shadow, gather, bounce, photon) to record and compare (at
+    /// most 10^8; the memory they need is checked first).
     #[arg(long, default_value_t = 100_000, value_parser = super::usize_in(1, 100_000_000))]
     pub rays: usize,
     /// Seed of the render (sample streams) and of the choice of recorded rays.
@@ -165,7 +169,12 @@ impl Spread {
 #[derive(Clone, Debug, Default)]
 pub struct KindReport {
     pub kind: Option<RayKind>,
+    /// The query the render cast these rays with.
+    pub query: Option<Query>,
+    /// Rays compared.
     pub rays: usize,
+    /// Rays of this kind and query the recorded render cast (`rays` of them were kept).
+    pub cast: u64,
     /// Closest hits found by the reference and the candidate.
     pub hits: [usize; 2],
     /// One backend hits, the other misses.
@@ -321,15 +330,15 @@ impl Classifier<'_> {
     }
 }
 
-/// Compares `candidate` with `reference` on `rays` of one kind.
+/// Compares `candidate` with `reference` on the rays of one recorded set.
 pub fn compare_kind(
     scene: &Scene,
     reference: &dyn RayQuery,
     candidate: &dyn RayQuery,
-    kind: RayKind,
-    rays: &[Ray],
+    set: &RaySet,
     show: usize,
 ) -> KindReport {
+    let rays = &set.rays;
     let a = answer_all(reference, rays);
     let b = answer_all(candidate, rays);
     let lights = crate::light::Lights::new(scene);
@@ -338,8 +347,10 @@ pub fn compare_kind(
         radius: lights.scene_sphere().1,
     };
     let mut r = KindReport {
-        kind: Some(kind),
+        kind: Some(set.kind),
+        query: Some(set.query),
         rays: rays.len(),
+        cast: set.seen,
         ..Default::default()
     };
     let (mut t_abs, mut t_rel) = (Vec::new(), Vec::new());
@@ -384,7 +395,7 @@ pub fn compare_kind(
     r
 }
 
-/// Compares the backends on every kind of `rays`.
+/// Compares the backends on every recorded set of `rays`.
 pub fn compare_rays(
     scene: &Scene,
     reference: &dyn RayQuery,
@@ -392,9 +403,9 @@ pub fn compare_rays(
     rays: &RecordedRays,
     show: usize,
 ) -> Vec<KindReport> {
-    RayKind::ALL
+    rays.sets
         .iter()
-        .map(|&k| compare_kind(scene, reference, candidate, k, rays.get(k), show))
+        .map(|set| compare_kind(scene, reference, candidate, set, show))
         .collect()
 }
 
@@ -441,8 +452,8 @@ pub fn table(reports: &[KindReport]) -> String {
     let _ =
         writeln!(
         s,
-        "{:<7} {:>7} {:>15} {:>8} {:>9} {:>6} {:>9} {:>9} {:>9} {:>9}  classes of disagreeing rays",
-        "kind", "rays", "hits ref/cand", "hit/miss", "other-tri", "occl", "|dt| max", "|dt| p999",
+        "{:<7} {:<8} {:>9} {:>7} {:>15} {:>8} {:>9} {:>6} {:>9} {:>9} {:>9} {:>9}  classes of disagreeing rays",
+        "kind", "query", "cast", "rays", "hits ref/cand", "hit/miss", "other-tri", "occl", "|dt| max", "|dt| p999",
         "rel max", "rel p999"
     );
     for r in reports {
@@ -454,8 +465,10 @@ pub fn table(reports: &[KindReport]) -> String {
             .collect();
         let _ = writeln!(
             s,
-            "{:<7} {:>7} {:>15} {:>8} {:>9} {:>6} {:>9.2e} {:>9.2e} {:>9.2e} {:>9.2e}  {}",
+            "{:<7} {:<8} {:>9} {:>7} {:>15} {:>8} {:>9} {:>6} {:>9.2e} {:>9.2e} {:>9.2e} {:>9.2e}  {}",
             r.kind.map_or("?", |k| k.name()),
+            r.query.map_or("?", |q| q.name()),
+            r.cast,
             r.rays,
             format!("{}/{}", r.hits[0], r.hits[1]),
             r.hit_miss,
@@ -493,8 +506,10 @@ pub fn to_json(reports: &[KindReport], relmse: Option<f64>, failures: &[String])
                 .map(|(c, n)| format!("\"{}\":{n}", c.name()))
                 .collect();
             format!(
-                "{{\"kind\":\"{}\",\"rays\":{},\"hits\":[{},{}],\"hit_miss\":{},\"other_triangle\":{},\"occlusion\":{},\"same_triangle\":{},\"t_abs_max\":{},\"t_abs_p999\":{},\"t_rel_max\":{},\"t_rel_p999\":{},\"disagreeing\":{},\"classes\":{{{}}}}}",
+                "{{\"kind\":\"{}\",\"query\":\"{}\",\"cast\":{},\"rays\":{},\"hits\":[{},{}],\"hit_miss\":{},\"other_triangle\":{},\"occlusion\":{},\"same_triangle\":{},\"t_abs_max\":{},\"t_abs_p999\":{},\"t_rel_max\":{},\"t_rel_p999\":{},\"disagreeing\":{},\"classes\":{{{}}}}}",
                 r.kind.map_or("?", |k| k.name()),
+                r.query.map_or("?", |q| q.name()),
+                r.cast,
                 r.rays, r.hits[0], r.hits[1], r.hit_miss, r.other_triangle, r.occlusion,
                 r.same_triangle, num(r.t_abs.max), num(r.t_abs.p999), num(r.t_rel.max),
                 num(r.t_rel.p999), r.disagreeing, classes.join(",")
@@ -554,10 +569,31 @@ fn compare_images(
     Ok((m.overall.relmse, secs))
 }
 
+/// What was recorded: the render's size and, per kind, rays kept of rays cast.
+pub fn describe_recording(r: &record::Recorded) -> String {
+    let s = &r.settings;
+    let kinds: Vec<String> = r
+        .rays
+        .sets
+        .iter()
+        .map(|k| format!("{} {} of {}", k.kind, k.rays.len(), k.seen))
+        .collect();
+    format!(
+        "recorded render: photon mapper {}x{}, {} spp, {} + {} photons; rays kept of cast: {}",
+        s.width,
+        s.height,
+        s.spp,
+        s.photon.trace.global_photons,
+        s.photon.trace.caustic_photons,
+        kinds.join(", ")
+    )
+}
+
 /// Runs the cross-check; `Ok(false)` when a threshold is exceeded.
 pub fn run(opts: &CrosscheckOptions) -> Result<bool, ToolError> {
     let scene = loader::load(&opts.scene)?;
-    let settings = RenderSettings::from_scene(&scene)?;
+    let mut settings = RenderSettings::from_scene(&scene)?;
+    settings.seed = opts.seed;
     let pool = thread_pool(opts.threads)?;
     let t = Instant::now();
     let embree =
@@ -565,11 +601,19 @@ pub fn run(opts: &CrosscheckOptions) -> Result<bool, ToolError> {
     let obvhs =
         pool.install(|| Accel::build(&scene, BackendKind::Obvhs, AccelOptions::default()))?;
     let build_s = t.elapsed().as_secs_f64();
+    let (embree, recorded) = pool
+        .install(|| record::record(&scene, embree, &settings, opts.rays, opts.seed))
+        .map_err(ToolError)?;
     let t = Instant::now();
-    let recorded = rays::record(&scene, &embree, &settings, opts.rays, opts.seed);
-    let record_s = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let reports = pool.install(|| compare_rays(&scene, &embree, &obvhs, &recorded, opts.show));
+    let reports = pool.install(|| {
+        compare_rays(
+            &scene,
+            embree.backend(),
+            obvhs.backend(),
+            &recorded.rays,
+            opts.show,
+        )
+    });
     let compare_s = t.elapsed().as_secs_f64();
     let image = if opts.no_render {
         None
@@ -603,9 +647,10 @@ pub fn run(opts: &CrosscheckOptions) -> Result<bool, ToolError> {
         scene.triangle_count(),
         opts.seed,
         build_s,
-        record_s,
+        recorded.seconds,
         compare_s
     );
+    println!("{}", describe_recording(&recorded));
     print!("{}", table(&reports));
     for r in &reports {
         for e in &r.examples {
@@ -662,7 +707,7 @@ mod tests {
             indices: vec![[0, 1, 2]],
             ..Default::default()
         };
-        let scene = super::super::meshgen::sphere_scene(10);
+        let scene = crate::scene::generate::sphere_scene(10);
         let mut scene = scene;
         scene.meshes = vec![mesh];
         let c = Classifier {

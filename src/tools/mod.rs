@@ -5,10 +5,8 @@ pub mod compare;
 pub mod converge;
 pub mod crosscheck;
 pub mod merge;
-pub mod meshgen;
 pub mod output;
 pub mod passes;
-pub mod rays;
 pub mod render;
 
 use std::fmt;

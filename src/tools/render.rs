@@ -1,7 +1,7 @@
 //! `photon render SCENE`: load, build the accelerator, render, write EXR + PNG, print stats.
 use super::output::Outputs;
 use super::{float_in, parse_resolution, thread_pool, usize_in, ToolError};
-use crate::accel::{Accel, AccelOptions, BackendKind};
+use crate::accel::{Accel, AccelOptions, BackendKind, RayKind};
 use crate::imageio::{self, ExrPixel};
 use crate::integrator::{self, IntegratorKind, RenderSettings};
 use crate::resources::{
@@ -378,7 +378,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
             let given =
                 opts.photon.global_photons.is_some() || opts.photon.caustic_photons.is_some();
             if !given && !settings.photon.progressive {
-                super::converge::scale_photons(&mut settings, budget, 200_000);
+                settings.photon.scale_for_budget(budget, 200_000);
             }
             let (out, spp) = pool.install(|| {
                 integrator::render_for_time(&scene, &accel, &settings, opts.integrator, budget)
@@ -416,7 +416,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     );
     if opts.stats {
         print_stats(&out, pool.current_num_threads());
-        print_raw_rate(&scene, &accel, &settings, &out);
+        print_raw_rate(&scene, accel, &settings, &out, &pool);
     }
     let bad = out.image.count_nonfinite();
     if bad > 0 {
@@ -506,36 +506,96 @@ pub fn parse_duration(s: &str) -> Result<f64, String> {
     }
 }
 
-/// The raw rate of the same backend on the same kinds of rays outside the render loop (rays
-/// recorded as `photon crosscheck` does, queried in 8-wide batches on one thread), next to the
-/// rate measured inside the render.
+/// Replays of each kind of recorded rays; the fastest gives that kind's raw rate.
+const RAW_RUNS: usize = 5;
+
+/// The fastest of [`RAW_RUNS`] replays of `rays` of `kind` through `accel` on this thread, in
+/// batches of up to 256 consecutive rays (the chunks the recording keeps): seconds per ray.
+fn replay_seconds_per_ray(accel: &Accel, kind: RayKind, rays: &[crate::math::Ray]) -> f64 {
+    use crate::accel::record::CHUNK;
+    let mut best = f64::INFINITY;
+    for _ in 0..RAW_RUNS {
+        let t = Instant::now();
+        for batch in rays.chunks(CHUNK) {
+            if kind == RayKind::Shadow {
+                accel.occluded_batch(kind, batch, &mut [false; CHUNK][..batch.len()]);
+            } else {
+                accel.intersect_batch(kind, batch, &mut [None; CHUNK][..batch.len()]);
+            }
+        }
+        best = best.min(t.elapsed().as_secs_f64());
+    }
+    best / rays.len().max(1) as f64
+}
+
+/// The raw rate of the same backend on the rays a render casts, outside the render loop: a
+/// small render with these settings is recorded (as `photon crosscheck` does, 20,000 rays per
+/// kind, see [`crate::integrator::record`]); each kind the render loop counts (camera, shadow,
+/// and gather + bounce as secondary) is replayed on one thread, and the per-kind costs are
+/// weighted by the render's own counts of those kinds (gather and bounce split as the recording
+/// saw them), so that the raw rate has the render's mix. Printed next to the rate measured
+/// inside the render.
 fn print_raw_rate(
     scene: &crate::scene::Scene,
-    accel: &Accel,
+    accel: Accel,
     settings: &RenderSettings,
     out: &crate::integrator::RenderOutput,
+    pool: &rayon::ThreadPool,
 ) {
-    use crate::accel::RayQuery;
+    use crate::accel::record::Query;
     use std::sync::atomic::Ordering::Relaxed;
-    let rec = super::rays::record(scene, accel, settings, 20_000, 1);
-    let t = Instant::now();
-    let mut n = 0usize;
-    for rays in [&rec.camera, &rec.gather] {
-        let mut hits = vec![None; rays.len()];
-        accel.intersect_batch(rays, &mut hits);
-        n += rays.len();
-    }
-    let mut occ = vec![false; rec.shadow.len()];
-    accel.occluded_batch(&rec.shadow, &mut occ);
-    n += rec.shadow.len();
-    let raw = n as f64 / t.elapsed().as_secs_f64().max(1e-9) / 1e6;
+    let recorded =
+        pool.install(|| crate::integrator::record::record(scene, accel, settings, 20_000, 1));
+    let (accel, rec) = match recorded {
+        Ok(r) => r,
+        Err(e) => {
+            println!("raw rate: not measured: {e}");
+            return;
+        }
+    };
     let c = &out.counters;
-    let rays = (c.camera_rays.load(Relaxed)
-        + c.secondary_rays.load(Relaxed)
-        + c.shadow_rays.load(Relaxed)) as f64;
-    let inside = rays / (c.ray_ns.load(Relaxed) as f64 * 1e-9).max(1e-9) / 1e6;
+    let seen = |k| {
+        rec.rays
+            .sets
+            .iter()
+            .find(|s| s.kind == k)
+            .map_or(0, |s| s.seen) as f64
+    };
+    let gather_share =
+        seen(RayKind::Gather) / (seen(RayKind::Gather) + seen(RayKind::Bounce)).max(1.0);
+    let secondary = c.secondary_rays.load(Relaxed) as f64;
+    let weights = [
+        (
+            RayKind::Camera,
+            Query::Closest,
+            c.camera_rays.load(Relaxed) as f64,
+        ),
+        (
+            RayKind::Shadow,
+            Query::Occlusion,
+            c.shadow_rays.load(Relaxed) as f64,
+        ),
+        (RayKind::Gather, Query::Closest, secondary * gather_share),
+        (
+            RayKind::Bounce,
+            Query::Closest,
+            secondary * (1.0 - gather_share),
+        ),
+    ];
+    let (mut rays, mut seconds, mut replayed) = (0.0, 0.0, 0);
+    for (kind, query, w) in weights {
+        let set = rec.rays.get(kind, query);
+        if set.is_empty() || w <= 0.0 {
+            continue;
+        }
+        rays += w;
+        seconds += w * replay_seconds_per_ray(&accel, kind, set);
+        replayed += set.len();
+    }
+    let raw = rays / seconds.max(1e-12) / 1e6;
+    let inside = c.total() as f64 / (c.ray_ns.load(Relaxed) as f64 * 1e-9).max(1e-9) / 1e6;
     println!(
-        "raw rate on {n} recorded camera/gather/shadow rays, 1 thread, 8-wide batches: {raw:.2} Mrays/s; inside the render {inside:.2} Mrays/s per thread ({:.0}% of raw)",
+        "raw rate on {replayed} recorded camera/shadow/gather/bounce rays, 1 thread, batches of <= 256, weighted by the render's counts: {raw:.2} Mrays/s; inside the render {inside:.2} Mrays/s per thread ({:.0}% of raw)",
         100.0 * inside / raw.max(1e-9)
     );
 }

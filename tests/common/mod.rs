@@ -1,5 +1,7 @@
 //! Helpers shared by the integration tests (each test file that needs them says `mod common;`).
 //!
+//! A seeded generator for test inputs ([`Rng`]), a render of a scene at a given size and seed
+//! ([`render_with`]), the cube that several scenes are built around ([`CUBE`]), and
 //! Runs of the `photon` binary on hostile input: a run under an
 //! address-space cap (`prlimit --as`) and a timeout, and the checks every such run must pass
 //! (exit 0 or 2; on 2 exactly one stderr line that says where the problem is; no panic, no
@@ -274,4 +276,66 @@ impl Drop for TempDir {
     fn drop(&mut self) {
         let _ = std::fs::remove_dir_all(&self.0);
     }
+}
+
+/// SplitMix64: a small seeded generator for test inputs.
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in `0..n` (0 when `n` is 0).
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next_u64() % n.max(1) as u64) as usize
+    }
+
+    /// Uniform in [0, 1).
+    pub fn f(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
+    }
+
+    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.f()
+    }
+
+    /// Uniform direction on the unit sphere.
+    pub fn dir(&mut self) -> photon::math::Vec3 {
+        let z = self.range(-1.0, 1.0);
+        let phi = self.range(0.0, std::f32::consts::TAU);
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        photon::math::Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    }
+}
+
+/// The six faces of the cube [-1, 1]^3 as a pbrt-v4 `trianglemesh`, wound so their normals
+/// point outwards.
+pub const CUBE: &str = r#"Shape "trianglemesh" "point3 P" [
+  -1 -1 -1  1 -1 -1  1 1 -1  -1 1 -1
+  -1 -1 1  1 -1 1  1 1 1  -1 1 1 ]
+  "integer indices" [ 0 2 1 0 3 2  4 5 6 4 6 7  0 1 5 0 5 4  3 7 6 3 6 2  0 4 7 0 7 3  1 2 6 1 6 5 ]"#;
+
+/// Renders `scene` with `kind` on `backend` at `w x h`, `spp` samples, sample streams of run
+/// `seed`, on `threads` threads (0 = all).
+pub fn render_with(
+    scene: &photon::scene::Scene,
+    kind: photon::integrator::IntegratorKind,
+    backend: photon::accel::BackendKind,
+    (w, h, spp): (u32, u32, u32),
+    threads: usize,
+    seed: u64,
+) -> photon::integrator::RenderOutput {
+    use photon::accel::{Accel, AccelOptions};
+    let accel = Accel::build(scene, backend, AccelOptions::default()).expect("accel builds");
+    let mut settings =
+        photon::integrator::RenderSettings::from_scene(scene).expect("integrator settings");
+    (settings.width, settings.height, settings.spp) = (w, h, spp);
+    settings.seed = seed;
+    let pool = photon::tools::thread_pool(threads).expect("thread pool");
+    pool.install(|| photon::integrator::render(scene, &accel, &settings, kind, &|_, _| {}))
 }
