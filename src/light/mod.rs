@@ -287,6 +287,51 @@ impl Lights {
         })
     }
 
+    /// A caustic photon from light `i`: as [`Self::emit`], except that an infinite light aims
+    /// it at the bounding spheres `targets` of the specular objects (only photons whose first
+    /// hit is specular can start a caustic path): the origin is uniform over the discs those
+    /// spheres cast on the emission plane along the photon's direction, a disc chosen by its
+    /// area with `u_pos.x`, and the flux divides by that density (`k / (pi sum r^2)` where `k`
+    /// discs overlap at the origin).
+    pub fn emit_caustic(
+        &self,
+        scene: &Scene,
+        i: usize,
+        u_pos: Vec2,
+        u_dir: Vec2,
+        targets: &[(Vec3, f32)],
+    ) -> Option<Emission> {
+        let Light::Infinite { map } = &scene.lights[i] else {
+            return self.emit(scene, i, u_pos, u_dir);
+        };
+        let areas: Vec<f32> = targets.iter().map(|&(_, r)| r * r).collect();
+        let (t, _, rem) = crate::sampling::warp::Distribution1D::new(&areas).sample(u_pos.x)?;
+        let (w, le, pdf_dir) = map.sample(u_dir)?;
+        let dir = -w;
+        let frame = Frame::from_normal(dir);
+        let (c, r) = targets[t];
+        let d = square_to_disk_concentric(Vec2::new(rem, u_pos.y)) * r;
+        // On the plane 2R upstream of the scene's centre, across from the target's centre.
+        let upstream = (c - self.center).dot(dir) + 2.0 * self.radius;
+        let p = c - dir * upstream + frame.s * d.x + frame.t * d.y;
+        let covering = targets
+            .iter()
+            .filter(|&&(c, r)| {
+                let v = c - p;
+                (v - dir * v.dot(dir)).length_squared() <= r * r
+            })
+            .count()
+            .max(1);
+        let total: f32 = areas.iter().sum::<f32>() * PI;
+        Some(Emission {
+            p,
+            n: Vec3::ZERO,
+            err: Vec3::ZERO,
+            dir,
+            flux: le * (total / (covering as f32 * pdf_dir)),
+        })
+    }
+
     /// The sample domain a projection map of light `i` restricts.
     pub fn emission_domain(&self, scene: &Scene, i: usize) -> EmissionDomain {
         match scene.lights[i] {

@@ -16,6 +16,8 @@
 //!   so that estimates can leave out what shadow rays and the caustic map already give; the
 //!   caustic map keeps light -> specular+ -> diffuse paths, shot with projection maps.
 //! - Photons trapped by total internal reflection end at `max_bounces`.
+//! - Caustic photons of infinite lights start only where they can reach a specular object
+//!   ([`Lights::emit_caustic`]): a disc of the scene's radius would waste almost all of them.
 use super::projection::ProjectionMap;
 use super::{Photon, PhotonMap};
 use crate::accel::{Accel, RayQuery};
@@ -304,7 +306,11 @@ fn trace_one(
         return (false, 0);
     };
     *restricted = u;
-    let Some(e) = lights.emit(scene, light, u_pos, u_dir) else {
+    let e = match kind {
+        MapKind::Global => lights.emit(scene, light, u_pos, u_dir),
+        MapKind::Caustic => lights.emit_caustic(scene, light, u_pos, u_dir, targets),
+    };
+    let Some(e) = e else {
         return (false, 0);
     };
     let mut power = e.flux * (map.fraction() / count as f32);
