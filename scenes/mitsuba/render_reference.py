@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
-"""Independent reference for scenes/cornell-glass.pbrt, rendered by Mitsuba 3 (llvm_ad_rgb, `path`).
+"""Independent references for scenes/cornell-glass.pbrt and scenes/cornell-textured.pbrt, rendered
+by Mitsuba 3 (llvm_ad_rgb, `path`).
 
-Renders cornell-glass.xml (next to this script) in passes of PASS_SPP samples per pixel, each with its
+Renders --xml (cornell-glass.xml by default, next to this script) in passes of PASS_SPP samples per pixel, each with its
 own seed, accumulates them in float64 and, after every pass, rewrites
   OUT.exr   the mean of all passes (float32 RGB EXR), so a partial result is always usable, and
   OUT.json  spp, seconds, Mitsuba version, variant and the reference's estimated own relMSE.
@@ -14,6 +15,8 @@ Reproduce (what was run; ~25 min on a shared 2-core machine, nice'd):
   python3 -m venv venv && venv/bin/pip install mitsuba==3.9.1 numpy
   nice -n 10 venv/bin/python render_reference.py --minutes 25 \
       --out /work/mitsuba-ref/cornell-glass-reference --json cornell-glass-reference.json
+  nice -n 5 venv/bin/python render_reference.py --xml cornell-textured.xml --res 64 \
+      --pass-spp 4096 --minutes 6 --out cornell-textured-reference-64   (49152 spp, 158 s)
 LLVM: Dr.Jit needs a recent libLLVM. The system's LLVM 14/15 failed here ("LLVM ERROR: Cannot
 select: fminimum"), so DRJIT_LIBLLVM_PATH is pointed at rustup's libLLVM 22 when it is not set.
 """
@@ -34,12 +37,13 @@ ap.add_argument('--pass-spp', type=int, default=256)
 ap.add_argument('--res', type=int, default=256)
 ap.add_argument('--seed0', type=int, default=1000, help='pass i uses seed seed0 + i')
 ap.add_argument('--variant', default='llvm_ad_rgb')
+ap.add_argument('--xml', default='cornell-glass.xml', help='scene, relative to this script')
 ap.add_argument('--out', default='cornell-glass-reference', help='EXR path without .exr')
 ap.add_argument('--json', default=None, help='JSON path (default: OUT.json)')
 args = ap.parse_args()
 
 mi.set_variant(args.variant)
-xml = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'cornell-glass.xml')
+xml = os.path.join(os.path.dirname(os.path.abspath(__file__)), args.xml)
 t0 = time.time()
 scene = mi.load_file(xml, res=str(args.res), spp=str(args.pass_spp))
 
@@ -51,7 +55,7 @@ def write(sums, counts, wall, render_s, passes):
     os.replace(tmp, args.out + '.exr')
     info = {
         'renderer': f'mitsuba {mi.__version__} {args.variant} path',
-        'scene': 'scenes/mitsuba/cornell-glass.xml (= scenes/cornell-glass.pbrt)',
+        'scene': f'scenes/mitsuba/{args.xml} (= scenes/{args.xml[:-4]}.pbrt)',
         'mitsuba_version': mi.__version__,
         'variant': args.variant,
         'max_depth': 9,

@@ -178,7 +178,8 @@ pub fn needed_maps(scene: &Scene) -> (bool, bool) {
             .map(|m| &scene.materials[m.material as usize].kind)
     };
     let any_diffuse = kinds().any(|k| k.flags().has_diffuse() && !k.is_black());
-    let any_specular = kinds().any(|k| k.flags().has_specular());
+    // Caustic paths bounce off specular or glossy surfaces (see photon::trace).
+    let any_specular = kinds().any(|k| k.flags().has_specular() || k.flags().has_glossy());
     let lights = !scene.lights.is_empty();
     (lights && any_diffuse, lights && any_diffuse && any_specular)
 }
@@ -383,8 +384,8 @@ const GATHER_SPECULAR_BOUNCES: u32 = 4;
 /// emitter hit straight away, or the infinite lights when the ray leaves the scene, is the
 /// BSDF-sampling half of direct lighting (MIS-weighted against the shadow rays); otherwise the reflected radiance of the first diffuse surface the
 /// ray reaches (through at most a few specular/glossy bounces), from the irradiance cache or
-/// the global map. Emitters reached through specular bounces count zero: the caustic map has
-/// that light.
+/// the global map. Emitters reached through specular or glossy bounces count zero: the caustic
+/// map has that light (L (S|G)+ paths, see `photon::trace`).
 pub fn gather_radiance(
     ctx: &RenderContext,
     pass: &PhotonPass,
@@ -487,7 +488,7 @@ pub fn describe(pass: &PhotonPass) -> Vec<String> {
     let st = &pass.maps.stats;
     let bytes = std::mem::size_of::<Photon>();
     let mut lines = vec![format!(
-        "photons: global {} emitted -> {} stored; caustic {} emitted -> {} stored; {} bytes/photon; traced in {:.3} s ({:.2} Mphotons/s), kd-trees built in {:.3} s",
+        "photons: global {} emitted -> {} stored; caustic {} emitted -> {} stored; {} bytes/photon; traced in {:.3} s ({:.2} Mphotons/s, {:.2} rays/photon), kd-trees built in {:.3} s",
         st.global_emitted,
         st.global_stored,
         st.caustic_emitted,
@@ -495,6 +496,7 @@ pub fn describe(pass: &PhotonPass) -> Vec<String> {
         bytes,
         st.trace_seconds,
         (st.global_emitted + st.caustic_emitted) as f64 / st.trace_seconds.max(1e-9) / 1e6,
+        st.rays as f64 / (st.global_emitted + st.caustic_emitted).max(1) as f64,
         st.build_seconds
     )];
     if st.caustic_emitted > 0 {

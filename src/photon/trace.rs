@@ -11,10 +11,14 @@
 //!   power becomes `power * w / q`: Jensen's Russian roulette (fewer photons of unchanged
 //!   power) and, per channel, RGB roulette (`rho_c / rho_avg`). The power already carries the
 //!   cosine; it is never multiplied in again.
-//! - **Storage**, only at diffuse surfaces: the global map keeps every diffuse hit, flagged
-//!   `DIRECT` when it came straight from the light and `CAUSTIC` after specular bounces only,
-//!   so that estimates can leave out what shadow rays and the caustic map already give; the
-//!   caustic map keeps light -> specular+ -> diffuse paths, shot with projection maps.
+//! - **Storage**, only at surfaces with a diffuse lobe: the global map keeps every such hit,
+//!   flagged `DIRECT` when it came straight from the light and `CAUSTIC` after caustic bounces
+//!   only, so that estimates can leave out what shadow rays and the caustic map already give;
+//!   the caustic map keeps light -> (specular|glossy)+ -> diffuse paths (Jensen's L S+ D with
+//!   glossy reflectors counted as S: light that reaches a room only through a metal lamp shade
+//!   is a caustic, carried by photons instead of rare camera paths), shot with projection maps
+//!   aimed at every specular or glossy object. A bounce is a caustic bounce when the surface
+//!   has no diffuse lobe ([`is_caustic_surface`]).
 //! - Photons trapped by total internal reflection end at `max_bounces`.
 //! - Caustic photons of infinite lights start only where they can reach a specular object
 //!   ([`Lights::emit_caustic`]): a disc of the scene's radius would waste almost all of them.
@@ -91,16 +95,22 @@ struct Landing {
     normal: Vec3,
 }
 
-/// The bounding spheres of all specular objects: the targets of the caustic projection maps.
-pub fn specular_targets(scene: &Scene) -> Vec<(Vec3, f32)> {
+/// Whether photons pass a surface with these lobes as a caustic bounce: it has specular or
+/// glossy lobes and no diffuse one (photons are stored at diffuse lobes, and the caustic path
+/// ends there).
+pub fn is_caustic_surface(flags: crate::bsdf::BxdfFlags) -> bool {
+    (flags.has_specular() || flags.has_glossy()) && !flags.has_diffuse()
+}
+
+/// The bounding spheres of all objects that may be caustic surfaces somewhere: the targets of
+/// the caustic projection maps.
+pub fn caustic_targets(scene: &Scene) -> Vec<(Vec3, f32)> {
     scene
         .meshes
         .iter()
         .filter(|m| {
-            scene.materials[m.material as usize]
-                .kind
-                .flags()
-                .has_specular()
+            let f = scene.materials[m.material as usize].kind.flags();
+            f.has_specular() || f.has_glossy()
         })
         .map(|m| m.sphere.unwrap_or_else(|| bounding_sphere(&m.positions)))
         .collect()
@@ -132,7 +142,7 @@ pub fn trace(scene: &Scene, accel: &Accel, lights: &Lights, s: &TraceSettings) -
     let start = Instant::now();
     let mut stats = TraceStats::default();
     let powers = lights.powers(scene);
-    let targets = specular_targets(scene);
+    let targets = caustic_targets(scene);
     let global = if s.global_photons > 0 {
         let counts = allocate(s.global_photons, &powers);
         stats.global_emitted = counts.iter().sum();
@@ -328,7 +338,8 @@ fn trace_one(
     };
     let mut ray = Ray::new(o, e.dir);
     let mut rays = 0;
-    let mut specular_only = true;
+    // Every bounce so far was a caustic one (specular or glossy, no diffuse lobe).
+    let mut caustic_chain = true;
     let mut first_specular = false;
     for bounce in 0..s.max_bounces {
         rays += 1;
@@ -338,18 +349,19 @@ fn trace_one(
         let mut si = SurfaceInteraction::new(scene, &hit, &ray);
         let bsdf = si.bsdf(scene);
         let flags = bsdf.flags();
+        let caustic_surface = is_caustic_surface(flags);
         if bounce == 0 {
-            first_specular = flags.has_specular();
+            first_specular = caustic_surface;
         }
         let dir = -si.wo_world;
         let facing = if si.ng.dot(dir) < 0.0 { si.ng } else { -si.ng };
         if flags.has_diffuse() {
             let store = match kind {
                 MapKind::Global => true,
-                MapKind::Caustic => specular_only && bounce > 0,
+                MapKind::Caustic => caustic_chain && bounce > 0,
             };
             if store && power.max_element() > 0.0 {
-                let flags = match (bounce, specular_only) {
+                let flags = match (bounce, caustic_chain) {
                     (0, _) => Photon::DIRECT,
                     (_, true) => Photon::CAUSTIC,
                     _ => 0,
@@ -360,14 +372,14 @@ fn trace_one(
                 });
             }
         }
-        if kind == MapKind::Caustic && !flags.has_specular() {
-            break; // a caustic path ends at its first non-specular surface
+        if kind == MapKind::Caustic && !caustic_surface {
+            break; // a caustic path ends at its first surface with a diffuse lobe
         }
         let Some(sc) = scatter(&si, &bsdf, sampler) else {
             break;
         };
         power *= sc.power_scale;
-        specular_only &= sc.specular;
+        caustic_chain &= caustic_surface;
         ray = sc.ray;
     }
     (first_specular, rays)
@@ -440,7 +452,8 @@ fn unrestricted_efficiency(
             };
             if let Some(h) = accel.intersect(&Ray::new(o, e.dir)) {
                 let material = &scene.materials[scene.meshes[h.mesh as usize].material as usize];
-                hits += material.kind.flags().has_specular() as u64;
+                let f = material.kind.flags();
+                hits += (f.has_specular() || f.has_glossy()) as u64;
             }
         }
     }

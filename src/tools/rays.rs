@@ -28,7 +28,7 @@ use crate::interaction::SurfaceInteraction;
 use crate::light::Lights;
 use crate::math::{spawn_origin, Frame, Ray, Vec2, Vec3};
 use crate::photon::projection::ProjectionMap;
-use crate::photon::trace::{allocate, scatter, specular_targets, MapKind, TraceSettings};
+use crate::photon::trace::{allocate, caustic_targets, scatter, MapKind, TraceSettings};
 use crate::sampling::warp::square_to_cosine_hemisphere;
 use crate::sampling::{hash, permute, strata, Sampler};
 use crate::scene::Scene;
@@ -334,7 +334,7 @@ fn photon_paths(
         MapKind::Caustic => t.caustic_photons,
     };
     let counts = allocate(total, &powers);
-    let targets = specular_targets(scene);
+    let targets = caustic_targets(scene);
     let maps: Vec<ProjectionMap> = (0..powers.len())
         .map(|i| match kind {
             MapKind::Caustic if t.projection_maps && counts[i] > 0 => {
