@@ -161,9 +161,12 @@ impl EnvMap {
         (pdf > 0.0).then(|| (w, self.texel(x, y), pdf / (4.0 * PI)))
     }
 
-    /// Emitted power through the scene's bounding sphere of radius `radius`.
+    /// Emitted power through the scene's bounding sphere of radius `radius` (computed in f64,
+    /// at most `f32::MAX`: a huge scene under a bright sky must not make it infinite).
     pub fn power(&self, radius: f32) -> f32 {
-        4.0 * PI * PI * radius * radius * scalar_power(self.mean)
+        let r = radius as f64;
+        let p = 4.0 * std::f64::consts::PI.powi(2) * r * r * scalar_power(self.mean) as f64;
+        p.min(f32::MAX as f64) as f32
     }
 
     /// Illuminance (the cosine-weighted integral of `L`) on a surface facing `+z` of the

@@ -283,7 +283,7 @@ impl Lights {
             n: Vec3::ZERO,
             err: Vec3::ZERO,
             dir,
-            flux: le * (PI * self.radius * self.radius / pdf),
+            flux: finite_flux(le, PI as f64 * (self.radius as f64).powi(2) / pdf as f64),
         })
     }
 
@@ -322,13 +322,13 @@ impl Lights {
             })
             .count()
             .max(1);
-        let total: f32 = areas.iter().sum::<f32>() * PI;
+        let total = areas.iter().map(|&a| a as f64).sum::<f64>() * PI as f64;
         Some(Emission {
             p,
             n: Vec3::ZERO,
             err: Vec3::ZERO,
             dir,
-            flux: le * (total / (covering as f32 * pdf_dir)),
+            flux: finite_flux(le, total / (covering as f64 * pdf_dir as f64)),
         })
     }
 
@@ -369,6 +369,14 @@ impl Lights {
             .map(|i| self.power(scene, i).max(0.0))
             .collect()
     }
+}
+
+/// `le * k` computed in f64 and kept finite (at most `f32::MAX` per channel): an infinite
+/// light's photon flux grows with the scene's area.
+fn finite_flux(le: Vec3, k: f64) -> Vec3 {
+    (le.as_dvec3() * k)
+        .min(glam::DVec3::splat(f32::MAX as f64))
+        .as_vec3()
 }
 
 /// A (not minimal) bounding sphere of points: the centre of their box, and the farthest point.
