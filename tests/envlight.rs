@@ -126,7 +126,7 @@ fn chi2_critical(df: f64) -> f64 {
 fn image_map_sampling_matches_its_pdf_and_integral() {
     let n = 16;
     let image = test_image(n);
-    let map = EnvMap::new(&image, 1.0, rotation());
+    let map = EnvMap::new(image.clone(), 1.0, rotation());
     let texel_sa = 4.0 * PI / (n * n) as f64;
 
     // The pdf integrates to 1 over the sphere.
@@ -205,8 +205,8 @@ fn image_map_sampling_matches_its_pdf_and_integral() {
 #[test]
 fn the_transform_turns_the_map() {
     let image = test_image(16);
-    let plain = EnvMap::new(&image, 1.0, Mat3::IDENTITY);
-    let turned = EnvMap::new(&image, 2.0, rotation());
+    let plain = EnvMap::new(image.clone(), 1.0, Mat3::IDENTITY);
+    let turned = EnvMap::new(image.clone(), 2.0, rotation());
     for w in sphere_grid(50) {
         let p = equal_area_sphere_to_square(w);
         let centre = (p * 16.0).floor() + Vec2::splat(0.5);

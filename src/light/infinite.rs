@@ -64,21 +64,19 @@ impl PartialEq for EnvMap {
 impl EnvMap {
     /// A map from a square image times `scale` (negative and non-finite texels count as 0;
     /// the loader rejects non-finite ones first), oriented by the rotation `world_from_light`.
-    pub fn new(image: &Image, scale: f32, world_from_light: Mat3) -> EnvMap {
+    /// Takes the image's texels (no copy: an environment image can be large).
+    pub fn new(image: Image, scale: f32, world_from_light: Mat3) -> EnvMap {
         debug_assert_eq!(image.width, image.height);
         let res = image.width;
-        let texels: Vec<Vec3> = image
-            .texels
-            .iter()
-            .map(|t| {
-                let t = *t * scale;
-                if t.is_finite() {
-                    t.max(Vec3::ZERO)
-                } else {
-                    Vec3::ZERO
-                }
-            })
-            .collect();
+        let mut texels = image.texels;
+        for t in texels.iter_mut() {
+            let v = *t * scale;
+            *t = if v.is_finite() {
+                v.max(Vec3::ZERO)
+            } else {
+                Vec3::ZERO
+            };
+        }
         let weights: Vec<f32> = texels.iter().map(|&t| luminance(t).max(0.0)).collect();
         let sum = texels
             .iter()
@@ -109,7 +107,7 @@ impl EnvMap {
             height: 1,
             texels: vec![l],
         };
-        EnvMap::new(&image, 1.0, Mat3::IDENTITY)
+        EnvMap::new(image, 1.0, Mat3::IDENTITY)
     }
 
     /// Texels per side.

@@ -343,7 +343,7 @@ fn infinite(
                 .fold(0.0f32, |m, t| m.max(t.max_element()));
             let k = scaled(params, "scale", loc, Vec3::splat(big), scale as f64 * k)?;
             let k = if big > 0.0 { k.x / big } else { 0.0 };
-            EnvMap::new(&image, k, rotation)
+            EnvMap::new(image, k, rotation)
         }
         None => {
             let l = infinite_l(params)?;
