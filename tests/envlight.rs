@@ -532,7 +532,19 @@ fn bad_infinite_lights_are_located_errors() {
     nan.texels[5] = Vec3::new(1.0, f32::NAN, 1.0);
     dir.write("nan.pfm", pfm(&nan));
     dir.write("ok.pfm", pfm(&test_image(4)));
-    let cases: [(&str, &[&str]); 8] = [
+    dir.write(
+        "black.pfm",
+        pfm(&Image {
+            width: 4,
+            height: 4,
+            texels: vec![Vec3::ZERO; 16],
+        }),
+    );
+    let cases: [(&str, &[&str]); 9] = [
+        (
+            "LightSource \"infinite\" \"string filename\" \"black.pfm\" \"float illuminance\" 2",
+            &["black above the horizon"],
+        ),
         (
             "LightSource \"infinite\" \"string filename\" \"wide.pfm\"",
             &["4x2", "not square"],

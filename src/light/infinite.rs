@@ -153,8 +153,7 @@ impl EnvMap {
 
     /// A direction towards the environment, its radiance and its solid-angle density.
     pub fn sample(&self, u: Vec2) -> Option<(Vec3, Vec3, f32)> {
-        let (p, pdf) = self.dist.sample(u)?;
-        let (x, y) = self.dist.cell(p);
+        let (p, pdf, (x, y)) = self.dist.sample(u)?;
         let w = self.direction(p);
         (pdf > 0.0).then(|| (w, self.texel(x, y), pdf / (4.0 * PI)))
     }

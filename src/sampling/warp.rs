@@ -152,9 +152,10 @@ impl Distribution2D {
         }
     }
 
-    /// A point of the square for `u` and its density; keeps `u`'s stratification (each
-    /// coordinate is re-stretched inside its cell).
-    pub fn sample(&self, u: Vec2) -> Option<(Vec2, f32)> {
+    /// A point of the square for `u`, its density and its cell `(x, y)` (the point can round
+    /// onto the next cell's edge); keeps `u`'s stratification (each coordinate is re-stretched
+    /// inside its cell).
+    pub fn sample(&self, u: Vec2) -> Option<(Vec2, f32, (usize, usize))> {
         let (y, py, ry) = self.marginal.sample(u.y)?;
         let (x, px, rx) = self.rows[y].sample(u.x)?;
         let p = Vec2::new(
@@ -162,7 +163,7 @@ impl Distribution2D {
             (y as f32 + ry) / self.height as f32,
         );
         let pdf = py * px * (self.width * self.height) as f32;
-        Some((p.min(Vec2::splat(super::ONE_MINUS_EPSILON)), pdf))
+        Some((p.min(Vec2::splat(super::ONE_MINUS_EPSILON)), pdf, (x, y)))
     }
 
     /// The cell holding `p` (clamped to the grid).

@@ -334,7 +334,16 @@ fn infinite(
             let rotation = light_rotation(ctm, loc)?;
             let image = env_image(&base_dir.join(&name), loc)?;
             let k = match illuminance {
-                Some(e) => e as f64 / EnvMap::upper_illuminance(&image),
+                Some(e) => {
+                    let upper = EnvMap::upper_illuminance(&image);
+                    if upper <= 0.0 {
+                        let p = params.peek("illuminance").expect("given");
+                        return Err(
+                            p.err("the image is black above the horizon: no illuminance to scale")
+                        );
+                    }
+                    e as f64 / upper
+                }
                 None => 1.0,
             };
             let big = image
