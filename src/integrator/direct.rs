@@ -19,6 +19,7 @@ use crate::bsdf::TransportMode;
 use crate::film::Radiance;
 use crate::interaction::SurfaceInteraction;
 use crate::math::{Ray, Vec3};
+use crate::photon::guide::GuideSlot;
 use crate::photon::KnnResult;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
@@ -52,6 +53,8 @@ pub struct Gathers {
     rays: Vec<Ray>,
     hits: Vec<Option<Hit>>,
     buf: KnnResult,
+    /// Per pixel of the tile: the guide of its last primary diffuse point.
+    guides: Vec<Option<GuideSlot>>,
 }
 
 impl Shade for Direct {
@@ -109,6 +112,21 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<Ga
         Some(pass) if flags.has_diffuse() => photonmap::gather_count(pass),
         _ => 0,
     };
+    let guide = match &ctx.photons {
+        Some(pass) if gather_n > 0 => {
+            let x = &mut *wave.extra;
+            let slot = if path.depth == 0 {
+                if x.guides.len() <= path.pixel {
+                    x.guides.resize(path.pixel + 1, None);
+                }
+                Some(&mut x.guides[path.pixel])
+            } else {
+                None
+            };
+            photonmap::gather_guide(pass, &ctx.counters.lookup_ns, &si, &mut x.buf, slot)
+        }
+        _ => None,
+    };
 
     // Direct light by shadow rays.
     if flags.has_non_specular() && !ctx.lights.is_empty() {
@@ -130,7 +148,8 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<Ga
             } else if flags.has_glossy() {
                 power_heuristic(s.pdf, bsdf.pdf(wo, wi))
             } else if gather_n > 0 {
-                power_heuristic(ls as f32 * s.pdf, gather_n as f32 * bsdf.pdf(wo, wi))
+                let gather_pdf = photonmap::gather_pdf(&si, guide.as_ref(), s.wi);
+                power_heuristic(ls as f32 * s.pdf, gather_n as f32 * gather_pdf)
             } else {
                 1.0
             };
@@ -163,6 +182,7 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<Ga
             pass,
             &ctx.counters.lookup_ns,
             ls,
+            guide.as_ref(),
             &si,
             f_d,
             path.beta,

@@ -30,6 +30,7 @@ use crate::interaction::SurfaceInteraction;
 use crate::light::Lights;
 use crate::math::{Frame, Ray, Vec2, Vec3};
 use crate::photon::estimate::{irradiance_with, EstimateParams};
+use crate::photon::guide::{cosine_hemisphere_to_square, GatherGuide, GuideSlot};
 use crate::photon::trace::{self, PhotonMaps, TraceSettings};
 use crate::photon::{Kernel, KnnResult, Photon, PhotonMap};
 use crate::sampling::{strata, Pattern, Sampler};
@@ -50,6 +51,9 @@ pub struct PhotonSettings {
     pub kernel: Kernel,
     pub gather_samples: u32,
     pub final_gather: bool,
+    /// Gather directions drawn by the nearest photons' incoming light (see
+    /// [`crate::photon::guide`]) instead of by the cosine alone.
+    pub guided_gather: bool,
     pub irradiance_cache: bool,
     /// Progressive photon mapping (Knaus and Zwicker 2011): every pass traces fresh maps and
     /// its estimates use only the photons within a shrinking fraction of the k-nearest radius
@@ -81,6 +85,7 @@ impl Default for PhotonSettings {
             kernel: Kernel::Epanechnikov,
             gather_samples: 2,
             final_gather: true,
+            guided_gather: true,
             irradiance_cache: true,
             progressive: false,
             alpha: 2.0 / 3.0,
@@ -124,6 +129,7 @@ impl PhotonSettings {
         s.global_radius = radius(params, "globalradius", s.global_radius)?;
         s.caustic_radius = radius(params, "causticradius", s.caustic_radius)?;
         s.final_gather = params.get_bool("finalgather", s.final_gather)?;
+        s.guided_gather = params.get_bool("guidedgather", s.guided_gather)?;
         s.irradiance_cache = params.get_bool("irradiancecache", s.irradiance_cache)?;
         s.trace.projection_maps = params.get_bool("projectionmaps", s.trace.projection_maps)?;
         s.progressive = params.get_bool("progressive", s.progressive)?;
@@ -161,6 +167,8 @@ pub struct PhotonPass {
     /// Precomputed irradiance at a subset of the global photons: `power` holds the
     /// irradiance, `dir` the surface normal.
     pub cache: Option<PhotonMap>,
+    /// The global photons that took a diffuse bounce, for guiding the final gather.
+    pub guide_map: Option<PhotonMap>,
     pub settings: PhotonSettings,
     global_params: EstimateParams,
     caustic_params: EstimateParams,
@@ -230,9 +238,15 @@ pub fn prepare(
     } else {
         None
     };
+    let guide_map = if s.final_gather && s.guided_gather {
+        crate::photon::guide::indirect_map(maps.global.as_ref())
+    } else {
+        None
+    };
     PhotonPass {
         maps,
         cache,
+        guide_map,
         settings: s,
         global_params,
         caustic_params,
@@ -276,7 +290,7 @@ pub struct Gather {
     pub pixel: usize,
     pub ray: Ray,
     pub weight: Vec3,
-    /// Cosine-hemisphere density of the ray's direction (for MIS with shadow rays).
+    /// Solid-angle density of the ray's direction (for MIS with shadow rays).
     pub pdf: f32,
     /// Shadow rays taken at the gather's origin (for MIS).
     pub light_samples: u32,
@@ -295,13 +309,48 @@ pub struct DiffusePhotons {
 /// Dimensions of the sampler used per gather ray.
 pub const GATHER_DIMS: u32 = 2;
 
+/// The gather guide at the diffuse point `si` (see [`crate::photon::guide`]), when guiding is
+/// on and the nearest photons say enough; `slot` (the pixel's, for primary points) may hold
+/// one to reuse. Shadow rays need it first: their MIS weights use the density [`gather_pdf`]
+/// with which the gather would have picked their direction.
+pub fn gather_guide(
+    pass: &PhotonPass,
+    counters: &AtomicU64,
+    si: &SurfaceInteraction,
+    buf: &mut KnnResult,
+    slot: Option<&mut Option<GuideSlot>>,
+) -> Option<GatherGuide> {
+    let map = pass.guide_map.as_ref()?;
+    let t = Instant::now();
+    let frame = Frame::from_normal(si.facing_normal());
+    let max_r2 = pass.global_params.max_r2;
+    let guide = match slot {
+        Some(slot) => GuideSlot::get(slot, map, si.p, &frame, max_r2, buf),
+        None => GatherGuide::build(map, si.p, &frame, max_r2, buf),
+    };
+    charge(counters, t);
+    guide
+}
+
+/// The solid-angle density with which the final gather at `si` picks world direction `wi`.
+pub fn gather_pdf(si: &SurfaceInteraction, guide: Option<&GatherGuide>, wi: Vec3) -> f32 {
+    let frame = Frame::from_normal(si.facing_normal());
+    let local = frame.to_local(wi);
+    if local.z <= 0.0 {
+        return 0.0;
+    }
+    let q = guide.map_or(1.0, |g| g.pdf(cosine_hemisphere_to_square(local)));
+    q * local.z / std::f32::consts::PI
+}
+
 /// Photon-map radiance at the diffuse point `si` (diffuse BRDF value `f_d`), and its gather
-/// rays pushed to `gathers` with throughput `beta`.
+/// rays pushed to `gathers` with throughput `beta`, drawn by `guide` when there is one.
 #[allow(clippy::too_many_arguments)]
 pub fn at_diffuse(
     pass: &PhotonPass,
     counters: &AtomicU64,
     light_samples: u32,
+    guide: Option<&GatherGuide>,
     si: &SurfaceInteraction,
     f_d: Vec3,
     beta: Vec3,
@@ -338,7 +387,8 @@ pub fn at_diffuse(
         out.indirect = beta * f_d * e;
         return out;
     }
-    // Final gathering: stratified cosine-weighted directions; f cos / pdf = f_d pi.
+    // Final gathering: stratified directions, cosine-weighted and (when guided) moved towards
+    // where the nearest photons came from; f cos / pdf = f_d pi / q.
     let g = pass.settings.gather_samples.max(1);
     let (nx, ny) = strata(g);
     let frame = Frame::from_normal(n);
@@ -350,9 +400,10 @@ pub fn at_diffuse(
             ((k % nx) as f32 + j.x) / nx as f32,
             ((k / nx) as f32 + j.y) / ny as f32,
         );
+        let (u, q) = guide.map_or((u, 1.0), |gd| gd.sample(u));
         let local = crate::sampling::warp::square_to_cosine_hemisphere(u);
         let d = frame.to_world(local);
-        let pdf = local.z / std::f32::consts::PI;
+        let pdf = q * local.z / std::f32::consts::PI;
         let gs = Sampler::new(
             Pattern::Independent,
             sampler_key(sampler),
@@ -363,7 +414,7 @@ pub fn at_diffuse(
         gathers.push(Gather {
             pixel,
             ray: Ray::new(o, d),
-            weight,
+            weight: weight / q,
             pdf,
             light_samples,
             primary,

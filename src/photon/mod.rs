@@ -26,6 +26,7 @@
 //! assert!(e.x > 0.0 && r2 < 0.04);
 //! ```
 pub mod estimate;
+pub mod guide;
 pub mod kdtree;
 pub mod map;
 pub mod projection;

@@ -259,9 +259,11 @@ fn shoot(
             let (mut first_specular, mut rays) = (0u64, 0u64);
             let map = &maps[light];
             let n = counts[light];
+            let strata = crate::sampling::strata(n.max(1) as u32);
             for j in lo..hi {
                 let domain = hash(&[kind as u64, light as u64]);
-                let mut sampler = Sampler::new(s.pattern, s.seed, domain, j as u32, n as u32);
+                let mut sampler =
+                    Sampler::with_strata(s.pattern, s.seed, domain, j as u32, n as u32, strata);
                 let t = trace_one(
                     scene,
                     accel,

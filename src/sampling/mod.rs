@@ -87,17 +87,38 @@ pub struct Sampler {
     index: u32,
     count: u32,
     dim: u32,
+    /// `strata(count)` for the stratified pattern, worked out once.
+    strata: (u32, u32),
 }
 
 impl Sampler {
     /// Sample `index` of `count` in `domain` (e.g. a pixel's linear index), for run `seed`.
     pub fn new(pattern: Pattern, seed: u64, domain: u64, index: u32, count: u32) -> Self {
+        let strata = match pattern {
+            Pattern::Stratified => strata(count.max(1)),
+            _ => (1, count.max(1)),
+        };
+        Self::with_strata(pattern, seed, domain, index, count, strata)
+    }
+
+    /// [`Self::new`] with `strata(count)` already known (`strata` may take O(sqrt count)
+    /// steps: photon shooting works it out once per light, not once per photon).
+    pub fn with_strata(
+        pattern: Pattern,
+        seed: u64,
+        domain: u64,
+        index: u32,
+        count: u32,
+        strata: (u32, u32),
+    ) -> Self {
+        debug_assert!(pattern != Pattern::Stratified || strata.0 * strata.1 == count.max(1));
         Sampler {
             pattern,
             domain: hash(&[seed, domain]),
             index,
             count: count.max(1),
             dim: 0,
+            strata,
         }
     }
 
@@ -139,7 +160,7 @@ impl Sampler {
                 ((sx as f32 + jx) / n as f32, (sy as f32 + jy) / n as f32)
             }
             Pattern::Stratified => {
-                let (nx, ny) = strata(n);
+                let (nx, ny) = self.strata;
                 let s = permute(self.index, n, hash(&[self.domain, d as u64, 4]));
                 (
                     ((s % nx) as f32 + jx) / nx as f32,

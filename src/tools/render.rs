@@ -175,6 +175,9 @@ pub struct PhotonOverrides {
     /// Final gathering on or off (off shows the global map directly).
     #[arg(long)]
     pub final_gather: Option<bool>,
+    /// Final-gather directions guided by the nearest photons (Jensen 1995) or cosine only.
+    #[arg(long)]
+    pub guided_gather: Option<bool>,
     /// Christensen's precomputed irradiance for the gather lookups.
     #[arg(long)]
     pub irradiance_cache: Option<bool>,
@@ -219,6 +222,9 @@ impl PhotonOverrides {
         }
         if let Some(v) = self.final_gather {
             s.final_gather = v;
+        }
+        if let Some(v) = self.guided_gather {
+            s.guided_gather = v;
         }
         if let Some(v) = self.irradiance_cache {
             s.irradiance_cache = v;
