@@ -16,7 +16,11 @@
 //!   [`equal_area_sphere_to_square`] and reads the *nearest* texel (so radiance is constant
 //!   over each texel, and each texel covers a solid angle of `4 pi / N` for `N` texels);
 //! - light sampling draws a point of the square from a [`Distribution2D`] over the texels
-//!   (here by luminance), with solid-angle density `pdf_square / (4 pi)`;
+//!   (by luminance here, where pbrt-v4 weighs texels by their channel average), with
+//!   solid-angle density `pdf_square / (4 pi)`; a texel of zero weight has zero radiance, so
+//!   the density covers all the light;
+//! - caustic photons are aimed at the specular and glossy objects
+//!   ([`super::Lights::emit_caustic`]);
 //! - photons (`SampleLe`): a direction from the same distribution and an origin uniform on a
 //!   disc of the scene's bounding-sphere radius `R` perpendicular to it, outside the scene:
 //!   flux `Le / (pdf_dir * 1 / (pi R^2))`; the light's power is `4 pi^2 R^2 mean(L)`.
