@@ -205,19 +205,7 @@ impl<'s> SurfaceInteraction<'s> {
 
 /// Whether any texture of `m` reads its footprint, or `m` is bump mapped.
 fn material_needs_differentials(m: &Material) -> bool {
-    use crate::scene::{MaterialKind as K, Metal};
-    m.displacement.is_some()
-        || match &m.kind {
-            K::Diffuse { reflectance } => reflectance.needs_differentials(),
-            K::Dielectric { .. } => false,
-            K::Conductor { metal, roughness } => {
-                let metal = match metal {
-                    Metal::EtaK { eta, k } => eta.needs_differentials() || k.needs_differentials(),
-                    Metal::Reflectance(r) => r.needs_differentials(),
-                };
-                metal || roughness.u.needs_differentials() || roughness.v.needs_differentials()
-            }
-        }
+    m.displacement.is_some() || m.kind.textures().iter().any(|t| t.needs_differentials())
 }
 
 /// The `(du, dv)` that best explains the surface step `dp` (least squares against `dpdu`,

@@ -238,6 +238,14 @@ fn landings_per_photon(scene: &Scene, max_bounces: u32) -> f64 {
             MaterialKind::Diffuse { reflectance } => reflectance
                 .constant()
                 .map_or(1.0, |r| r.clamp(Vec3::ZERO, Vec3::ONE).element_sum() / 3.0),
+            // Coated diffuse, diffuse transmission: their albedo estimate (at uv 0,0).
+            kind if kind.flags().has_diffuse() => {
+                let b = crate::bsdf::Bsdf::new(kind, &crate::texture::TexCoord::default());
+                b.reflectance_estimate()
+                    .clamp(Vec3::ZERO, Vec3::ONE)
+                    .element_sum()
+                    / 3.0
+            }
             _ => 0.0,
         })
         .fold(0.0f32, f32::max) as f64;

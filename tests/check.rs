@@ -19,7 +19,7 @@ fn troubled_scene() -> String {
 Accelerator "bvh"
 WorldBegin
 Texture "wood" "spectrum" "imagemap" "string filename" "wood.png"
-MakeNamedMaterial "floor" "string type" "coateddiffuse" "texture reflectance" "wood"
+MakeNamedMaterial "floor" "string type" "hair" "texture reflectance" "wood"
 NamedMaterial "floor"
 {TRI}
 Shape "plymesh" "string filename" "missing.ply"
@@ -52,7 +52,7 @@ fn collect_mode_lists_every_problem_in_order() {
     let errs = lines_and_messages(&got.errors);
     let want: [(u32, &str); 7] = [
         (4, "wood.png"),
-        (5, "unsupported material type \"coateddiffuse\""),
+        (5, "unsupported material type \"hair\""),
         (8, "missing.ply"),
         (9, "participating media are not supported"),
         (10, "unknown directive \"Frobnicate\""),

@@ -569,7 +569,16 @@ fn diffuse(r: Vec3) -> Material {
 
 /// A smooth dielectric.
 fn dielectric(eta: f32) -> Material {
-    MaterialKind::Dielectric { eta }.into()
+    MaterialKind::Dielectric {
+        eta,
+        // As a file without roughness says: 0, remapped (pbrt-v4's default).
+        roughness: photon::scene::Roughness {
+            u: 0.0.into(),
+            v: 0.0.into(),
+            remap: true,
+        },
+    }
+    .into()
 }
 
 /// A conductor's constant (eta, k, alpha_u, alpha_v), or `None` for another material; a
@@ -609,7 +618,7 @@ fn materials() {
     assert_vec(eta, Vec3::new(0.200438, 0.924033, 1.102212), 3e-4);
     assert_vec(k, Vec3::new(3.912949, 2.452848, 2.142188), 3e-4);
     // Named glasses: the index at 550 nm (BK7: 1.51852 from Schott's Sellmeier fit).
-    let MaterialKind::Dielectric { eta } =
+    let MaterialKind::Dielectric { eta, .. } =
         material_of(r#"Material "dielectric" "spectrum eta" [ "glass-BK7" ]"#).kind
     else {
         panic!("not a dielectric")
@@ -1030,9 +1039,9 @@ fn error_unknown_and_unsupported_directives() {
         &["unsupported shape type \"hyperboloid\""],
     );
     assert_src_err(
-        "WorldBegin\nMaterial \"coateddiffuse\"\n",
+        "WorldBegin\nMaterial \"hair\"\n",
         2,
-        &["unsupported material type \"coateddiffuse\""],
+        &["unsupported material type \"hair\""],
     );
     assert_src_err(
         "WorldBegin\nMakeNamedMaterial \"x\"\n \"string type\" \"interface\"\n",
@@ -1163,9 +1172,9 @@ fn error_parameter_types_and_values() {
         &["lensradius"],
     );
     assert_src_err(
-        "WorldBegin\nMaterial \"dielectric\"\n \"float roughness\" 0.1\n",
+        "WorldBegin\nMaterial \"dielectric\"\n \"float roughness\" -0.1\n",
         3,
-        &["rough dielectrics"],
+        &["roughness must be finite and not negative"],
     );
     assert_src_err(
         "WorldBegin\nMaterial \"dielectric\"\n \"spectrum eta\" \"glass-XYZ\"\n",
@@ -2003,5 +2012,219 @@ fn object_instancing_errors() {
         ),
         6,
         &["object \"a\": the instance transform is singular"],
+    );
+}
+
+/// The materials of issue 9 with pbrt-v4's defaults, explicit values, and textures where
+/// pbrt-v4 allows them; each lands in the BSDF it names.
+#[test]
+fn coated_rough_and_translucent_materials() {
+    use photon::bsdf::{Bsdf, BxdfFlags as F};
+    use photon::scene::{Coat, Roughness};
+    use photon::texture::TexCoord;
+    let tc = TexCoord::default();
+    let bsdf = |m: &Material| Bsdf::new(&m.kind, &tc);
+    let constant = |u: f32, remap: bool| Roughness {
+        u: u.into(),
+        v: u.into(),
+        remap,
+    };
+
+    // Rough dielectric: roughness remapped (alpha = sqrt), u/v separately, remap off.
+    let m = material_of(r#"Material "dielectric" "float roughness" 0.04"#);
+    assert_eq!(
+        m.kind,
+        MaterialKind::Dielectric {
+            eta: 1.5,
+            roughness: constant(0.04, true)
+        }
+    );
+    let Bsdf::Dielectric(d) = bsdf(&m) else {
+        panic!("{m:?}")
+    };
+    assert!((d.distrib.alpha_x() - 0.2).abs() < 1e-6 && !d.is_smooth());
+    assert_eq!(
+        bsdf(&m).flags(),
+        F::REFLECTION | F::TRANSMISSION | F::GLOSSY
+    );
+    assert_eq!(m.kind.flags(), bsdf(&m).flags());
+    let m = material_of(
+        r#"Material "dielectric" "float uroughness" 0.1 "float vroughness" 0.3 "bool remaproughness" false "float eta" 1.33"#,
+    );
+    let Bsdf::Dielectric(d) = bsdf(&m) else {
+        panic!("{m:?}")
+    };
+    assert_eq!(
+        (d.eta, d.distrib.alpha_x(), d.distrib.alpha_y()),
+        (1.33, 0.1, 0.3)
+    );
+
+    // Thin dielectric.
+    let m = material_of(r#"Material "thindielectric""#);
+    assert_eq!(m.kind, MaterialKind::ThinDielectric { eta: 1.5 });
+    assert!(bsdf(&m).flags().is_specular_only());
+    let m = material_of(r#"Material "thindielectric" "spectrum eta" "glass-BK7""#);
+    let MaterialKind::ThinDielectric { eta } = m.kind else {
+        panic!("{m:?}")
+    };
+    assert!((eta - 1.5185).abs() < 1e-3, "{eta}");
+
+    // Diffuse transmission: defaults 0.25 and 0.25, scale multiplies, clamped per hit.
+    let m = material_of(r#"Material "diffusetransmission""#);
+    let Bsdf::DiffuseTransmission(d) = bsdf(&m) else {
+        panic!("{m:?}")
+    };
+    assert_eq!(
+        (d.reflectance, d.transmittance),
+        (Vec3::splat(0.25), Vec3::splat(0.25))
+    );
+    let m = material_of(
+        r#"Material "diffusetransmission" "rgb reflectance" [0.2 0.4 0.6] "rgb transmittance" [0.5 0.5 0.5] "float scale" 2"#,
+    );
+    let Bsdf::DiffuseTransmission(d) = bsdf(&m) else {
+        panic!("{m:?}")
+    };
+    assert_eq!(d.reflectance, Vec3::new(0.4, 0.8, 1.0));
+    assert_eq!(d.transmittance, Vec3::ONE);
+    assert_eq!(
+        bsdf(&m).flags(),
+        F::REFLECTION | F::TRANSMISSION | F::DIFFUSE
+    );
+
+    // Coated diffuse: pbrt-v4's defaults.
+    let m = material_of(r#"Material "coateddiffuse""#);
+    let want_coat = Coat {
+        eta: 1.5,
+        thickness: 0.01.into(),
+        albedo: Vec3::ZERO.into(),
+        g: 0.0.into(),
+        max_depth: 10,
+        n_samples: 1,
+    };
+    assert_eq!(
+        m.kind,
+        MaterialKind::CoatedDiffuse {
+            reflectance: Vec3::splat(0.5).into(),
+            roughness: constant(0.0, true),
+            coat: want_coat.clone(),
+        }
+    );
+    let Bsdf::CoatedDiffuse(c) = bsdf(&m) else {
+        panic!("{m:?}")
+    };
+    assert_eq!(
+        (c.thickness, c.g, c.max_depth, c.n_samples),
+        (0.01, 0.0, 10, 1)
+    );
+    assert_eq!(bsdf(&m).flags(), F::REFLECTION | F::SPECULAR | F::DIFFUSE);
+    assert_eq!(m.kind.flags(), bsdf(&m).flags());
+    let m = material_of(
+        r#"Material "coateddiffuse" "rgb reflectance" [0.1 0.2 0.3] "float roughness" 0.09 "float thickness" 0.2 "float eta" 1.4 "rgb albedo" [0.5 0.5 0.5] "float g" -0.3 "integer maxdepth" 4 "integer nsamples" 3"#,
+    );
+    let Bsdf::CoatedDiffuse(c) = bsdf(&m) else {
+        panic!("{m:?}")
+    };
+    assert_eq!(c.bottom.reflectance, Vec3::new(0.1, 0.2, 0.3));
+    assert!((c.top.distrib.alpha_x() - 0.3).abs() < 1e-6 && c.top.eta == 1.4);
+    assert_eq!(
+        (c.thickness, c.g, c.max_depth, c.n_samples),
+        (0.2, -0.3, 4, 3)
+    );
+    assert_eq!(c.albedo, Vec3::splat(0.5));
+    assert_eq!(bsdf(&m).flags(), F::REFLECTION | F::DIFFUSE);
+
+    // Coated conductor: copper under the coat by default, its index divided by the coat's.
+    let m = material_of(r#"Material "coatedconductor""#);
+    let Bsdf::CoatedConductor(c) = bsdf(&m) else {
+        panic!("{m:?}")
+    };
+    let cu = material_of(r#"Material "conductor""#);
+    let Bsdf::Conductor(plain) = bsdf(&cu) else {
+        panic!()
+    };
+    assert_vec(c.bottom.eta, plain.eta / 1.5, 1e-6);
+    assert_vec(c.bottom.k, plain.k / 1.5, 1e-6);
+    assert_eq!(bsdf(&m).flags(), F::REFLECTION | F::SPECULAR);
+    let m = material_of(
+        r#"Material "coatedconductor" "float interface.roughness" 0.01 "float interface.eta" 1.2 "spectrum conductor.eta" "metal-Au-eta" "spectrum conductor.k" "metal-Au-k" "float conductor.uroughness" 0.04 "float conductor.vroughness" 0.16"#,
+    );
+    let Bsdf::CoatedConductor(c) = bsdf(&m) else {
+        panic!("{m:?}")
+    };
+    assert!((c.top.distrib.alpha_x() - 0.1).abs() < 1e-6 && c.top.eta == 1.2);
+    assert!((c.bottom.distrib.alpha_x() - 0.2).abs() < 1e-6);
+    assert!((c.bottom.distrib.alpha_y() - 0.4).abs() < 1e-6);
+    assert_eq!(bsdf(&m).flags(), F::REFLECTION | F::GLOSSY);
+    assert_eq!(m.kind.flags(), bsdf(&m).flags());
+    let m = material_of(r#"Material "coatedconductor" "rgb reflectance" [0.9 0.5 0.1]"#);
+    assert!(matches!(
+        m.kind,
+        MaterialKind::CoatedConductor {
+            metal: Metal::Reflectance(_),
+            ..
+        }
+    ));
+
+    // Textures where pbrt-v4 allows them.
+    let m = material_of(
+        "Texture \"r\" \"spectrum\" \"checkerboard\"\nTexture \"t\" \"float\" \"constant\" \"float value\" 0.3\nMaterial \"coateddiffuse\" \"texture reflectance\" \"r\" \"texture thickness\" \"t\" \"texture roughness\" \"t\"",
+    );
+    let MaterialKind::CoatedDiffuse {
+        coat,
+        reflectance,
+        roughness,
+    } = &m.kind
+    else {
+        panic!("{m:?}")
+    };
+    assert_eq!(reflectance.constant(), None, "the checkerboard varies");
+    // A constant texture is folded into its value.
+    assert_eq!(coat.thickness.constant(), Some(Vec3::splat(0.3)));
+    assert_eq!(roughness.u.constant(), Some(Vec3::splat(0.3)));
+}
+
+#[test]
+fn bad_coated_and_translucent_parameters_are_located_errors() {
+    for (body, needle) in [
+        (r#""float thickness" -1"#, "thickness must lie in"),
+        (r#""float g" 1.5"#, "g must lie in [-1, 1]"),
+        (r#""integer maxdepth" -1"#, "maxdepth must lie in 0..=1000"),
+        (r#""integer nsamples" 0"#, "nsamples must lie in 1..=1024"),
+        (r#""rgb albedo" [2 0 0]"#, "must lie in [0, 1]"),
+        (r#""float eta" 0"#, "eta must be positive"),
+        (
+            r#""float roughness" -0.5"#,
+            "roughness must be finite and not negative",
+        ),
+        (
+            r#""float conductor.roughness" 0.1"#,
+            "unused parameter \"float conductor.roughness\"",
+        ),
+    ] {
+        assert_src_err(
+            &format!("WorldBegin\nMaterial \"coateddiffuse\"\n {body}\n"),
+            3,
+            &[needle],
+        );
+    }
+    assert_src_err(
+        "WorldBegin\nMaterial \"coatedconductor\"\n \"rgb reflectance\" [0.5 0.5 0.5] \"spectrum conductor.eta\" \"metal-Au-eta\"\n",
+        3,
+        &["not both"],
+    );
+    assert_src_err(
+        "WorldBegin\nMaterial \"coatedconductor\"\n \"float interface.eta\" -1\n",
+        3,
+        &["interface.eta must be positive"],
+    );
+    assert_src_err(
+        "WorldBegin\nMaterial \"diffusetransmission\"\n \"float scale\" -1\n",
+        3,
+        &["scale must lie in"],
+    );
+    assert_src_err(
+        "WorldBegin\nMaterial \"thindielectric\"\n \"float roughness\" 0.1\n",
+        3,
+        &["unused parameter \"float roughness\""],
     );
 }

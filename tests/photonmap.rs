@@ -66,6 +66,7 @@ Film "rgb" "integer xresolution" [ 32 ] "integer yresolution" [ 32 ]
 Sampler "stratified" "integer xsamples" [ 2 ] "integer ysamples" [ 2 ]
 PixelFilter "box"
 Integrator "photonmap" "integer globalphotons" [ 200000 ] "integer maxdepth" [ 5 ] "integer gathersamples" [ 64 ]
+    "integer maxphotonbounces" [ 64 ]
 WorldBegin
 Material "diffuse" "rgb reflectance" [ {rho} {rho} {rho} ]
 AreaLightSource "diffuse" "rgb L" [ {le} {le} {le} ]
@@ -73,6 +74,8 @@ ReverseOrientation
 {CUBE}
 "#
     );
+    // Le / (1 - rho) is the whole series of bounces: photons follow it to 64 bounces (0.5^64 is
+    // nothing) instead of the maxdepth 5 they would otherwise keep to.
     let scene = loader::load(&write_scene("furnace", &text)).unwrap();
     // The inward normals: every wall emits into the box.
     let n = scene.meshes[0].geometric_normal(0, 0.3, 0.3);

@@ -8,6 +8,8 @@ use photon::integrator::{self, IntegratorKind, RenderSettings};
 use photon::scene::{loader, Scene};
 use std::path::Path;
 
+mod common;
+
 fn render(
     scene: &Scene,
     backend: BackendKind,
@@ -16,13 +18,21 @@ fn render(
     spp: u32,
     threads: usize,
 ) -> RgbImage {
+    render_with(scene, backend, (w, h, spp), threads, IntegratorKind::Direct)
+}
+
+fn render_with(
+    scene: &Scene,
+    backend: BackendKind,
+    (w, h, spp): (u32, u32, u32),
+    threads: usize,
+    kind: IntegratorKind,
+) -> RgbImage {
     let accel = Accel::build(scene, backend, AccelOptions::default()).expect("accel builds");
     let mut settings = RenderSettings::from_scene(scene).expect("integrator settings");
     (settings.width, settings.height, settings.spp) = (w, h, spp);
     let pool = photon::tools::thread_pool(threads).unwrap();
-    pool.install(|| {
-        integrator::render(scene, &accel, &settings, IntegratorKind::Direct, &|_, _| {}).image
-    })
+    pool.install(|| integrator::render(scene, &accel, &settings, kind, &|_, _| {}).image)
 }
 
 fn check_scene(path: &str, w: u32, h: u32) {
@@ -73,4 +83,89 @@ fn image_does_not_depend_on_thread_count() {
     let two = render(&scene, BackendKind::Embree, 48, 40, 4, 2);
     assert!(one.pixels.iter().any(|p| p[0] > 0.0));
     assert_eq!(one, two);
+}
+
+/// The materials of issue 9 in one small room (coated diffuse floor, rough coated conductor
+/// wall, rough glass, thin glass and a translucent sheet): every integrator renders them with
+/// finite pixels, and the photon mapper's and the path tracer's images agree in mean.
+#[test]
+fn coated_rough_and_translucent_materials_render() {
+    let world = r#"
+Material "coateddiffuse" "rgb reflectance" [ 0.6 0.3 0.2 ] "float roughness" 0.05
+Shape "trianglemesh" "point3 P" [ -1 0.001 -1  1 0.001 -1  1 0.001 1  -1 0.001 1 ] "integer indices" [ 0 1 2 0 2 3 ]
+Material "coatedconductor" "float interface.roughness" 0.02 "float conductor.roughness" 0.1
+Shape "trianglemesh" "point3 P" [ -1 0 -0.999  -1 2 -0.999  1 2 -0.999  1 0 -0.999 ] "integer indices" [ 0 1 2 0 2 3 ]
+Material "dielectric" "float roughness" 0.05
+Shape "trianglemesh" "point3 P" [ -0.8 0.2 0  -0.8 1 0  -0.3 1 0  -0.3 0.2 0 ] "integer indices" [ 0 1 2 0 2 3 ]
+Material "thindielectric"
+Shape "trianglemesh" "point3 P" [ -0.2 0.2 0.2  -0.2 1 0.2  0.3 1 0.2  0.3 0.2 0.2 ] "integer indices" [ 0 1 2 0 2 3 ]
+Material "diffusetransmission" "rgb reflectance" [ 0.3 0.3 0.3 ] "rgb transmittance" [ 0.5 0.5 0.5 ]
+Shape "trianglemesh" "point3 P" [ 0.4 0.2 0  0.4 1 0  0.9 1 0  0.9 0.2 0 ] "integer indices" [ 0 1 2 0 2 3 ]
+"#;
+    let dir = common::TempDir::new("photon-materials");
+    let path = dir.write("materials.pbrt", common::small_scene(world));
+    let scene = loader::load(&path).expect("scene loads");
+    let mut means = vec![];
+    for kind in [
+        IntegratorKind::Photonmap,
+        IntegratorKind::Path,
+        IntegratorKind::Direct,
+    ] {
+        let img = render_with(&scene, BackendKind::Embree, (24, 24, 16), 0, kind);
+        let mean: f64 = img.pixels.iter().flatten().map(|&v| v as f64).sum::<f64>()
+            / (3 * img.pixels.len()) as f64;
+        println!(
+            "{kind:?}: {} non-finite pixels, mean {mean:.4}",
+            img.count_nonfinite()
+        );
+        assert_eq!(img.count_nonfinite(), 0, "{kind:?}");
+        assert!(mean > 0.01, "{kind:?}: image is black");
+        means.push(mean);
+    }
+    let (pm, pt) = (means[0], means[1]);
+    assert!(
+        (pm / pt - 1.0).abs() < 0.25,
+        "photon map mean {pm} against path tracer {pt}"
+    );
+}
+
+/// A white room whose floor is a smoothly coated white diffuse (flags diffuse + specular):
+/// the photon mapper must not count the light under the coat twice (once by shadow rays and
+/// photons, again by continuing the through-coat sample as if it were the coat's mirror
+/// reflection). Measured on the floor rows at 256 spp: photon map 0.0678 against the path
+/// tracer's 0.0473 before the fix (+43%), 0.0520 after (+10%; a plain diffuse floor: +9%).
+#[test]
+fn smooth_coat_is_not_counted_twice() {
+    let room = r#"LookAt 0 1 3.5  0 0.6 0  0 1 0
+Camera "perspective" "float fov" [ 45 ]
+Film "rgb" "integer xresolution" [ 32 ] "integer yresolution" [ 32 ]
+WorldBegin
+Material "diffuse" "rgb reflectance" [ 0.8 0.8 0.8 ]
+Shape "trianglemesh" "point3 P" [ -1 0 -1  -1 2 -1  1 2 -1  1 0 -1 ] "integer indices" [ 0 1 2 0 2 3 ]
+Shape "trianglemesh" "point3 P" [ -1 0 -1  -1 0 1  -1 2 1  -1 2 -1 ] "integer indices" [ 0 1 2 0 2 3 ]
+Shape "trianglemesh" "point3 P" [ 1 0 -1  1 2 -1  1 2 1  1 0 1 ] "integer indices" [ 0 1 2 0 2 3 ]
+Shape "trianglemesh" "point3 P" [ -1 2 -1  -1 2 1  1 2 1  1 2 -1 ] "integer indices" [ 0 1 2 0 2 3 ]
+AttributeBegin
+AreaLightSource "diffuse" "rgb L" [ 8 8 8 ]
+Shape "trianglemesh" "point3 P" [ -0.3 1.99 -0.3  0.3 1.99 -0.3  0.3 1.99 0.3  -0.3 1.99 0.3 ] "integer indices" [ 0 1 2 0 2 3 ]
+AttributeEnd
+Material "coateddiffuse" "rgb reflectance" [ 0.8 0.8 0.8 ]
+Shape "trianglemesh" "point3 P" [ -1 0 -1  1 0 -1  1 0 1  -1 0 1 ] "integer indices" [ 0 1 2 0 2 3 ]
+"#;
+    let dir = common::TempDir::new("photon-coat-twice");
+    let scene = loader::load(&dir.write("room.pbrt", room)).expect("scene loads");
+    let floor = |kind| {
+        let img = render_with(&scene, BackendKind::Embree, (32, 32, 256), 0, kind);
+        let rows = &img.pixels[img.pixels.len() - 8 * 32..];
+        rows.iter().flatten().map(|&v| v as f64).sum::<f64>() / (3 * rows.len()) as f64
+    };
+    let (pm, pt) = (
+        floor(IntegratorKind::Photonmap),
+        floor(IntegratorKind::Path),
+    );
+    println!("floor rows: photon map {pm:.4}, path tracer {pt:.4}");
+    assert!(
+        (pm / pt - 1.0).abs() < 0.2,
+        "photon map {pm} against path {pt}"
+    );
 }

@@ -56,6 +56,7 @@ impl Diffuse {
             specular: false,
             transmission: false,
             eta: 1.0,
+            pdf_is_proportional: false,
         })
     }
 }

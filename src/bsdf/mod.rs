@@ -14,7 +14,17 @@
 //! Material "conductor"  "rgb reflectance" [ .9 .6 .3 ]
 //!                       "float uroughness" [ .1 ] "float vroughness" [ .3 ]
 //!                                                               -> Bsdf::Conductor (GGX)
+//! Material "dielectric" "float roughness" [ .05 ]               -> Bsdf::Dielectric (GGX)
+//! Material "thindielectric" "float eta" [ 1.5 ]                 -> Bsdf::ThinDielectric
+//! Material "diffusetransmission" "rgb transmittance" [ .5 .5 .5 ]
+//!                                                               -> Bsdf::DiffuseTransmission
+//! Material "coateddiffuse" "rgb reflectance" [ .5 .5 .5 ]       -> Bsdf::CoatedDiffuse
+//! Material "coatedconductor" "float conductor.roughness" [ .1 ] -> Bsdf::CoatedConductor
 //! ```
+//!
+//! The coated BSDFs ([`layered`]) are stochastic: `f` and `pdf` are deterministic Monte Carlo
+//! estimates (random numbers hashed from the query), and their samples carry
+//! `pdf_is_proportional` (use [`Bsdf::mis_pdf`] for multiple importance sampling).
 //!
 //! Delta lobes (smooth glass, mirrors) follow pbrt-v4: `f` is the Fresnel weight divided by
 //! `|cos wi|` (and by `eta^2` for radiance through a refraction), `pdf` the discrete lobe
@@ -23,8 +33,11 @@
 pub mod conductor;
 pub mod dielectric;
 pub mod diffuse;
+pub mod diffuse_transmission;
 pub mod fresnel;
+pub mod layered;
 pub mod microfacet;
+pub mod thin_dielectric;
 mod warp;
 
 #[cfg(test)]
@@ -33,10 +46,13 @@ pub(crate) mod testutil;
 pub use conductor::Conductor;
 pub use dielectric::Dielectric;
 pub use diffuse::Diffuse;
+pub use diffuse_transmission::DiffuseTransmission;
+pub use layered::{CoatedConductor, CoatedDiffuse};
 pub use microfacet::TrowbridgeReitz;
+pub use thin_dielectric::ThinDielectric;
 
 use crate::math::{Vec2, Vec3};
-use crate::scene::{MaterialKind, Metal};
+use crate::scene::{Coat, MaterialKind, Metal, Roughness};
 use crate::texture::TexCoord;
 
 /// What a path carries: radiance (camera paths) or importance (photons). Only refraction
@@ -45,6 +61,37 @@ use crate::texture::TexCoord;
 pub enum TransportMode {
     Radiance,
     Importance,
+}
+
+impl TransportMode {
+    /// The adjoint mode (pbrt-v4's `!mode`): what a path traced from the other end carries.
+    pub fn flip(self) -> TransportMode {
+        match self {
+            TransportMode::Radiance => TransportMode::Importance,
+            TransportMode::Importance => TransportMode::Radiance,
+        }
+    }
+}
+
+/// Which lobes a sampling routine may choose (pbrt-v4's `BxDFReflTransFlags`); the layered
+/// BSDF restricts its interfaces to one side. The pdf of a restricted sampler is the density
+/// of that restricted choice.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Lobes {
+    All,
+    Reflection,
+    Transmission,
+}
+
+impl Lobes {
+    /// Probabilities of choosing reflection and transmission, given their weights `r`, `t`;
+    /// `None` when nothing may be chosen.
+    pub(crate) fn choose(self, r: f32, t: f32) -> Option<(f32, f32)> {
+        let pr = if self == Lobes::Transmission { 0.0 } else { r };
+        let pt = if self == Lobes::Reflection { 0.0 } else { t };
+        let sum = pr + pt;
+        (sum > 0.0).then(|| (pr / sum, pt / sum))
+    }
 }
 
 /// One sampled scattering direction.
@@ -63,6 +110,43 @@ pub struct BsdfSample {
     /// Relative index of refraction crossed (`eta` entering, `1/eta` leaving); 1 for
     /// reflection.
     pub eta: f32,
+    /// `pdf` is only proportional to the density of `wi` (the layered BSDF returns the
+    /// density of one random-walk path; `f / pdf` is still the right throughput weight, and
+    /// [`Bsdf::pdf`] gives the density for multiple importance sampling).
+    pub pdf_is_proportional: bool,
+}
+
+impl BsdfSample {
+    /// A sample with `pdf_is_proportional` false.
+    /// `wi` is on the other side of the surface from `wo` when `wi.z * wo.z < 0`; the caller
+    /// says so in `transmission`.
+    pub(crate) fn new(
+        wi: Vec3,
+        f: Vec3,
+        pdf: f32,
+        specular: bool,
+        transmission: bool,
+        eta: f32,
+    ) -> BsdfSample {
+        BsdfSample {
+            wi,
+            f,
+            pdf,
+            specular,
+            transmission,
+            eta,
+            pdf_is_proportional: false,
+        }
+    }
+
+    /// True for a usable sample: positive finite pdf, non-zero finite f, `wi` off the surface.
+    pub(crate) fn is_valid(&self) -> bool {
+        self.pdf > 0.0
+            && self.pdf.is_finite()
+            && self.wi.z != 0.0
+            && self.f.is_finite()
+            && self.f.max_element() > 0.0
+    }
 }
 
 /// What lobes a BSDF has, as pbrt-v4's `BxDFFlags`: reflection and/or transmission, each
@@ -121,6 +205,13 @@ impl std::ops::BitOr for BxdfFlags {
     }
 }
 
+impl std::ops::BitAnd for BxdfFlags {
+    type Output = BxdfFlags;
+    fn bitand(self, other: BxdfFlags) -> BxdfFlags {
+        BxdfFlags(self.0 & other.0)
+    }
+}
+
 /// pbrt-v4's conductor from reflectance: k = 2 sqrt(r) / sqrt(1 - r), with r at most 1 - 1e-7
 /// (so that k stays finite): its normal-incidence reflectance with eta = 1 is r.
 pub fn k_from_reflectance(r: Vec3) -> Vec3 {
@@ -132,34 +223,86 @@ pub fn k_from_reflectance(r: Vec3) -> Vec3 {
     Vec3::new(f(r.x), f(r.y), f(r.z))
 }
 
+/// The specular and/or glossy lobe of a microfacet surface whose roughness may vary.
+fn microfacet_lobe(r: &Roughness) -> BxdfFlags {
+    match r.constant() {
+        Some((u, v)) if TrowbridgeReitz::new(u, v).effectively_smooth() => BxdfFlags::SPECULAR,
+        Some(_) => BxdfFlags::GLOSSY,
+        None => BxdfFlags::SPECULAR | BxdfFlags::GLOSSY,
+    }
+}
+
+/// Whether a texture is the constant 0 (black everywhere).
+fn is_zero(t: &crate::texture::Tex) -> bool {
+    t.constant().is_some_and(|v| v.max_element() <= 0.0)
+}
+
 impl MaterialKind {
     /// Every lobe the BSDF may have somewhere on a surface of this material (the union over
     /// its textures' values): what the photon-map rules read to decide which maps a scene
-    /// needs.
+    /// needs. The coated materials follow pbrt-v4's `LayeredBxDF::Flags`: reflection,
+    /// specular when the coat is smooth, diffuse when the base is diffuse or the slab
+    /// scatters (`albedo`), else glossy when the coat or the base is rough.
     pub fn flags(&self) -> BxdfFlags {
         use BxdfFlags as F;
         match self {
             MaterialKind::Diffuse { .. } => F::REFLECTION | F::DIFFUSE,
-            MaterialKind::Dielectric { eta } => Bsdf::Dielectric(Dielectric::new(*eta)).flags(),
-            MaterialKind::Conductor { roughness, .. } => match roughness.constant() {
-                Some((u, v)) if TrowbridgeReitz::new(u, v).effectively_smooth() => {
-                    F::REFLECTION | F::SPECULAR
+            MaterialKind::Dielectric { eta, roughness } => {
+                let sides = if *eta == 1.0 {
+                    return F::TRANSMISSION | F::SPECULAR; // no interface: straight through
+                } else {
+                    F::REFLECTION | F::TRANSMISSION
+                };
+                sides | microfacet_lobe(roughness)
+            }
+            MaterialKind::Conductor { roughness, .. } => F::REFLECTION | microfacet_lobe(roughness),
+            MaterialKind::ThinDielectric { .. } => F::REFLECTION | F::TRANSMISSION | F::SPECULAR,
+            MaterialKind::DiffuseTransmission {
+                reflectance,
+                transmittance,
+                scale,
+            } => {
+                let mut f = F::default();
+                if *scale > 0.0 && !is_zero(reflectance) {
+                    f = f | F::REFLECTION | F::DIFFUSE;
                 }
-                Some(_) => F::REFLECTION | F::GLOSSY,
-                None => F::REFLECTION | F::SPECULAR | F::GLOSSY,
-            },
+                if *scale > 0.0 && !is_zero(transmittance) {
+                    f = f | F::TRANSMISSION | F::DIFFUSE;
+                }
+                f
+            }
+            MaterialKind::CoatedDiffuse { roughness, .. } => {
+                F::REFLECTION | F::DIFFUSE | (microfacet_lobe(roughness) & F::SPECULAR)
+            }
+            MaterialKind::CoatedConductor {
+                interface,
+                coat,
+                roughness,
+                ..
+            } => {
+                let (top, base) = (microfacet_lobe(interface), microfacet_lobe(roughness));
+                let mut f = F::REFLECTION | (top & F::SPECULAR);
+                if !is_zero(&coat.albedo) {
+                    f = f | F::DIFFUSE;
+                }
+                if is_zero(&coat.albedo) || coat.albedo.constant().is_none() {
+                    f = f | ((top | base) & F::GLOSSY);
+                }
+                f
+            }
         }
     }
-}
 
-impl MaterialKind {
-    /// Whether the surface reflects nothing anywhere (a diffuse material with a constant black
-    /// reflectance): no photon map is needed for it.
+    /// Whether the surface reflects nothing anywhere (a diffuse or diffuse-transmission
+    /// material with constant black colours): no photon map is needed for it.
     pub fn is_black(&self) -> bool {
         match self {
-            MaterialKind::Diffuse { reflectance } => reflectance
-                .constant()
-                .is_some_and(|r| r.max_element() <= 0.0),
+            MaterialKind::Diffuse { reflectance } => is_zero(reflectance),
+            MaterialKind::DiffuseTransmission {
+                reflectance,
+                transmittance,
+                scale,
+            } => *scale <= 0.0 || (is_zero(reflectance) && is_zero(transmittance)),
             _ => false,
         }
     }
@@ -171,6 +314,39 @@ pub enum Bsdf {
     Diffuse(Diffuse),
     Dielectric(Dielectric),
     Conductor(Conductor),
+    ThinDielectric(ThinDielectric),
+    DiffuseTransmission(DiffuseTransmission),
+    CoatedDiffuse(CoatedDiffuse),
+    CoatedConductor(CoatedConductor),
+}
+
+/// A conductor's BSDF at `tc`, its index divided by `outside` (the index of the medium above
+/// it: 1, or a coat's).
+fn conductor(metal: &Metal, roughness: &Roughness, outside: f32, tc: &TexCoord) -> Conductor {
+    let (eta, k) = match metal {
+        Metal::EtaK { eta, k } => (eta.eval(tc), k.eval(tc)),
+        Metal::Reflectance(r) => (
+            Vec3::ONE,
+            k_from_reflectance(r.eval(tc).clamp(Vec3::ZERO, Vec3::ONE)),
+        ),
+    };
+    let e = if outside > 0.0 { outside } else { 1.0 };
+    let (au, av) = roughness.eval(tc);
+    Conductor::new(eta / e, k / e, au, av)
+}
+
+/// The layered BSDF at `tc` of a coat of `roughness` over `base`.
+fn coated<B: layered::Layer + Copy>(
+    c: &Coat,
+    roughness: &Roughness,
+    base: B,
+    tc: &TexCoord,
+) -> layered::Layered<B> {
+    let (au, av) = roughness.eval(tc);
+    let top = Dielectric::rough(c.eta, au, av);
+    let (thickness, g) = (c.thickness.eval_float(tc), c.g.eval_float(tc));
+    let albedo = c.albedo.eval(tc);
+    layered::Layered::new(top, base, thickness, albedo, g, c.max_depth, c.n_samples)
 }
 
 /// True when `a` and `b` are strictly on the same side of the surface.
@@ -182,47 +358,76 @@ impl Bsdf {
     /// The BSDF of scattering model `kind` with its textures looked up at `tc` (bad values are
     /// sanitised: reflectances clamped to [0, 1] as pbrt-v4 does, see each variant's `new`).
     pub fn new(kind: &MaterialKind, tc: &TexCoord) -> Bsdf {
+        let unit = |t: &crate::texture::Tex| t.eval(tc).clamp(Vec3::ZERO, Vec3::ONE);
         match kind {
-            MaterialKind::Diffuse { reflectance } => Bsdf::Diffuse(Diffuse::new(
-                reflectance.eval(tc).clamp(Vec3::ZERO, Vec3::ONE),
-            )),
-            MaterialKind::Dielectric { eta } => Bsdf::Dielectric(Dielectric::new(*eta)),
-            MaterialKind::Conductor { metal, roughness } => {
-                let (eta, k) = match metal {
-                    Metal::EtaK { eta, k } => (eta.eval(tc), k.eval(tc)),
-                    Metal::Reflectance(r) => (
-                        Vec3::ONE,
-                        k_from_reflectance(r.eval(tc).clamp(Vec3::ZERO, Vec3::ONE)),
-                    ),
-                };
+            MaterialKind::Diffuse { reflectance } => Bsdf::Diffuse(Diffuse::new(unit(reflectance))),
+            MaterialKind::Dielectric { eta, roughness } => {
                 let (au, av) = roughness.eval(tc);
-                Bsdf::Conductor(Conductor::new(eta, k, au, av))
+                Bsdf::Dielectric(Dielectric::rough(*eta, au, av))
+            }
+            MaterialKind::Conductor { metal, roughness } => {
+                Bsdf::Conductor(conductor(metal, roughness, 1.0, tc))
+            }
+            MaterialKind::ThinDielectric { eta } => Bsdf::ThinDielectric(ThinDielectric::new(*eta)),
+            MaterialKind::DiffuseTransmission {
+                reflectance,
+                transmittance,
+                scale,
+            } => Bsdf::DiffuseTransmission(DiffuseTransmission::new(
+                reflectance.eval(tc) * *scale,
+                transmittance.eval(tc) * *scale,
+            )),
+            MaterialKind::CoatedDiffuse {
+                reflectance,
+                roughness,
+                coat,
+            } => Bsdf::CoatedDiffuse(coated(coat, roughness, Diffuse::new(unit(reflectance)), tc)),
+            MaterialKind::CoatedConductor {
+                interface,
+                coat,
+                metal,
+                roughness,
+            } => {
+                // pbrt-v4: the base's index is relative to the coat's medium.
+                let base = conductor(metal, roughness, coat.eta, tc);
+                Bsdf::CoatedConductor(coated(coat, interface, base, tc))
             }
         }
     }
 
-    /// BSDF value for the pair `(wo, wi)`; 0 for delta lobes. `mode` does not matter for the
-    /// non-delta lobes here (they are symmetric).
-    pub fn f(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> Vec3 {
+    /// BSDF value for the pair `(wo, wi)`; 0 for delta lobes. `mode` matters for refraction
+    /// through a rough dielectric (radiance is scaled by `1 / eta'^2`) and for the layered
+    /// BSDFs; the coated BSDFs' value is a deterministic Monte Carlo estimate.
+    pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
         if wo.z == 0.0 {
             return Vec3::ZERO;
         }
         match self {
             Bsdf::Diffuse(b) => b.f(wo, wi),
-            Bsdf::Dielectric(_) => Vec3::ZERO,
+            Bsdf::Dielectric(b) => b.f(wo, wi, mode),
             Bsdf::Conductor(b) => b.f(wo, wi),
+            Bsdf::ThinDielectric(_) => Vec3::ZERO,
+            Bsdf::DiffuseTransmission(b) => b.f(wo, wi),
+            Bsdf::CoatedDiffuse(b) => b.f(wo, wi, mode),
+            Bsdf::CoatedConductor(b) => b.f(wo, wi, mode),
         }
     }
 
-    /// Solid-angle density with which [`Self::sample`] picks `wi`; 0 for delta lobes.
+    /// Solid-angle density with which [`Self::sample`] picks `wi`; 0 for delta lobes. For the
+    /// coated BSDFs, pbrt-v4's stochastic estimate of it (see [`layered`]).
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         if wo.z == 0.0 {
             return 0.0;
         }
+        let mode = TransportMode::Radiance; // no density here depends on it
         match self {
             Bsdf::Diffuse(b) => b.pdf(wo, wi),
-            Bsdf::Dielectric(_) => 0.0,
+            Bsdf::Dielectric(b) => b.pdf(wo, wi, Lobes::All),
             Bsdf::Conductor(b) => b.pdf(wo, wi),
+            Bsdf::ThinDielectric(_) => 0.0,
+            Bsdf::DiffuseTransmission(b) => b.pdf(wo, wi, Lobes::All),
+            Bsdf::CoatedDiffuse(b) => b.pdf(wo, wi, mode),
+            Bsdf::CoatedConductor(b) => b.pdf(wo, wi, mode),
         }
     }
 
@@ -240,15 +445,28 @@ impl Bsdf {
         }
         let s = match self {
             Bsdf::Diffuse(b) => b.sample(wo, u),
-            Bsdf::Dielectric(b) => b.sample(wo, uc, mode),
+            Bsdf::Dielectric(b) => b.sample(wo, uc, u, mode, Lobes::All),
             Bsdf::Conductor(b) => b.sample(wo, u),
+            Bsdf::ThinDielectric(b) => b.sample(wo, uc, Lobes::All),
+            Bsdf::DiffuseTransmission(b) => b.sample(wo, uc, u, Lobes::All),
+            Bsdf::CoatedDiffuse(b) => b.sample(wo, uc, u, mode),
+            Bsdf::CoatedConductor(b) => b.sample(wo, uc, u, mode),
         }?;
-        let valid = s.pdf > 0.0
-            && s.pdf.is_finite()
-            && s.wi.z != 0.0
-            && s.f.is_finite()
-            && s.f.max_element() > 0.0;
-        valid.then_some(s)
+        s.is_valid().then_some(s)
+    }
+
+    /// The density to weigh a sample `s` of this BSDF by in multiple importance sampling: 0
+    /// for a delta lobe, [`Self::pdf`] when the sample's own pdf is only proportional (the
+    /// coated BSDFs: the light-sampling side uses [`Self::pdf`] too, so the weights still sum
+    /// to one), else the sample's pdf.
+    pub fn mis_pdf(&self, wo: Vec3, s: &BsdfSample) -> f32 {
+        if s.specular {
+            0.0
+        } else if s.pdf_is_proportional {
+            self.pdf(wo, s.wi)
+        } else {
+            s.pdf
+        }
     }
 
     /// The lobes this BSDF has.
@@ -256,19 +474,28 @@ impl Bsdf {
         use BxdfFlags as F;
         match self {
             Bsdf::Diffuse(_) => F::REFLECTION | F::DIFFUSE,
-            Bsdf::Dielectric(_) => F::REFLECTION | F::TRANSMISSION | F::SPECULAR,
+            Bsdf::Dielectric(b) => b.flags(),
             Bsdf::Conductor(c) if c.is_smooth() => F::REFLECTION | F::SPECULAR,
             Bsdf::Conductor(_) => F::REFLECTION | F::GLOSSY,
+            Bsdf::ThinDielectric(_) => F::REFLECTION | F::TRANSMISSION | F::SPECULAR,
+            Bsdf::DiffuseTransmission(b) => b.flags(),
+            Bsdf::CoatedDiffuse(b) => b.flags(),
+            Bsdf::CoatedConductor(b) => b.flags(),
         }
     }
 
-    /// A rough albedo for Russian roulette: the diffuse reflectance, 1 for a dielectric, the
-    /// normal-incidence Fresnel reflectance for a conductor.
+    /// A rough albedo for Russian roulette: the diffuse reflectance, 1 for (thin) dielectrics,
+    /// the normal-incidence Fresnel reflectance for a conductor, `R + T` for diffuse
+    /// transmission, and for a coat its normal-incidence reflectance plus the rest times the
+    /// base's estimate.
     pub fn reflectance_estimate(&self) -> Vec3 {
         match self {
             Bsdf::Diffuse(b) => b.reflectance,
-            Bsdf::Dielectric(_) => Vec3::ONE,
+            Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => Vec3::ONE,
             Bsdf::Conductor(c) => c.normal_reflectance(),
+            Bsdf::DiffuseTransmission(b) => b.reflectance + b.transmittance,
+            Bsdf::CoatedDiffuse(b) => b.reflectance_estimate(b.bottom.reflectance),
+            Bsdf::CoatedConductor(b) => b.reflectance_estimate(b.bottom.normal_reflectance()),
         }
     }
 }
@@ -291,7 +518,13 @@ mod tests {
         assert!(f.contains(BxdfFlags::REFLECTION) && !f.contains(BxdfFlags::TRANSMISSION));
         assert_eq!(diffuse.reflectance_estimate(), Vec3::new(0.1, 0.2, 0.3));
 
-        let glass = Bsdf::new(&MaterialKind::Dielectric { eta: 1.5 }, &tc);
+        let glass = Bsdf::new(
+            &MaterialKind::Dielectric {
+                eta: 1.5,
+                roughness: Roughness::alphas(0.0, 0.0),
+            },
+            &tc,
+        );
         let f = glass.flags();
         assert!(f.is_specular_only() && !f.has_diffuse() && !f.has_glossy());
         assert!(f.contains(BxdfFlags::REFLECTION | BxdfFlags::TRANSMISSION));
@@ -377,6 +610,82 @@ mod tests {
             assert!(b
                 .sample(nan, 0.5, Vec2::splat(0.5), TransportMode::Radiance)
                 .is_none());
+        }
+    }
+
+    /// Every model, with ordinary and extreme parameters, at random and grazing directions:
+    /// f and pdf are finite and non-negative, samples are valid or None (never NaN).
+    #[test]
+    fn no_nan_anywhere() {
+        use crate::bsdf::testutil::Rng;
+        let mut rng = Rng::new(61);
+        let coat = |eta: f32, a: f32, thick: f32, albedo: f32, g: f32| {
+            layered::Layered::new(
+                Dielectric::rough(eta, a, a),
+                Diffuse::new(Vec3::splat(0.7)),
+                thick,
+                Vec3::splat(albedo),
+                g,
+                10,
+                1,
+            )
+        };
+        let mut all = vec![];
+        for eta in [1.0f32, 1.0001, 1.5, 3.0, 0.7] {
+            for a in [0.0f32, 1e-4, 0.02, 0.5, 2.0] {
+                all.push(Bsdf::Dielectric(Dielectric::rough(eta, a, a * 0.5)));
+                all.push(Bsdf::CoatedDiffuse(coat(eta, a, 0.01, 0.5, 0.3)));
+                all.push(Bsdf::CoatedConductor(layered::Layered::new(
+                    Dielectric::rough(eta, a, a),
+                    Conductor::new(Vec3::splat(0.2), Vec3::splat(3.0), a, 0.3),
+                    1e-3,
+                    Vec3::ZERO,
+                    0.0,
+                    10,
+                    1,
+                )));
+            }
+            all.push(Bsdf::ThinDielectric(ThinDielectric::new(eta)));
+        }
+        all.push(Bsdf::CoatedDiffuse(coat(1.5, 0.1, 0.0, 1.0, 0.99)));
+        all.push(Bsdf::CoatedDiffuse(coat(1.5, 0.1, 1e6, 1.0, -0.99)));
+        all.push(Bsdf::DiffuseTransmission(DiffuseTransmission::new(
+            Vec3::ONE,
+            Vec3::ZERO,
+        )));
+        all.push(Bsdf::DiffuseTransmission(DiffuseTransmission::new(
+            Vec3::ZERO,
+            Vec3::ZERO,
+        )));
+        let grazing = [
+            Vec3::new(1.0, 0.0, 1e-7).normalize(),
+            Vec3::new(0.0, 1.0, -1e-7).normalize(),
+            Vec3::Z,
+            -Vec3::Z,
+        ];
+        for b in &all {
+            for i in 0..400 {
+                let wo = if i < 4 { grazing[i] } else { rng.sphere() };
+                let wi = if i % 7 == 0 {
+                    grazing[i % 4]
+                } else {
+                    rng.sphere()
+                };
+                for mode in [TransportMode::Radiance, TransportMode::Importance] {
+                    let f = b.f(wo, wi, mode);
+                    assert!(
+                        f.is_finite() && f.min_element() >= 0.0,
+                        "{b:?} f {f:?} at {wo:?} {wi:?}"
+                    );
+                    if let Some(s) = b.sample(wo, rng.f32(), rng.vec2(), mode) {
+                        assert!(s.is_valid(), "{b:?}: {s:?}");
+                        let m = b.mis_pdf(wo, &s);
+                        assert!(m.is_finite() && m >= 0.0, "{b:?}: mis pdf {m}");
+                    }
+                }
+                let p = b.pdf(wo, wi);
+                assert!(p.is_finite() && p >= 0.0, "{b:?} pdf {p} at {wo:?} {wi:?}");
+            }
         }
     }
 }

@@ -214,7 +214,10 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<Ga
     let Some(bs) = bsdf.sample(wo, uc, u, TransportMode::Radiance) else {
         return;
     };
-    if bs.pdf <= 0.0 {
+    // Where the BSDF has a diffuse lobe too (a smoothly coated diffuse surface), shadow rays
+    // and the photon estimates above already cover every non-delta part: only a delta sample
+    // (the coat's mirror reflection) continues, else it would be counted twice.
+    if bs.pdf <= 0.0 || (flags.has_diffuse() && !bs.specular) {
         return;
     }
     let beta = path.beta * bs.f * (bs.wi.z.abs() / bs.pdf);
@@ -225,7 +228,7 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<Ga
         ray: si.spawn_ray(si.frame.to_world(bs.wi)),
         beta,
         depth: path.depth + 1,
-        prev_pdf: if bs.specular { 0.0 } else { bs.pdf },
+        prev_pdf: bsdf.mis_pdf(wo, &bs),
         prev_p: si.p,
         prev_delta: path.prev_delta && bs.specular,
         ..path

@@ -77,7 +77,8 @@ impl RenderSettings {
                 msg: format!("\"maxdepth\" {m}"),
             },
         )?;
-        let photon = photonmap::PhotonSettings::from_params(&mut params)?;
+        let mut photon = photonmap::PhotonSettings::from_params(&mut params)?;
+        photon.follow_depth(max_depth as u32);
         let pass_spp = params.get_int("passspp", 4)?;
         if pass_spp < 1 {
             return Err(SceneError {

@@ -194,7 +194,7 @@ fn continue_path(mut path: PathState, bsdf: &Bsdf, v: &SurfaceInteraction) -> Op
     path.ray = v.spawn_ray(v.frame.to_world(bs.wi));
     path.beta = beta;
     path.depth = depth;
-    path.prev_pdf = if bs.specular { 0.0 } else { bs.pdf };
+    path.prev_pdf = bsdf.mis_pdf(v.wo, &bs);
     path.prev_p = v.p;
     path.eta_scale = eta_scale;
     Some(path)

@@ -64,6 +64,9 @@ pub struct PhotonSettings {
     /// Factor on the squared k-nearest radii of the current pass's estimates (1 for pass 0
     /// and for Jensen's fixed maps; set by the pass driver).
     pub radius_scale2: f64,
+    /// Whether the scene or the command line set `maxphotonbounces`; otherwise it follows the
+    /// render's `maxdepth` ([`PhotonSettings::follow_depth`]).
+    pub bounces_given: bool,
 }
 
 impl Default for PhotonSettings {
@@ -90,11 +93,25 @@ impl Default for PhotonSettings {
             progressive: false,
             alpha: 2.0 / 3.0,
             radius_scale2: 1.0,
+            bounces_given: false,
         }
     }
 }
 
 impl PhotonSettings {
+    /// Photon paths as long as the render's `maxdepth` allows, unless `maxphotonbounces` was
+    /// given: a photon stored at its `b`-th hit (b = 0 straight from the light) and read at a
+    /// final-gather hit makes a light path of `b + 2` scattering vertices (its `b + 1` and the
+    /// visible point), so photons are traced for `maxdepth - 1` hits (at least 1). Without
+    /// this the maps carried light that pbrt-v4, Mitsuba and our path tracer leave out: in a
+    /// closed room of albedo 0.7 at maxdepth 8, 3-5% of the image (measured on
+    /// scenes/lamp-enclosed.pbrt against our path tracer at maxdepth 8 and 100).
+    pub fn follow_depth(&mut self, max_depth: u32) {
+        if !self.bounces_given {
+            self.trace.max_bounces = max_depth.saturating_sub(1).max(1);
+        }
+    }
+
     /// Reads the `photonmap` parameters (each marked used); others stay for the caller.
     pub fn from_params(params: &mut ParamSet) -> Result<PhotonSettings, SceneError> {
         let mut s = PhotonSettings::default();
@@ -112,6 +129,7 @@ impl PhotonSettings {
         t.global_photons = count(params, "globalphotons", t.global_photons, r::MAX_PHOTONS)?;
         t.caustic_photons = count(params, "causticphotons", t.caustic_photons, r::MAX_PHOTONS)?;
         let depth = r::MAX_DEPTH as u64;
+        s.bounces_given = params.peek("maxphotonbounces").is_some();
         t.max_bounces = count(params, "maxphotonbounces", t.max_bounces as u64, depth)? as u32;
         let lookup = r::MAX_LOOKUP as u64;
         s.global_lookup = count(params, "globallookup", s.global_lookup as u64, lookup)? as usize;
@@ -169,6 +187,10 @@ pub struct PhotonPass {
     pub cache: Option<PhotonMap>,
     /// The global photons that took a diffuse bounce, for guiding the final gather.
     pub guide_map: Option<PhotonMap>,
+    /// The global photons flagged `GLOSSY` (glossy caustics), looked up at visible diffuse
+    /// points with the global map's parameters when final gathering (without it, the direct
+    /// look at the global map includes them).
+    pub glossy_map: Option<PhotonMap>,
     pub settings: PhotonSettings,
     global_params: EstimateParams,
     caustic_params: EstimateParams,
@@ -186,8 +208,7 @@ pub fn needed_maps(scene: &Scene) -> (bool, bool) {
             .map(|m| &scene.materials[m.material as usize].kind)
     };
     let any_diffuse = kinds().any(|k| k.flags().has_diffuse() && !k.is_black());
-    // Caustic paths bounce off specular or glossy surfaces (see photon::trace).
-    let any_specular = kinds().any(|k| k.flags().has_specular() || k.flags().has_glossy());
+    let any_specular = kinds().any(|k| k.flags().has_specular());
     let lights = !scene.lights.is_empty();
     (lights && any_diffuse, lights && any_diffuse && any_specular)
 }
@@ -243,10 +264,18 @@ pub fn prepare(
     } else {
         None
     };
+    let glossy_map = if s.final_gather {
+        maps.global
+            .as_ref()
+            .and_then(|g| g.subset(|ph| ph.flags() & Photon::GLOSSY != 0))
+    } else {
+        None
+    };
     PhotonPass {
         maps,
         cache,
         guide_map,
+        glossy_map,
         settings: s,
         global_params,
         caustic_params,
@@ -370,6 +399,13 @@ pub fn at_diffuse(
         let (e, _, _) = irradiance_with(caustic, p, n, &pass.caustic_params, buf);
         charge(counters, t);
         out.caustic = beta * f_d * e;
+    }
+    if let Some(glossy) = &pass.glossy_map {
+        // Glossy caustics: spread wide, so estimated with the global map's radius.
+        let t = Instant::now();
+        let (e, _, _) = irradiance_with(glossy, p, n, &pass.global_params, buf);
+        charge(counters, t);
+        out.caustic += beta * f_d * e;
     }
     let Some(global) = &pass.maps.global else {
         return out;

@@ -8,17 +8,20 @@
 //! came from that patch, so their directions say where to look.
 //!
 //! How:
-//! - the global photons that took a diffuse bounce (those flagged `DIRECT` or `CAUSTIC` carry
-//!   light that shadow rays and the caustic map give, which gather rays count as zero) get a
-//!   kd-tree of their own ([`indirect_map`]), so that finding the nearest of them does not
-//!   wade through the others;
+//! - the global photons that took a diffuse bounce (those flagged `DIRECT`, `CAUSTIC` or
+//!   `GLOSSY` carry light that shadow rays and the caustic estimates give, which gather rays
+//!   count as zero) get a kd-tree of their own ([`indirect_map`]), so that finding the nearest
+//!   of them does not wade through the others;
 //! - the `GUIDE_PHOTONS` nearest of them that arrive from the gather point's side are binned
-//!   by their incoming
-//!   direction on an `N x N` grid over the unit square, mapped to the hemisphere by the same
-//!   cosine-weighted concentric warp the plain gather uses; each adds its power's mean;
+//!   by their incoming direction on an `N x N` grid over the unit square, mapped to the
+//!   hemisphere by the same cosine-weighted concentric warp the plain gather uses; each counts
+//!   one (photons are shot in proportion to the lights' power and rouletted to similar powers,
+//!   so counts follow the flux; weighting by the stored power, rounded to 8-bit mantissas, let
+//!   a light 1e6 times brighter move some samples across cell edges, and the image was no
+//!   longer exactly 1e6 times brighter pixel by pixel);
 //! - the grid's density is a mixture of uniform and the bins' shares, with the uniform share
-//!   `eps = N^2 / (n + N^2)` for `n` photons (Laplace's add-one smoothing: one pseudo-photon of
-//!   mean power per cell) and never below `DEFENSIVE`. Every direction the cosine sampler
+//!   `eps = N^2 / (n + N^2)` for `n` photons (Laplace's add-one smoothing: one pseudo-photon
+//!   per cell) and never below `DEFENSIVE`. Every direction the cosine sampler
 //!   reaches keeps a density of at least `eps` times the cosine's, so the estimate stays
 //!   unbiased and its variance bounded; and a histogram of few photons, which is mostly noise
 //!   where indirect light is even, leans towards the plain cosine. Without the smoothing (32
@@ -80,7 +83,7 @@ impl GatherGuide {
             let ph = map.photon(nb.idx);
             let local = frame.to_local(-ph.dir());
             let u = cosine_hemisphere_to_square(local);
-            bins[cell_of(u)] += ph.power().element_sum() / 3.0;
+            bins[cell_of(u)] += 1.0;
         }
         GatherGuide::from_bins(&bins, found.len())
     }
@@ -161,19 +164,10 @@ impl GuideSlot {
     }
 }
 
-/// The photons of `global` that took a diffuse bounce (neither `DIRECT` nor `CAUSTIC`) in a
-/// kd-tree of their own; `None` when there are none.
+/// The photons of `global` that took a diffuse bounce (not `DIRECT`, `CAUSTIC` or `GLOSSY`)
+/// in a kd-tree of their own; `None` when there are none.
 pub fn indirect_map(global: Option<&PhotonMap>) -> Option<PhotonMap> {
-    let photons: Vec<Photon> = global?
-        .photons()
-        .iter()
-        .filter(|ph| ph.flags() & (Photon::DIRECT | Photon::CAUSTIC) == 0)
-        .copied()
-        .collect();
-    if photons.is_empty() {
-        return None;
-    }
-    PhotonMap::new(&photons).ok()
+    global?.subset(|ph| ph.flags() & (Photon::DIRECT | Photon::CAUSTIC | Photon::GLOSSY) == 0)
 }
 
 /// The item of `weights` (summing to `total`) that `u` falls in, and where in it (in [0, 1)).

@@ -40,6 +40,15 @@ impl PhotonMap {
         self.photons.is_empty()
     }
 
+    /// A map of the photons for which `keep` holds; `None` when there are none.
+    pub fn subset(&self, keep: impl Fn(&Photon) -> bool) -> Option<PhotonMap> {
+        let photons: Vec<Photon> = self.photons.iter().filter(|p| keep(p)).copied().collect();
+        if photons.is_empty() {
+            return None;
+        }
+        PhotonMap::new(&photons).ok()
+    }
+
     /// The photons in tree order.
     pub fn photons(&self) -> &[Photon] {
         &self.photons

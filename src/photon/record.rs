@@ -41,6 +41,9 @@ impl Photon {
     pub const CAUSTIC: u8 = 1;
     /// Flag bit: the photon was stored directly from a light (no bounce); useful for debugging.
     pub const DIRECT: u8 = 2;
+    /// Flag bit: the photon reached this surface through surfaces without a diffuse lobe only,
+    /// at least one of them glossy (a glossy caustic: L (S|G)* G (S|G)* D).
+    pub const GLOSSY: u8 = 4;
 
     /// A photon at `pos` carrying RGB `power`, travelling along the unit vector `dir`
     /// (direction of travel, i.e. pointing into the surface it hit), with free-form `flags`.

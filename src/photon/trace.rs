@@ -12,13 +12,16 @@
 //!   power) and, per channel, RGB roulette (`rho_c / rho_avg`). The power already carries the
 //!   cosine; it is never multiplied in again.
 //! - **Storage**, only at surfaces with a diffuse lobe: the global map keeps every such hit,
-//!   flagged `DIRECT` when it came straight from the light and `CAUSTIC` after caustic bounces
-//!   only, so that estimates can leave out what shadow rays and the caustic map already give;
-//!   the caustic map keeps light -> (specular|glossy)+ -> diffuse paths (Jensen's L S+ D with
-//!   glossy reflectors counted as S: light that reaches a room only through a metal lamp shade
-//!   is a caustic, carried by photons instead of rare camera paths), shot with projection maps
-//!   aimed at every specular or glossy object. A bounce is a caustic bounce when the surface
-//!   has no diffuse lobe ([`is_caustic_surface`]).
+//!   flagged `DIRECT` when it came straight from the light, `CAUSTIC` after specular (delta)
+//!   bounces only, and `GLOSSY` after bounces off surfaces without a diffuse lobe at least one
+//!   of which was glossy, so that estimates can leave out what shadow rays and the caustic
+//!   map already give; the caustic map keeps light -> specular+ -> diffuse paths, shot with
+//!   projection maps aimed at the specular objects.
+//! - **Glossy caustics** (light that reaches a room only through a metal lamp shade) are
+//!   caustics too, but spread wide: the renderer estimates them from the `GLOSSY` photons of
+//!   the global map with the global map's radius (see `integrator::photonmap`), not from the
+//!   caustic map's sharp, small discs. A bounce counts towards a caustic chain when the
+//!   surface has no diffuse lobe ([`is_caustic_surface`]).
 //! - Photons trapped by total internal reflection end at `max_bounces`.
 //! - Caustic photons of infinite lights start only where they can reach a specular object
 //!   ([`Lights::emit_caustic`]): a disc of the scene's radius would waste almost all of them.
@@ -102,15 +105,17 @@ pub fn is_caustic_surface(flags: crate::bsdf::BxdfFlags) -> bool {
     (flags.has_specular() || flags.has_glossy()) && !flags.has_diffuse()
 }
 
-/// The bounding spheres of all objects that may be caustic surfaces somewhere: the targets of
-/// the caustic projection maps.
+/// The bounding spheres of all objects that may be specular somewhere: the targets of the
+/// caustic projection maps.
 pub fn caustic_targets(scene: &Scene) -> Vec<(Vec3, f32)> {
     scene
         .meshes
         .iter()
         .filter(|m| {
-            let f = scene.materials[m.material as usize].kind.flags();
-            f.has_specular() || f.has_glossy()
+            scene.materials[m.material as usize]
+                .kind
+                .flags()
+                .has_specular()
         })
         .map(|m| m.sphere.unwrap_or_else(|| bounding_sphere(&m.positions)))
         .collect()
@@ -340,8 +345,10 @@ fn trace_one(
     };
     let mut ray = Ray::new(o, e.dir);
     let mut rays = 0;
-    // Every bounce so far was a caustic one (specular or glossy, no diffuse lobe).
+    // Every bounce so far was off a surface without a diffuse lobe; every sampled lobe was a
+    // delta one.
     let mut caustic_chain = true;
+    let mut specular_chain = true;
     let mut first_specular = false;
     for bounce in 0..s.max_bounces {
         rays += 1;
@@ -353,19 +360,20 @@ fn trace_one(
         let flags = bsdf.flags();
         let caustic_surface = is_caustic_surface(flags);
         if bounce == 0 {
-            first_specular = caustic_surface;
+            first_specular = flags.has_specular();
         }
         let dir = -si.wo_world;
         let facing = if si.ng.dot(dir) < 0.0 { si.ng } else { -si.ng };
         if flags.has_diffuse() {
             let store = match kind {
                 MapKind::Global => true,
-                MapKind::Caustic => caustic_chain && bounce > 0,
+                MapKind::Caustic => specular_chain && bounce > 0,
             };
             if store && power.max_element() > 0.0 {
-                let flags = match (bounce, caustic_chain) {
-                    (0, _) => Photon::DIRECT,
-                    (_, true) => Photon::CAUSTIC,
+                let flags = match (bounce, specular_chain, caustic_chain) {
+                    (0, _, _) => Photon::DIRECT,
+                    (_, true, _) => Photon::CAUSTIC,
+                    (_, false, true) => Photon::GLOSSY,
                     _ => 0,
                 };
                 out.push(Landing {
@@ -374,14 +382,18 @@ fn trace_one(
                 });
             }
         }
-        if kind == MapKind::Caustic && !caustic_surface {
-            break; // a caustic path ends at its first surface with a diffuse lobe
+        if kind == MapKind::Caustic && !flags.has_specular() {
+            break; // a caustic path ends at its first non-specular surface
         }
         let Some(sc) = scatter(&si, &bsdf, sampler) else {
             break;
         };
+        if kind == MapKind::Caustic && !sc.specular {
+            break; // the sampled lobe was not a delta one (a glossy or diffuse part)
+        }
         power *= sc.power_scale;
         caustic_chain &= caustic_surface;
+        specular_chain &= sc.specular;
         ray = sc.ray;
     }
     (first_specular, rays)
@@ -454,8 +466,7 @@ fn unrestricted_efficiency(
             };
             if let Some(h) = accel.intersect(&Ray::new(o, e.dir)) {
                 let material = &scene.materials[scene.meshes[h.mesh as usize].material as usize];
-                let f = material.kind.flags();
-                hits += (f.has_specular() || f.has_glossy()) as u64;
+                hits += material.kind.flags().has_specular() as u64;
             }
         }
     }

@@ -201,10 +201,101 @@ impl From<MaterialKind> for Material {
 pub enum MaterialKind {
     /// `"diffuse"`: Lambertian, `reflectance` (default 0.5).
     Diffuse { reflectance: Tex },
-    /// `"dielectric"`: smooth glass with relative index `eta` (default 1.5).
-    Dielectric { eta: f32 },
+    /// `"dielectric"`: glass with relative index `eta` (default 1.5) and Trowbridge-Reitz
+    /// roughness (default 0: smooth; smooth wherever alpha is below 1e-3).
+    Dielectric { eta: f32, roughness: Roughness },
     /// `"conductor"`: complex index `eta + i k` ([`Metal`]) and Trowbridge-Reitz roughness.
     Conductor { metal: Metal, roughness: Roughness },
+    /// `"thindielectric"`: a thin sheet of relative index `eta` (default 1.5).
+    ThinDielectric { eta: f32 },
+    /// `"diffusetransmission"`: Lambertian `reflectance` and `transmittance` (defaults 0.25),
+    /// each times `scale` (1) and clamped to [0, 1] per hit.
+    DiffuseTransmission {
+        reflectance: Tex,
+        transmittance: Tex,
+        scale: f32,
+    },
+    /// `"coateddiffuse"`: a dielectric coat of `roughness` over a Lambertian `reflectance`
+    /// (0.5).
+    CoatedDiffuse {
+        reflectance: Tex,
+        roughness: Roughness,
+        coat: Coat,
+    },
+    /// `"coatedconductor"`: a dielectric coat of roughness `interface` over a conductor
+    /// (`conductor.eta`/`conductor.k` as given in the file, relative to the outside: the BSDF
+    /// divides them by the coat's index, as pbrt-v4 does; or `reflectance`) of `roughness`.
+    CoatedConductor {
+        interface: Roughness,
+        coat: Coat,
+        metal: Metal,
+        roughness: Roughness,
+    },
+}
+
+/// The textures of a conductor's index.
+fn metal(m: &Metal) -> Vec<&Tex> {
+    match m {
+        Metal::EtaK { eta, k } => vec![eta, k],
+        Metal::Reflectance(r) => vec![r],
+    }
+}
+
+impl MaterialKind {
+    /// Every colour and float parameter (constant or texture) of the model.
+    pub fn textures(&self) -> Vec<&Tex> {
+        let mut out = match self {
+            MaterialKind::Diffuse { reflectance } => vec![reflectance],
+            MaterialKind::Dielectric { roughness, .. } => vec![&roughness.u, &roughness.v],
+            MaterialKind::Conductor {
+                metal: m,
+                roughness,
+            } => {
+                let mut v = metal(m);
+                v.extend([&roughness.u, &roughness.v]);
+                v
+            }
+            MaterialKind::ThinDielectric { .. } => vec![],
+            MaterialKind::DiffuseTransmission {
+                reflectance,
+                transmittance,
+                ..
+            } => vec![reflectance, transmittance],
+            MaterialKind::CoatedDiffuse {
+                reflectance,
+                roughness,
+                ..
+            } => vec![reflectance, &roughness.u, &roughness.v],
+            MaterialKind::CoatedConductor {
+                interface,
+                metal: m,
+                roughness,
+                ..
+            } => {
+                let mut v = metal(m);
+                v.extend([&interface.u, &interface.v, &roughness.u, &roughness.v]);
+                v
+            }
+        };
+        if let MaterialKind::CoatedDiffuse { coat, .. }
+        | MaterialKind::CoatedConductor { coat, .. } = self
+        {
+            out.extend([&coat.thickness, &coat.albedo, &coat.g]);
+        }
+        out
+    }
+}
+
+/// The coat and slab of `coateddiffuse` and `coatedconductor` (pbrt-v4's defaults: `eta` 1.5,
+/// `thickness` 0.01, `albedo` 0, `g` 0, `maxdepth` 10, `nsamples` 1).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Coat {
+    pub eta: f32,
+    pub thickness: Tex,
+    pub albedo: Tex,
+    pub g: Tex,
+    pub max_depth: u32,
+    pub n_samples: u32,
 }
 
 /// A conductor's complex index of refraction: `eta` and `k` (RGB, named spectra or textures),

@@ -18,7 +18,7 @@
 use super::ToolError;
 use crate::integrator::RenderSettings;
 use crate::scene::loader::load_collecting;
-use crate::scene::{MaterialKind, Scene, SceneError};
+use crate::scene::{Scene, SceneError};
 use clap::Args;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -154,10 +154,10 @@ pub fn check_scene(path: &Path) -> SceneReport {
     });
     // As a render does, no caustic map without a specular (non-diffuse) surface.
     let specular = scene.meshes.iter().any(|m| {
-        !matches!(
-            scene.materials.get(m.material as usize).map(|m| &m.kind),
-            Some(MaterialKind::Diffuse { .. }) | None
-        )
+        scene
+            .materials
+            .get(m.material as usize)
+            .is_some_and(|m| m.kind.flags().has_specular())
     });
     let photons = settings.map_or(0, |s| {
         s.photon.trace.global_photons + u64::from(specular) * s.photon.trace.caustic_photons

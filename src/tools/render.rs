@@ -265,6 +265,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     settings.pattern = opts.pattern;
     settings.light_samples = opts.light_samples.max(1);
     opts.photon.apply(&mut settings.photon)?;
+    settings.photon.follow_depth(settings.max_depth);
     let exr = opts
         .output
         .clone()

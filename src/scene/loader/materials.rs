@@ -1,9 +1,18 @@
-//! `Material`, `MakeNamedMaterial`: the diffuse, dielectric and conductor materials with
-//! pbrt-v4's parameters and defaults.
+//! `Material`, `MakeNamedMaterial`: the diffuse, dielectric, thin dielectric, conductor,
+//! diffuse-transmission and coated materials with pbrt-v4's parameters and defaults.
 //!
 //! ```text
 //! Material "diffuse" "rgb reflectance" [ 0.8 0.8 0.8 ]                  # default 0.5
-//! Material "dielectric" "float eta" 1.5                                  # smooth only
+//! Material "dielectric" "float eta" 1.5 "float roughness" 0.01           # default smooth
+//! Material "thindielectric" "float eta" 1.5
+//! Material "diffusetransmission" "rgb reflectance" [ 0.25 0.25 0.25 ]
+//!     "rgb transmittance" [ 0.25 0.25 0.25 ] "float scale" 1             # defaults
+//! Material "coateddiffuse" "rgb reflectance" [ 0.5 0.5 0.5 ] "float roughness" 0
+//!     "float thickness" 0.01 "float eta" 1.5 "rgb albedo" [ 0 0 0 ] "float g" 0
+//!     "integer maxdepth" 10 "integer nsamples" 1                         # defaults
+//! Material "coatedconductor" "float interface.roughness" 0 "float interface.eta" 1.5
+//!     "spectrum conductor.eta" "metal-Cu-eta" "spectrum conductor.k" "metal-Cu-k"
+//!     "float conductor.roughness" 0 "float thickness" 0.01 ...           # defaults
 //! Material "conductor" "spectrum eta" "metal-Au-eta" "spectrum k" "metal-Au-k"
 //!     "float roughness" 0.1 "bool remaproughness" true                    # alpha = sqrt(0.1)
 //! Material "conductor" "rgb reflectance" [ 0.9 0.6 0.3 ]                 # eta 1, k from r
@@ -12,8 +21,11 @@
 //! ```
 //!
 //! - Parameters pbrt-v4 lets be textures may be: diffuse `reflectance`; conductor `eta`, `k`,
-//!   `reflectance`, `roughness`, `uroughness`, `vroughness`; and every material's
-//!   `displacement` (a float texture: bump mapping). A `"texture"` value names a texture defined
+//!   `reflectance`, `roughness`, `uroughness`, `vroughness`; dielectric roughness;
+//!   diffusetransmission `reflectance`, `transmittance`; coateddiffuse `reflectance`,
+//!   roughness, `thickness`, `albedo`, `g`; coatedconductor `interface.`/`conductor.`
+//!   roughness, `conductor.eta`, `conductor.k`, `reflectance`, `thickness`, `albedo`, `g`; and
+//!   every material's `displacement` (a float texture: bump mapping). A `"texture"` value names a texture defined
 //!   earlier in the right namespace (spectrum for colours, float for the others).
 //! - conductor `eta`/`k`: RGB, or pbrt-v4's named spectra `metal-{Ag,Al,Au,Cu,CuZn,MgO,TiO2}-
 //!   {eta,k}` (with or without brackets) as the RGB values of [`super::spectra`]; default
@@ -23,17 +35,24 @@
 //! - conductor roughness: `uroughness`/`vroughness`, each defaulting to `roughness` (0);
 //!   `remaproughness` (default true) maps roughness to Trowbridge-Reitz alpha = sqrt(roughness)
 //!   as pbrt-v4's `RoughnessToAlpha` does.
-//! - dielectric `eta`: a float, or a `spectrum` that is constant (one number, or
-//!   wavelength-value pairs with one value) or a named glass (`glass-BK7`, `glass-BAF10`,
-//!   `glass-FK51A`, `glass-LASF9`, `glass-F5`, `glass-F10`, `glass-F11`: its index at 550 nm,
-//!   see [`super::spectra`]); roughness other than 0 is unsupported.
+//! - dielectric, thindielectric and coateddiffuse `eta`, coatedconductor `interface.eta`: a
+//!   float, or a `spectrum` that is constant (one number, or wavelength-value pairs with one
+//!   value) or a named glass (`glass-BK7`, `glass-BAF10`, `glass-FK51A`, `glass-LASF9`,
+//!   `glass-F5`, `glass-F10`, `glass-F11`: its index at 550 nm, see [`super::spectra`]).
+//! - roughness of every microfacet part as the conductor's (`interface.` and `conductor.`
+//!   prefixes for coatedconductor; one `remaproughness` for both).
+//! - coats: `thickness` (0.01) and `g` (0, in [-1, 1]) floats or float textures, `albedo`
+//!   (0) a reflectance, `maxdepth` 0..=1000 (10), `nsamples` 1..=1024 (1); coatedconductor
+//!   takes `conductor.eta`/`conductor.k` (default copper) or `reflectance`, not both.
+//! - diffusetransmission `scale` (1) is a float >= 0; the scaled colours are clamped to
+//!   [0, 1] per hit as pbrt-v4 does.
 //! - RGB reflectances must lie in [0, 1] (pbrt-v4 rejects others too).
 
 use super::params::{ParamSet, ParamType};
 use super::spectra::{self, CU_ETA, CU_K};
 use super::textures::texture_param;
 use crate::math::Vec3;
-use crate::scene::{Loc, Material, MaterialKind, Metal, Roughness, SceneError};
+use crate::scene::{Coat, Loc, Material, MaterialKind, Metal, Roughness, SceneError};
 use crate::texture::{Tex, Textures};
 
 /// Builds material `ty` from `params` (all of which must be used); `loc` is where the type is
@@ -48,8 +67,30 @@ pub fn make_material(
         "diffuse" => MaterialKind::Diffuse {
             reflectance: albedo(params, "reflectance", Vec3::splat(0.5), textures)?,
         },
-        "dielectric" => dielectric(params)?,
+        "dielectric" => MaterialKind::Dielectric {
+            eta: dielectric_eta(params, "eta")?,
+            roughness: roughness(params, "", textures)?,
+        },
+        "thindielectric" => MaterialKind::ThinDielectric {
+            eta: dielectric_eta(params, "eta")?,
+        },
         "conductor" => conductor(params, textures)?,
+        "diffusetransmission" => MaterialKind::DiffuseTransmission {
+            reflectance: albedo(params, "reflectance", Vec3::splat(0.25), textures)?,
+            transmittance: albedo(params, "transmittance", Vec3::splat(0.25), textures)?,
+            scale: float_in(params, "scale", 1.0, 0.0, f32::MAX)?,
+        },
+        "coateddiffuse" => MaterialKind::CoatedDiffuse {
+            reflectance: albedo(params, "reflectance", Vec3::splat(0.5), textures)?,
+            roughness: roughness(params, "", textures)?,
+            coat: coat(params, "eta", textures)?,
+        },
+        "coatedconductor" => MaterialKind::CoatedConductor {
+            interface: roughness(params, "interface.", textures)?,
+            coat: coat(params, "interface.eta", textures)?,
+            metal: metal_index(params, "conductor.", textures)?,
+            roughness: roughness(params, "conductor.", textures)?,
+        },
         other => {
             return Err(SceneError::at(
                 loc,
@@ -106,26 +147,80 @@ fn albedo(
     Ok(r.into())
 }
 
-/// `dielectric`: `eta` and (zero) roughness.
-fn dielectric(params: &mut ParamSet) -> Result<MaterialKind, SceneError> {
-    let eta = match params.peek("eta").map(|p| p.ty) {
-        Some(ParamType::Spectrum) => constant_spectrum(params, "eta")?,
-        _ => params.get_float("eta", 1.5)?,
+/// A dielectric's index `name`: a float or a constant spectrum (default 1.5), positive and
+/// finite.
+fn dielectric_eta(params: &mut ParamSet, name: &str) -> Result<f32, SceneError> {
+    let eta = match params.peek(name).map(|p| p.ty) {
+        Some(ParamType::Spectrum) => constant_spectrum(params, name)?,
+        _ => params.get_float(name, 1.5)?,
     };
-    if eta.is_nan() || eta <= 0.0 {
-        let p = params.peek("eta").expect("a bad eta came from the file");
-        return Err(p.err("eta must be positive"));
+    if eta.is_nan() || eta <= 0.0 || eta.is_infinite() {
+        let p = params.peek(name).expect("a bad eta came from the file");
+        return Err(p.err(format!("{name} must be positive and finite")));
     }
-    for name in ["roughness", "uroughness", "vroughness"] {
-        if params.get_float(name, 0.0)? != 0.0 {
-            let p = params
-                .peek(name)
-                .expect("a nonzero roughness came from the file");
-            return Err(p.err("rough dielectrics are not supported (roughness must be 0)"));
-        }
+    Ok(eta)
+}
+
+/// A float parameter that must lie in `[lo, hi]`.
+fn float_in(
+    params: &mut ParamSet,
+    name: &str,
+    default: f32,
+    lo: f32,
+    hi: f32,
+) -> Result<f32, SceneError> {
+    let v = params.get_float(name, default)?;
+    if !(lo..=hi).contains(&v) {
+        let p = params
+            .peek(name)
+            .expect("an out-of-range value came from the file");
+        return Err(p.err(format!("{name} must lie in [{lo}, {hi}]")));
     }
-    params.get_bool("remaproughness", true)?;
-    Ok(MaterialKind::Dielectric { eta })
+    Ok(v)
+}
+
+/// An integer parameter that must lie in `[lo, hi]`.
+fn int_in(
+    params: &mut ParamSet,
+    name: &str,
+    default: i32,
+    lo: i32,
+    hi: i32,
+) -> Result<u32, SceneError> {
+    let v = params.get_int(name, default)?;
+    if !(lo..=hi).contains(&v) {
+        let p = params
+            .peek(name)
+            .expect("an out-of-range value came from the file");
+        return Err(p.err(format!("{name} must lie in {lo}..={hi}")));
+    }
+    Ok(v as u32)
+}
+
+/// A float parameter that may be a texture; a constant must lie in `[lo, hi]`.
+fn float_tex_in(
+    params: &mut ParamSet,
+    name: &str,
+    default: f32,
+    (lo, hi): (f32, f32),
+    textures: &Textures,
+) -> Result<Tex, SceneError> {
+    if is_texture(params, name) {
+        return tex(params, name, false, default, textures);
+    }
+    Ok(float_in(params, name, default, lo, hi)?.into())
+}
+
+/// The coat and slab of a coated material, its index read from `eta_name`.
+fn coat(params: &mut ParamSet, eta_name: &str, textures: &Textures) -> Result<Coat, SceneError> {
+    Ok(Coat {
+        eta: dielectric_eta(params, eta_name)?,
+        thickness: float_tex_in(params, "thickness", 0.01, (0.0, f32::MAX), textures)?,
+        albedo: albedo(params, "albedo", Vec3::ZERO, textures)?,
+        g: float_tex_in(params, "g", 0.0, (-1.0, 1.0), textures)?,
+        max_depth: int_in(params, "maxdepth", 10, 0, 1000)?,
+        n_samples: int_in(params, "nsamples", 1, 1, 1024)?,
+    })
 }
 
 /// The value of a `spectrum` parameter that is one number, constant wavelength-value pairs or
@@ -151,21 +246,35 @@ fn constant_spectrum(params: &mut ParamSet, name: &str) -> Result<f32, SceneErro
 
 /// `conductor`: eta/k or reflectance, and roughness.
 fn conductor(params: &mut ParamSet, textures: &Textures) -> Result<MaterialKind, SceneError> {
-    let metal = if params.peek("reflectance").is_some() {
-        if let Some(p) = params.peek("eta").or_else(|| params.peek("k")) {
-            return Err(
-                p.err("a conductor takes either \"reflectance\" or \"eta\"/\"k\", not both")
-            );
-        }
-        Metal::Reflectance(albedo(params, "reflectance", Vec3::ZERO, textures)?)
-    } else {
-        Metal::EtaK {
-            eta: metal(params, "eta", CU_ETA, textures)?,
-            k: metal(params, "k", CU_K, textures)?,
-        }
-    };
-    let roughness = roughness(params, textures)?;
+    let metal = metal_index(params, "", textures)?;
+    let roughness = roughness(params, "", textures)?;
     Ok(MaterialKind::Conductor { metal, roughness })
+}
+
+/// A conductor's index: `reflectance`, or `{prefix}eta`/`{prefix}k` (default copper).
+fn metal_index(
+    params: &mut ParamSet,
+    prefix: &str,
+    textures: &Textures,
+) -> Result<Metal, SceneError> {
+    let (eta, k) = (format!("{prefix}eta"), format!("{prefix}k"));
+    if params.peek("reflectance").is_some() {
+        if let Some(p) = params.peek(&eta).or_else(|| params.peek(&k)) {
+            return Err(p.err(format!(
+                "a conductor takes either \"reflectance\" or \"{eta}\"/\"{k}\", not both"
+            )));
+        }
+        return Ok(Metal::Reflectance(albedo(
+            params,
+            "reflectance",
+            Vec3::ZERO,
+            textures,
+        )?));
+    }
+    Ok(Metal::EtaK {
+        eta: metal(params, &eta, CU_ETA, textures)?,
+        k: metal(params, &k, CU_K, textures)?,
+    })
 }
 
 /// A conductor's `eta` or `k`: RGB, a spectrum texture, or a named metal spectrum, or
@@ -194,31 +303,38 @@ fn metal(
     }
 }
 
-/// Conductor roughness: `uroughness`/`vroughness`, each defaulting to `roughness` (0); floats
-/// or float textures; constants must not be negative.
-fn roughness(params: &mut ParamSet, textures: &Textures) -> Result<Roughness, SceneError> {
-    for name in ["uroughness", "vroughness", "roughness"] {
+/// Microfacet roughness: `{prefix}uroughness`/`{prefix}vroughness`, each defaulting to
+/// `{prefix}roughness` (0); floats or float textures; constants must be finite and not
+/// negative; `remaproughness` (true) as pbrt-v4.
+fn roughness(
+    params: &mut ParamSet,
+    prefix: &str,
+    textures: &Textures,
+) -> Result<Roughness, SceneError> {
+    let [un, vn, both_n] =
+        ["uroughness", "vroughness", "roughness"].map(|n| format!("{prefix}{n}"));
+    for name in [&un, &vn, &both_n] {
         if let Some(p) = params.peek(name) {
             if p.floats()
-                .is_some_and(|f| f.first().is_some_and(|&x| x < 0.0))
+                .is_some_and(|f| f.first().is_some_and(|&x| !(x >= 0.0 && x.is_finite())))
             {
-                return Err(p.err("roughness must not be negative"));
+                return Err(p.err("roughness must be finite and not negative"));
             }
         }
     }
     // pbrt-v4 reads `roughness` only for a missing u or v (else it is an unused parameter).
     let given = |params: &ParamSet, n: &str| params.peek(n).is_some();
-    let both = if given(params, "uroughness") && given(params, "vroughness") {
+    let both = if given(params, &un) && given(params, &vn) {
         Tex::from(0.0)
     } else {
-        tex(params, "roughness", false, 0.0, textures)?
+        tex(params, &both_n, false, 0.0, textures)?
     };
     let mut one = |name: &str| match given(params, name) {
         true => tex(params, name, false, 0.0, textures),
         false => Ok(both.clone()),
     };
-    let u = one("uroughness")?;
-    let v = one("vroughness")?;
+    let u = one(&un)?;
+    let v = one(&vn)?;
     let remap = params.get_bool("remaproughness", true)?;
     Ok(Roughness { u, v, remap })
 }
