@@ -77,7 +77,7 @@ impl<'s> SurfaceInteraction<'s> {
             ng,
             ns,
             frame,
-            uv: mesh_uv(mesh, prim, u, v),
+            uv: mesh.uv(prim, u, v),
             wo_world,
             wo: frame.to_local(wo_world),
         }
@@ -116,7 +116,7 @@ impl<'s> SurfaceInteraction<'s> {
     /// or two tangents of `ng` when the uvs are degenerate.
     pub fn dpduv(&self) -> (Vec3, Vec3) {
         let [p0, p1, p2] = self.mesh.triangle(self.prim);
-        let [uv0, uv1, uv2] = triangle_uvs(self.mesh, self.prim);
+        let [uv0, uv1, uv2] = self.mesh.triangle_uvs(self.prim);
         let (duv02, duv12) = (uv0 - uv2, uv1 - uv2);
         let (dp02, dp12) = (p0 - p2, p1 - p2);
         let det = duv02.x * duv12.y - duv02.y * duv12.x;
@@ -220,18 +220,4 @@ fn uv_step(dpdu: Vec3, dpdv: Vec3, dp: Vec3) -> Vec2 {
     } else {
         Vec2::ZERO
     }
-}
-
-/// The uvs of triangle `prim`'s vertices: the mesh's, or pbrt-v4's default (0,0), (1,0), (1,1).
-fn triangle_uvs(mesh: &Mesh, prim: u32) -> [Vec2; 3] {
-    match &mesh.uvs {
-        Some(uvs) => mesh.indices[prim as usize].map(|i| uvs[i as usize]),
-        None => [Vec2::ZERO, Vec2::X, Vec2::ONE],
-    }
-}
-
-/// The texture coordinates at barycentrics `(u, v)` (weights `1-u-v, u, v`) of triangle `prim`.
-pub fn mesh_uv(mesh: &Mesh, prim: u32, u: f32, v: f32) -> Vec2 {
-    let [a, b, c] = triangle_uvs(mesh, prim);
-    a * (1.0 - u - v) + b * u + c * v
 }

@@ -81,6 +81,17 @@ pub fn triangle_bytes(backend: BackendKind) -> u64 {
         BackendKind::Obvhs => 410,
     }
 }
+/// Bytes the ray-query backend's alpha masks copy from meshes with `alpha` and uvs (see
+/// `accel::AlphaMask`): their indices (12 per triangle) and uvs (8 per vertex). Exact sizes,
+/// not measured; 0 without alpha.
+pub fn alpha_mask_bytes(scene: &Scene) -> u64 {
+    scene
+        .meshes
+        .iter()
+        .filter(|m| m.alpha.is_some())
+        .filter_map(|m| Some(m.indices.len() * 12 + m.uvs.as_ref()?.len() * 8))
+        .fold(0u64, |a, b| a.saturating_add(b as u64))
+}
 /// Per worker thread: gather and shadow batches, path states, k-nearest buffers, stack.
 pub const THREAD_BYTES: u64 = 16 << 20;
 
@@ -289,6 +300,7 @@ pub fn estimate(
     e.parts.push(("textures", scene.textures.decoded_bytes()));
     // Environment maps: texels and sampling tables, shared (Arc) by every render's lights.
     e.parts.push(("environment maps", scene.light_map_bytes()));
+    e.parts.push(("alpha masks", alpha_mask_bytes(scene)));
     e.parts.push((
         "threads",
         (threads.max(1) as u64).saturating_mul(THREAD_BYTES),

@@ -501,11 +501,11 @@ fn embree_errors_surface_as_err() {
     let mut builder = SceneBuilder::new(&dev, SceneConfig::default()).unwrap();
     builder
         .attach(
-            Geometry::triangles(&dev, &pos, &[[0, 1, 2]], quality).unwrap(),
+            Geometry::triangles(&dev, &pos, &[[0, 1, 2]], quality, None).unwrap(),
             0,
         )
         .unwrap();
-    let g = Geometry::triangles(&dev, &pos, &[[0, 1, 2]], quality).unwrap();
+    let g = Geometry::triangles(&dev, &pos, &[[0, 1, 2]], quality, None).unwrap();
     let err = builder.attach(g, 0).expect_err("second geometry on id 0");
     println!("duplicate id: {err}");
     assert!(err.0.contains("RTC_ERROR_INVALID"), "{err}");
@@ -513,7 +513,7 @@ fn embree_errors_surface_as_err() {
     let bad = scene_of(vec![mesh_of(pos.to_vec(), vec![[0, 1, 3]])]);
     assert!(EmbreeAccel::build(&bad, AccelOptions::default()).is_err());
     assert!(BvhAccel::build(&bad, AccelOptions::default()).is_err());
-    assert!(Geometry::triangles(&dev, &pos, &[[0, 1, 3]], quality).is_err());
+    assert!(Geometry::triangles(&dev, &pos, &[[0, 1, 3]], quality, None).is_err());
 }
 
 #[test]

@@ -1237,10 +1237,11 @@ fn error_unused_parameters() {
         &["\"texture normalmap\": a texture is not supported for this parameter"],
     );
     assert_src_err("WorldBegin\nMaterial \"conductor\" \"float uroughness\" 0.1 \"float vroughness\" 0.1\n \"float roughness\" 0.2\n", 3, &["unused parameter \"float roughness\""]);
+    // (`alpha` is read since shapes take it; a sphere's `radius` is not a mesh's.)
     assert_src_err(
-        &format!("WorldBegin\n{TRI}\n  \"float alpha\" 0.5\n"),
+        &format!("WorldBegin\n{TRI}\n  \"float radius\" 0.5\n"),
         3,
-        &["unused parameter \"float alpha\""],
+        &["unused parameter \"float radius\""],
     );
     assert_src_err(
         "WorldBegin\nShape \"sphere\" \"float radius\" 1\n \"float zmax\" 0.5\n",

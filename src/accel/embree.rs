@@ -13,10 +13,17 @@
 //! Geometry ids are mesh indices (`Scene::meshes`): meshes are attached with
 //! `rtcAttachGeometryByID`, empty meshes are skipped.
 //!
+//! A mesh with alpha (see [`super`]) gets [`alpha_filter`] as its intersection and occlusion
+//! filter callback, with its [`AlphaMask`] as the geometry's user data; other geometries have
+//! no callback, so scenes without alpha pay nothing. The [`Geometry`] holds the mask until
+//! [`SceneBuilder::attach`] hands it to the scene, and the [`CommittedScene`] keeps it as long
+//! as Embree may call the callback with its address.
+//!
 //! This file and the EXR layer are the only `unsafe` code outside `sys/`. Every `unsafe`
 //! block states what it relies on.
 use super::{
-    face_normals, query_interval, validate_meshes, AccelError, AccelOptions, Hit, RayQuery,
+    face_normals, query_interval, validate_meshes, AccelError, AccelOptions, AlphaMask, Hit,
+    RayQuery,
 };
 use crate::math::{Ray, Vec3};
 use crate::scene::Scene;
@@ -171,11 +178,57 @@ impl Drop for Device {
 pub struct Geometry {
     raw: NonNull<sys::RTCGeometryTy>,
     device: Arc<Device>,
+    /// The alpha mask whose address the filter callbacks receive, if any.
+    alpha: Option<Arc<AlphaMask>>,
+}
+
+/// Embree's intersection and occlusion filter for geometries with alpha: rejects (clears
+/// `valid[i]`) each active lane whose candidate hit [`AlphaMask::keeps`] refuses, reading the
+/// ray's origin and direction and the hit's barycentrics and triangle from Embree's
+/// structure-of-arrays layout for `N` rays (`RTCRayN_*`/`RTCHitN_*` in `rtcore_ray.h`: field
+/// `k` of lane `i` is 4-byte word `k * N + i`). Works for single rays (`N = 1`) and packets.
+unsafe extern "C" fn alpha_filter(args: *const sys::RTCFilterFunctionNArguments) {
+    // SAFETY: Embree passes valid arguments for the duration of the call.
+    let Some(args) = (unsafe { args.as_ref() }) else {
+        return;
+    };
+    let n = args.N as usize;
+    if args.geometryUserPtr.is_null() || args.valid.is_null() || n == 0 {
+        return;
+    }
+    // SAFETY: the user pointer is the `AlphaMask` set in `Geometry::triangles`, kept alive by
+    // the `CommittedScene` being queried (see the module docs); it is only read.
+    let mask = unsafe { &*(args.geometryUserPtr as *const AlphaMask) };
+    // SAFETY: `valid` holds `N` ints; the ray holds 12 and the hit at least 7 arrays of `N`
+    // 4-byte words (Embree's RTCRayN / RTCHitN layouts), all live during the call. The ray
+    // and hit are only read; only `valid` is written.
+    let (valid, ray, hit) = unsafe {
+        (
+            std::slice::from_raw_parts_mut(args.valid, n),
+            std::slice::from_raw_parts(args.ray as *const f32, 12 * n),
+            std::slice::from_raw_parts(args.hit as *const f32, 7 * n),
+        )
+    };
+    for (i, lane) in valid.iter_mut().enumerate() {
+        if *lane == 0 {
+            continue;
+        }
+        let at = |src: &[f32], k: usize| src[k * n + i];
+        let o = Vec3::new(at(ray, 0), at(ray, 1), at(ray, 2));
+        let d = Vec3::new(at(ray, 4), at(ray, 5), at(ray, 6));
+        let prim = at(hit, 5).to_bits();
+        // A panic must not unwind into Embree: one that cannot happen reads as "keep".
+        let keep = std::panic::catch_unwind(|| mask.keeps(prim, at(hit, 3), at(hit, 4), o, d));
+        if !keep.unwrap_or(true) {
+            *lane = 0;
+        }
+    }
 }
 
 impl Geometry {
     /// Creates a triangle geometry from `positions` and `indices` (copied into Embree-owned
-    /// buffers) with build quality `quality`, and commits it.
+    /// buffers) with build quality `quality` and, given `alpha`, the alpha filter callbacks
+    /// (an error when this Embree was built without filter functions), and commits it.
     ///
     /// Every index must be `< positions.len()` (checked: Embree does not) and `indices` must
     /// not be empty.
@@ -184,6 +237,7 @@ impl Geometry {
         positions: &[Vec3],
         indices: &[[u32; 3]],
         quality: sys::RTCBuildQuality,
+        alpha: Option<Arc<AlphaMask>>,
     ) -> Result<Geometry, AccelError> {
         let n = positions.len();
         if indices.is_empty() || indices.iter().flatten().any(|&i| i as usize >= n) {
@@ -199,9 +253,11 @@ impl Geometry {
         let geom = Geometry {
             raw,
             device: device.clone(),
+            alpha,
         };
         geom.fill_vertices(positions)?;
         geom.fill_indices(indices)?;
+        geom.set_alpha_filter()?;
         // SAFETY: live geometry; both buffers are set.
         unsafe {
             sys::rtcSetGeometryBuildQuality(geom.raw(), quality);
@@ -213,6 +269,39 @@ impl Geometry {
 
     fn raw(&self) -> sys::RTCGeometry {
         self.raw.as_ptr()
+    }
+
+    /// With an alpha mask: makes it the geometry's user data and sets [`alpha_filter`] for
+    /// intersection and occlusion queries. Without one: nothing.
+    fn set_alpha_filter(&self) -> Result<(), AccelError> {
+        let Some(mask) = &self.alpha else {
+            return Ok(());
+        };
+        let dev = &self.device;
+        // SAFETY: live device; a property query.
+        let supported = unsafe {
+            sys::rtcGetDeviceProperty(
+                dev.raw(),
+                sys::RTC_DEVICE_PROPERTY_FILTER_FUNCTION_SUPPORTED,
+            )
+        };
+        if supported == 0 {
+            return Err(AccelError(
+                "embree: this Embree has no filter functions, which shape alpha needs (use \
+                 --backend obvhs)"
+                    .into(),
+            ));
+        }
+        let user = Arc::as_ptr(mask) as *mut c_void;
+        // SAFETY: live geometry, not yet committed. `user` points to the mask this geometry
+        // holds and hands on to the scene it is attached to, which keeps it while queries can
+        // run; the callback only reads it.
+        unsafe {
+            sys::rtcSetGeometryUserData(self.raw(), user);
+            sys::rtcSetGeometryIntersectFilterFunction(self.raw(), Some(alpha_filter));
+            sys::rtcSetGeometryOccludedFilterFunction(self.raw(), Some(alpha_filter));
+        }
+        dev.check("rtcSetGeometryIntersectFilterFunction")
     }
 
     /// Copies `positions` into a new `FLOAT3` vertex buffer with 4 bytes of padding after the
@@ -312,6 +401,8 @@ pub struct SceneConfig {
 pub struct SceneBuilder {
     raw: NonNull<sys::RTCSceneTy>,
     device: Arc<Device>,
+    /// The alpha masks of the attached geometries (their filters' user data).
+    alpha: Vec<Arc<AlphaMask>>,
 }
 
 impl SceneBuilder {
@@ -325,6 +416,7 @@ impl SceneBuilder {
         let builder = SceneBuilder {
             raw,
             device: device.clone(),
+            alpha: Vec::new(),
         };
         let (flags, quality) = if config.robust {
             (sys::RTC_SCENE_FLAG_ROBUST, sys::RTC_BUILD_QUALITY_MEDIUM)
@@ -341,8 +433,8 @@ impl SceneBuilder {
     }
 
     /// Attaches `geometry` under id `id` (which must be unused) and releases it: the scene
-    /// keeps its own reference.
-    pub fn attach(&mut self, geometry: Geometry, id: u32) -> Result<(), AccelError> {
+    /// keeps its own reference, and the geometry's alpha mask.
+    pub fn attach(&mut self, mut geometry: Geometry, id: u32) -> Result<(), AccelError> {
         if !Arc::ptr_eq(&geometry.device, &self.device) || id == sys::RTC_INVALID_GEOMETRY_ID {
             return Err(AccelError(
                 "embree: geometry from another device or invalid id".into(),
@@ -351,12 +443,14 @@ impl SceneBuilder {
         // SAFETY: live scene and geometry of the same device; Embree reports a used id as an
         // error, which `check` returns.
         unsafe { sys::rtcAttachGeometryByID(self.raw.as_ptr(), geometry.raw(), id) };
-        self.device.check("rtcAttachGeometryByID")
+        self.device.check("rtcAttachGeometryByID")?;
+        self.alpha.extend(geometry.alpha.take());
+        Ok(())
     }
 
     /// Builds the acceleration structure. Consumes the builder: only the committed scene can
     /// be queried.
-    pub fn commit(self) -> Result<CommittedScene, AccelError> {
+    pub fn commit(mut self) -> Result<CommittedScene, AccelError> {
         // SAFETY: live scene; no other thread can touch it (we own the builder).
         unsafe { sys::rtcCommitScene(self.raw.as_ptr()) };
         self.device.check("rtcCommitScene")?;
@@ -367,6 +461,7 @@ impl SceneBuilder {
         Ok(CommittedScene {
             raw: self.raw,
             _device: self.device.clone(),
+            _alpha: std::mem::take(&mut self.alpha),
         })
     }
 }
@@ -399,6 +494,8 @@ pub struct CommittedScene {
     raw: NonNull<sys::RTCSceneTy>,
     /// Keeps the device alive at least as long as the scene.
     _device: Arc<Device>,
+    /// The alpha masks the filter callbacks read; dropped after the scene is released.
+    _alpha: Vec<Arc<AlphaMask>>,
 }
 
 // SAFETY: see the type's documentation.
@@ -571,7 +668,8 @@ impl EmbreeAccel {
                 .ok()
                 .filter(|&id| id != sys::RTC_INVALID_GEOMETRY_ID)
                 .ok_or_else(|| AccelError("embree: too many meshes".into()))?;
-            let geom = Geometry::triangles(device, &mesh.positions, &mesh.indices, quality)?;
+            let alpha = AlphaMask::of(mesh).map(Arc::new);
+            let geom = Geometry::triangles(device, &mesh.positions, &mesh.indices, quality, alpha)?;
             builder.attach(geom, id)?;
         }
         Ok(EmbreeAccel {

@@ -6,12 +6,33 @@
 //!
 //! Both answer with the same [`Hit`], so the renderer cannot tell which one answered. Hot loops
 //! dispatch through the closed enum [`Accel`], not a trait object.
+//!
+//! ## Alpha cut-outs
+//! A shape with `alpha` (`Shape "trianglemesh" ... "float alpha" 0.5` or `"texture alpha"
+//! "mask"`, see [`crate::scene::Mesh::alpha`]) is tested inside both backends' traversal, as
+//! pbrt-v4's `GeometricPrimitive::Intersect` does: at a candidate hit the alpha texture is
+//! evaluated at the hit's uv ([`crate::scene::interpolate_uv`]) giving `a`; `a >= 1` keeps the
+//! hit, `a <= 0` rejects it, and otherwise it is kept when `u <= a` for `u` a hash of the
+//! ray's origin and direction ([`ray_hash`], pbrt-v4's `HashFloat(r.o, r.d)`). A rejected hit
+//! lets traversal go on to the next candidate, so closest-hit and occlusion queries answer as
+//! if the cut-out part were not there. Every ray (camera, shadow, gather, photon) goes through
+//! these queries, so all of them see the same cut-outs. Embree runs the test in intersection
+//! and occlusion filter callbacks set only on geometries with alpha; obvhs in its
+//! per-primitive callback. Both call [`AlphaMask::keeps`], so for a constant alpha their
+//! decisions are bit-identical (they depend on the ray alone), and for a texture they differ
+//! only where the backends' barycentrics (last bits) straddle a texel or cell edge.
+//!
+//! As in pbrt-v4, the hash depends on the ray only: a ray through two surfaces of the same
+//! constant alpha `a` passes both or neither (probability `a` of being stopped by the pair,
+//! not `1 - (1-a)^2`); a new ray (another sample, bounce or shadow ray) draws anew.
 pub mod bvh;
 pub mod embree;
 
-use crate::math::{Ray, Vec3};
-use crate::scene::Scene;
+use crate::math::{Ray, Vec2, Vec3};
+use crate::scene::{interpolate_uv, Mesh, Scene};
+use crate::texture::Texture;
 use std::fmt;
+use std::sync::Arc;
 
 /// A closest hit: distance along the ray (in units of `ray.d`), which mesh and triangle,
 /// barycentrics (`p = (1-u-v) p0 + u p1 + v p2`) and the unit geometric normal
@@ -186,4 +207,87 @@ pub(crate) fn query_interval(ray: &Ray) -> Option<(f32, f32)> {
     let inside = |v: Vec3| v.is_finite() && v.abs().max_element() <= LARGE;
     let ok = tmin <= ray.tmax && inside(ray.o) && inside(ray.d) && ray.d != Vec3::ZERO;
     ok.then_some((tmin, ray.tmax))
+}
+
+/// pbrt-v4's `HashFloat(r.o, r.d)`: a uniform number in [0, 1) that depends on the bits of
+/// the ray's origin and direction only (here through [`crate::sampling::hash`], not pbrt's
+/// MurmurHash: the rays differ from pbrt's anyway, what matters is that both backends draw
+/// the same number for the same ray).
+#[inline]
+pub fn ray_hash(o: Vec3, d: Vec3) -> f32 {
+    let pair = |a: f32, b: f32| (a.to_bits() as u64) << 32 | b.to_bits() as u64;
+    let h = crate::sampling::hash(&[pair(o.x, o.y), pair(o.z, d.x), pair(d.y, d.z)]);
+    crate::sampling::to_unit(h)
+}
+
+/// pbrt-v4's stochastic alpha test: whether a hit where the alpha texture is `a` counts, for
+/// the ray `(o, d)`. `a >= 1` (or NaN, as in pbrt) keeps it, `a <= 0` rejects it, otherwise
+/// it is kept when [`ray_hash`]`(o, d) <= a` (probability `a`).
+#[inline]
+pub fn alpha_keeps(a: f32, o: Vec3, d: Vec3) -> bool {
+    if a.is_nan() || a >= 1.0 {
+        return true;
+    }
+    a > 0.0 && ray_hash(o, d) <= a
+}
+
+/// One mesh's alpha cut-out, as both backends test it: the texture and what the hit's uv is
+/// computed from (the mesh's uvs and indices, copied so the backends need not borrow the
+/// scene; without uvs the uv comes from the barycentrics and nothing is copied).
+#[derive(Debug)]
+pub struct AlphaMask {
+    texture: Arc<Texture>,
+    uvs: Option<Vec<Vec2>>,
+    indices: Vec<[u32; 3]>,
+}
+
+impl AlphaMask {
+    /// The mask of `mesh`, or `None` when it has no alpha.
+    pub fn of(mesh: &Mesh) -> Option<AlphaMask> {
+        let texture = mesh.alpha.clone()?;
+        let uvs = mesh.uvs.clone();
+        let indices = if uvs.is_some() {
+            mesh.indices.clone()
+        } else {
+            Vec::new()
+        };
+        Some(AlphaMask {
+            texture,
+            uvs,
+            indices,
+        })
+    }
+
+    /// The masks of every mesh of `scene` (by mesh index), or `None` when no mesh has alpha.
+    pub fn of_scene(scene: &Scene) -> Option<Vec<Option<Arc<AlphaMask>>>> {
+        scene.meshes.iter().any(|m| m.alpha.is_some()).then(|| {
+            scene
+                .meshes
+                .iter()
+                .map(|m| AlphaMask::of(m).map(Arc::new))
+                .collect()
+        })
+    }
+
+    /// The alpha texture's value at barycentrics `(u, v)` of triangle `prim` (its first
+    /// channel: float textures have three equal ones). A triangle the mask does not know
+    /// (cannot happen for ids the backends report) reads as opaque.
+    pub fn alpha(&self, prim: u32, u: f32, v: f32) -> f32 {
+        let tri = match &self.uvs {
+            Some(_) => match self.indices.get(prim as usize) {
+                Some(&t) => t,
+                None => return 1.0,
+            },
+            None => [0; 3],
+        };
+        let uv = interpolate_uv(self.uvs.as_deref(), tri, u, v);
+        self.texture.eval(uv).x
+    }
+
+    /// Whether the candidate hit at barycentrics `(u, v)` of triangle `prim` of the ray
+    /// `(o, d)` counts ([`alpha_keeps`]).
+    #[inline]
+    pub fn keeps(&self, prim: u32, u: f32, v: f32, o: Vec3, d: Vec3) -> bool {
+        alpha_keeps(self.alpha(prim, u, v), o, d)
+    }
 }

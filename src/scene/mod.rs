@@ -105,6 +105,29 @@ pub struct Mesh {
     pub flip_normals: bool,
     /// The analytic sphere (centre, radius) this mesh tessellates, for `Shape "sphere"`.
     pub sphere: Option<(Vec3, f32)>,
+    /// The shape's `alpha` (a float texture, or a constant below 1): a hit where it evaluates
+    /// to `a < 1` is kept only with probability `a` (see [`crate::accel::alpha_keeps`]).
+    /// `None`: opaque.
+    pub alpha: Option<Arc<crate::texture::Texture>>,
+}
+
+/// The uvs of a triangle's vertices (indices `tri`): from `uvs`, or without them pbrt-v4's
+/// default (0, 0), (1, 0), (1, 1) (`Triangle::InteractionFromIntersection`).
+#[inline]
+pub fn triangle_uvs(uvs: Option<&[Vec2]>, tri: [u32; 3]) -> [Vec2; 3] {
+    match uvs {
+        Some(uvs) => tri.map(|i| uvs[i as usize]),
+        None => [Vec2::ZERO, Vec2::X, Vec2::ONE],
+    }
+}
+
+/// Texture coordinates at barycentrics `(u, v)` (weights `1-u-v, u, v`) of the triangle with
+/// vertex indices `tri`, from [`triangle_uvs`]: `(u + v, v)` without `uvs`. The one place
+/// shading and the alpha test compute a hit's uv.
+#[inline]
+pub fn interpolate_uv(uvs: Option<&[Vec2]>, tri: [u32; 3], u: f32, v: f32) -> Vec2 {
+    let [a, b, c] = triangle_uvs(uvs, tri);
+    a * (1.0 - u - v) + b * u + c * v
 }
 
 impl Mesh {
@@ -154,6 +177,17 @@ impl Mesh {
     /// moved past its error bound (see [`crate::math::spawn_origin`]).
     pub fn spawn(&self, prim: u32, u: f32, v: f32, n: Vec3) -> Vec3 {
         crate::math::spawn_origin(self.point(prim, u, v), self.point_error(prim, u, v), n)
+    }
+
+    /// The texture coordinates at barycentrics `(u, v)` of triangle `prim` (see
+    /// [`interpolate_uv`]).
+    pub fn uv(&self, prim: u32, u: f32, v: f32) -> Vec2 {
+        interpolate_uv(self.uvs.as_deref(), self.indices[prim as usize], u, v)
+    }
+
+    /// The uvs of triangle `prim`'s vertices (see [`triangle_uvs`]).
+    pub fn triangle_uvs(&self, prim: u32) -> [Vec2; 3] {
+        triangle_uvs(self.uvs.as_deref(), self.indices[prim as usize])
     }
 
     /// The interpolated shading normal at barycentrics `(u, v)` (weights `1-u-v, u, v`).
@@ -474,7 +508,8 @@ impl Scene {
     }
 
     /// A 64-bit hash of everything that decides the image: geometry (vertex bits, indices,
-    /// normals, uvs, material and light of each mesh), materials, lights, camera and pixel filter
+    /// normals, uvs, material, light and alpha of each mesh; an image alpha by its settings and
+    /// size), materials, lights, camera and pixel filter
     /// (the resolution is checked on its own). Partial renders carry it so that parts of different scenes never merge.
     pub fn content_hash(&self) -> u64 {
         use crate::sampling::hash;
@@ -516,6 +551,10 @@ impl Scene {
                 m.area_light.map_or(u64::MAX, |l| l as u64),
                 m.flip_normals as u64,
             ]);
+            // Only with alpha, so that the hash of a scene without alpha is what it was.
+            if let Some(a) = &m.alpha {
+                h = hash(&[h, text(format!("{a:?}"))]);
+            }
         }
         h
     }

@@ -13,6 +13,8 @@
 //! The loader parses and stores them ([`crate::scene::Scene::textures`]); materials hold
 //! texture-valued parameters as [`Tex`], evaluated per hit at a [`TexCoord`] (the point's uv and
 //! its screen-space derivatives, from [`crate::interaction::SurfaceInteraction`]).
+//! A shape's `alpha` reads a float texture at the hit's uv, inside both ray-query backends (see
+//! [`crate::accel`]).
 //!
 //! Lookups follow pbrt-v4:
 //! - `uv` mapping: (s, t) = (uscale u + udelta, vscale v + vdelta); image textures then flip

@@ -20,8 +20,8 @@
 //! [`FOREIGN_INTEGRATORS`]), the `Option`s that cannot change photon's image. `ColorSpace
 //! "srgb"` is photon's own space; other color spaces, participating media (`MakeNamedMedium`,
 //! a non-empty `MediumInterface`), curves and hair are errors. `Texture`s are parsed and
-//! stored ([`super::textures`]), but a material or shape that names one is an error until the
-//! integrators apply them.
+//! stored ([`super::textures`]); materials ([`super::materials`]) and a shape's `alpha` (see
+//! [`super::shapes`]) name them.
 //!
 //! Object instancing (`ObjectBegin "tree"` ... `ObjectEnd`, `ObjectInstance "tree"`) copies
 //! the object's meshes per instance (photon's accelerators hold flat meshes), each moved by the
@@ -666,6 +666,8 @@ impl Builder {
     fn shape(&mut self, tok: &mut Tokenizer) -> Result<(), SceneError> {
         let (ty, at) = string_arg(tok, "a shape type")?;
         let mut params = read_params(tok)?;
+        let alpha_at = params.loc("alpha").cloned();
+        let alpha = shapes::alpha(&mut params, &self.textures)?;
         let gs = &self.gs;
         let mut mesh = match ty.as_str() {
             "trianglemesh" => {
@@ -715,6 +717,15 @@ impl Builder {
         };
         super::extent::check_shape(&mesh, &at)?;
         mesh.material = self.material_index();
+        if let (Some(_), Some(_), Some(loc), None) =
+            (&alpha, &self.gs.area, &alpha_at, &self.object)
+        {
+            return Err(SceneError::at(
+                loc,
+                "alpha on an emitting shape (AreaLightSource) is not supported",
+            ));
+        }
+        mesh.alpha = alpha;
         if let Some((name, meshes, _)) = &mut self.object {
             if self.gs.area.is_some() {
                 self.notes.push(format!(

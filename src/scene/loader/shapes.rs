@@ -6,7 +6,15 @@
 //! Shape "sphere" "float radius" 0.5                                     # tessellated, see below
 //! Shape "disk" "float radius" 1 "float innerradius" 0.2 "float height" 0 "float phimax" 360
 //! Shape "cylinder" "float radius" 1 "float zmin" -1 "float zmax" 1 "float phimax" 360
+//! Shape "trianglemesh" ... "float alpha" 0.5          # any shape: a constant alpha in [0, 1]
+//! Shape "plymesh" ... "texture alpha" "leafmask"      # or a float texture
 //! ```
+//!
+//! `alpha` ([`alpha`]) follows pbrt-v4's `GetAlphaTexture`: a `"texture alpha"` names a float
+//! texture defined earlier; a `"float alpha"` below 1 becomes a constant texture and 1 means no
+//! alpha. Unlike pbrt-v4, which takes any number (below 0 acting as 0), a constant outside
+//! [0, 1] is an error. How hits are cut out is in [`crate::accel`]. Emitting shapes
+//! (`AreaLightSource`) with alpha are errors for now (pbrt-v4 also masks their emission).
 //!
 //! Positions go through the CTM, normals through its inverse transpose (renormalised) and are
 //! negated under `ReverseOrientation`, as pbrt-v4's `TriangleMesh` does. Every triangle is kept,
@@ -43,10 +51,13 @@
 
 use super::params::ParamSet;
 use super::ply::read_ply;
+use super::textures::named_texture;
 use crate::math::{Mat3, Mat4, Vec2, Vec3};
 use crate::scene::{Loc, Mesh, SceneError};
+use crate::texture::{Texture, Textures};
 use std::f32::consts::PI;
 use std::path::Path;
+use std::sync::Arc;
 
 /// Latitude rings of a tessellated sphere.
 pub const SPHERE_RINGS: u32 = 64;
@@ -102,6 +113,26 @@ pub fn triangle_mesh(params: &mut ParamSet, loc: &Loc) -> Result<ObjMesh, SceneE
         uvs,
         indices,
     })
+}
+
+/// A shape's `alpha`: the float texture `"texture alpha"` names, or `"float alpha"` as a
+/// constant texture when below 1; `None` without alpha (or with alpha 1). A constant must be
+/// in [0, 1]; an unknown texture name is an error at the parameter.
+pub fn alpha(
+    params: &mut ParamSet,
+    textures: &Textures,
+) -> Result<Option<Arc<Texture>>, SceneError> {
+    if let Some(t) = named_texture(params, "alpha", false, textures)? {
+        return Ok(Some(t));
+    }
+    match params.get_float_opt("alpha")? {
+        Some(a) if !(0.0..=1.0).contains(&a) => {
+            let p = params.peek("alpha").expect("just read");
+            Err(p.err(format!("alpha {a} is outside [0, 1]")))
+        }
+        Some(a) if a < 1.0 => Ok(Some(Arc::new(Texture::Constant(Vec3::splat(a))))),
+        _ => Ok(None),
+    }
 }
 
 /// An error at parameter `name` (or at `loc` if it somehow is not there).
@@ -285,6 +316,7 @@ pub fn transform_mesh(mesh: &Mesh, m: &Mat4) -> Result<Mesh, String> {
         area_light: None,
         flip_normals,
         sphere,
+        alpha: mesh.alpha.clone(),
     })
 }
 

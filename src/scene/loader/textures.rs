@@ -112,23 +112,45 @@ pub(super) fn texture_param(
     default: f32,
     textures: &Textures,
 ) -> Result<Arc<Texture>, SceneError> {
-    if params.peek(name).map(|p| p.ty) != Some(ParamType::Texture) {
-        return Ok(Arc::new(Texture::Constant(value(
+    match named_texture(params, name, spectrum, textures)? {
+        Some(t) => Ok(t),
+        None => Ok(Arc::new(Texture::Constant(value(
             params, name, spectrum, default,
-        )?)));
+        )?))),
+    }
+}
+
+/// The texture a `"texture name" "tex"` parameter names in the spectrum or float namespace, or
+/// `None` (nothing read) when parameter `name` is absent or not texture-typed. A name that is
+/// not defined in that namespace is an error at the parameter (which says when the name is a
+/// texture of the other kind).
+pub fn named_texture(
+    params: &mut ParamSet,
+    name: &str,
+    spectrum: bool,
+    textures: &Textures,
+) -> Result<Option<Arc<Texture>>, SceneError> {
+    if params.peek(name).map(|p| p.ty) != Some(ParamType::Texture) {
+        return Ok(None);
     }
     let p = params.get_param(name).expect("just peeked");
     let Some([tex]) = p.strings() else {
         return Err(p.err("expected one texture name"));
     };
-    let (map, kind) = if spectrum {
-        (&textures.spectrum, "spectrum")
+    let (map, other, kind, other_kind) = if spectrum {
+        (&textures.spectrum, &textures.float, "spectrum", "float")
     } else {
-        (&textures.float, "float")
+        (&textures.float, &textures.spectrum, "float", "spectrum")
     };
-    map.get(tex)
-        .cloned()
-        .ok_or_else(|| p.err(format!("unknown {kind} texture \"{tex}\"")))
+    if let Some(t) = map.get(tex) {
+        return Ok(Some(t.clone()));
+    }
+    let hint = if other.contains_key(tex) {
+        format!(" (\"{tex}\" is a {other_kind} texture)")
+    } else {
+        String::new()
+    };
+    Err(p.err(format!("unknown {kind} texture \"{tex}\"{hint}")))
 }
 
 /// `mapping "uv"` with `uscale`, `vscale`, `udelta`, `vdelta`.
