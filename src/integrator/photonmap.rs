@@ -52,7 +52,9 @@ pub struct PhotonSettings {
     pub gather_samples: u32,
     pub final_gather: bool,
     /// Gather directions drawn by the nearest photons' incoming light (see
-    /// [`crate::photon::guide`]) instead of by the cosine alone.
+    /// [`crate::photon::guide`]) instead of by the cosine alone. Off by default: on
+    /// cornell-spheres at 16 spp it cut relMSE 9% (0.0086 -> 0.0078) for 35% more time; on
+    /// veach-bidir at equal time (15 s) it cut it 20% (0.240 -> 0.192, one seed each).
     pub guided_gather: bool,
     pub irradiance_cache: bool,
     /// Progressive photon mapping (Knaus and Zwicker 2011): every pass traces fresh maps and
@@ -88,7 +90,7 @@ impl Default for PhotonSettings {
             kernel: Kernel::Epanechnikov,
             gather_samples: 2,
             final_gather: true,
-            guided_gather: true,
+            guided_gather: false,
             irradiance_cache: true,
             progressive: false,
             alpha: 2.0 / 3.0,
