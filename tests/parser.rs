@@ -2229,3 +2229,18 @@ fn bad_coated_and_translucent_parameters_are_located_errors() {
         &["unused parameter \"float roughness\""],
     );
 }
+
+/// `interface` materials bound media: a clear error naming why, at the type.
+#[test]
+fn interface_material_names_media() {
+    let dir = TempDir::new("photon-interface");
+    let path = dir.write(
+        "s.pbrt",
+        "WorldBegin\nMaterial \"interface\"\nShape \"sphere\"\n",
+    );
+    let e = load(&path).unwrap_err().to_string();
+    assert!(
+        e.contains("s.pbrt:2:10: material \"interface\" only bounds participating media"),
+        "{e}"
+    );
+}

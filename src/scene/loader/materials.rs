@@ -63,41 +63,47 @@ pub fn make_material(
     loc: &Loc,
     textures: &Textures,
 ) -> Result<Material, SceneError> {
-    let kind = match ty {
-        "diffuse" => MaterialKind::Diffuse {
-            reflectance: albedo(params, "reflectance", Vec3::splat(0.5), textures)?,
-        },
-        "dielectric" => MaterialKind::Dielectric {
-            eta: dielectric_eta(params, "eta")?,
-            roughness: roughness(params, "", textures)?,
-        },
-        "thindielectric" => MaterialKind::ThinDielectric {
-            eta: dielectric_eta(params, "eta")?,
-        },
-        "conductor" => conductor(params, textures)?,
-        "diffusetransmission" => MaterialKind::DiffuseTransmission {
-            reflectance: albedo(params, "reflectance", Vec3::splat(0.25), textures)?,
-            transmittance: albedo(params, "transmittance", Vec3::splat(0.25), textures)?,
-            scale: float_in(params, "scale", 1.0, 0.0, f32::MAX)?,
-        },
-        "coateddiffuse" => MaterialKind::CoatedDiffuse {
-            reflectance: albedo(params, "reflectance", Vec3::splat(0.5), textures)?,
-            roughness: roughness(params, "", textures)?,
-            coat: coat(params, "eta", textures)?,
-        },
-        "coatedconductor" => MaterialKind::CoatedConductor {
-            interface: roughness(params, "interface.", textures)?,
-            coat: coat(params, "interface.eta", textures)?,
-            metal: metal_index(params, "conductor.", textures)?,
-            roughness: roughness(params, "conductor.", textures)?,
-        },
-        other => {
-            return Err(SceneError::at(
+    let kind =
+        match ty {
+            "diffuse" => MaterialKind::Diffuse {
+                reflectance: albedo(params, "reflectance", Vec3::splat(0.5), textures)?,
+            },
+            "dielectric" => MaterialKind::Dielectric {
+                eta: dielectric_eta(params, "eta")?,
+                roughness: roughness(params, "", textures)?,
+            },
+            "thindielectric" => MaterialKind::ThinDielectric {
+                eta: dielectric_eta(params, "eta")?,
+            },
+            "conductor" => conductor(params, textures)?,
+            "diffusetransmission" => MaterialKind::DiffuseTransmission {
+                reflectance: albedo(params, "reflectance", Vec3::splat(0.25), textures)?,
+                transmittance: albedo(params, "transmittance", Vec3::splat(0.25), textures)?,
+                scale: float_in(params, "scale", 1.0, 0.0, f32::MAX)?,
+            },
+            "coateddiffuse" => MaterialKind::CoatedDiffuse {
+                reflectance: albedo(params, "reflectance", Vec3::splat(0.5), textures)?,
+                roughness: roughness(params, "", textures)?,
+                coat: coat(params, "eta", textures)?,
+            },
+            "coatedconductor" => MaterialKind::CoatedConductor {
+                interface: roughness(params, "interface.", textures)?,
+                coat: coat(params, "interface.eta", textures)?,
+                metal: metal_index(params, "conductor.", textures)?,
+                roughness: roughness(params, "conductor.", textures)?,
+            },
+            "interface" => return Err(SceneError::at(
                 loc,
-                format!("unsupported material type \"{other}\""),
-            ))
-        }
-    };
+                "material \"interface\" only bounds participating media, which photon does not \
+                 support (MakeNamedMedium and MediumInterface are errors too)",
+            )),
+            other => {
+                return Err(SceneError::at(
+                    loc,
+                    format!("unsupported material type \"{other}\""),
+                ))
+            }
+        };
     let displacement = match params.peek("displacement") {
         Some(_) => Some(tex(params, "displacement", false, 0.0, textures)?),
         None => None,
