@@ -313,6 +313,8 @@ pub fn estimate(
         .push(("geometry", tris.saturating_mul(triangle_bytes(backend))));
     // Already decoded by the loader (each image checked against MAX_IMAGE_PIXELS first).
     e.parts.push(("textures", scene.textures.decoded_bytes()));
+    // Environment maps: texels and sampling tables, shared (Arc) by every render's lights.
+    e.parts.push(("environment maps", scene.light_map_bytes()));
     e.parts.push(("alpha masks", alpha_mask_bytes(scene)));
     e.parts.push((
         "threads",

@@ -1049,9 +1049,9 @@ fn error_unknown_and_unsupported_directives() {
         &["\"interface\""],
     );
     assert_src_err(
-        "WorldBegin\nLightSource \"infinite\"\n",
+        "WorldBegin\nLightSource \"goniometric\"\n",
         2,
-        &["unsupported light type \"infinite\""],
+        &["unsupported light type \"goniometric\""],
     );
     assert_src_err("WorldBegin\nAreaLightSource \"spot\"\n", 2, &["\"spot\""]);
     assert_src_err(

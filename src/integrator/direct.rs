@@ -4,7 +4,9 @@
 //!
 //! At each hit: emitted light (MIS-weighted after a glossy bounce); direct light by shadow rays
 //! to a light chosen in proportion to power (power-heuristic MIS with BSDF sampling on glossy
-//! surfaces); then, on specular and glossy surfaces only, a BSDF-sampled continuation.
+//! surfaces, with the gather rays on diffuse ones); then, on specular and glossy surfaces only,
+//! a BSDF-sampled continuation. Rays that leave the scene see the infinite lights, weighted
+//! like emission ([`wavefront::escaped`]).
 //! Diffuse surfaces end the path: diffuse interreflection is the photon mapper's job.
 //!
 //! Components: light reaching the camera after at most one non-delta scattering event is
@@ -62,6 +64,10 @@ impl Shade for Direct {
         shade(ctx, path, hit, wave)
     }
 
+    fn emitted_component(&self, path: &PathState) -> Component {
+        component(path.depth == 0 || (path.depth == 1 && !path.prev_delta))
+    }
+
     fn pending(&self, g: &Gathers) -> usize {
         g.pending.len()
     }
@@ -86,8 +92,8 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<Ga
             } else {
                 1.0
             };
-            let direct = path.depth == 0 || (path.depth == 1 && !path.prev_delta);
-            add(wave.acc, path.pixel, component(direct), path.beta * le * w);
+            let c = Direct.emitted_component(&path);
+            add(wave.acc, path.pixel, c, path.beta * le * w);
         }
     }
     if path.depth >= ctx.settings.max_depth {

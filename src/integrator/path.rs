@@ -13,7 +13,8 @@
 //! At every vertex:
 //! - emission seen along the ray counts with full weight after the camera or a delta bounce,
 //!   and MIS-weighted (power heuristic, [`Lights::pdf_area`](crate::light::Lights::pdf_area)
-//!   against the BSDF density) after a non-delta bounce;
+//!   against the BSDF density) after a non-delta bounce; a ray that leaves the scene sees the
+//!   infinite lights the same way ([`wavefront::escaped`]);
 //! - on a non-delta BSDF (diffuse, rough conductor), one light sample chosen in proportion to
 //!   power (next-event estimation), power-heuristic-weighted against BSDF sampling (full weight
 //!   for delta lights);
@@ -69,6 +70,10 @@ impl Shade for PathTracer {
     fn shade(&self, ctx: &RenderContext, path: PathState, hit: &Hit, wave: &mut Wave<()>) {
         shade(ctx, path, hit, wave)
     }
+
+    fn emitted_component(&self, path: &PathState) -> Component {
+        component(path.depth == 0 || (path.depth == 1 && path.prev_pdf > 0.0))
+    }
 }
 
 /// Light from an emitter straight away or after one non-delta bounce at the first hit is
@@ -86,8 +91,12 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<()
     let mut si = SurfaceInteraction::new(ctx.scene, hit, &path.ray);
     if let Some(li) = si.area_light() {
         let le = emitted(ctx, &path, li, si.p, si.ng);
-        let direct = path.depth == 0 || (path.depth == 1 && path.prev_pdf > 0.0);
-        add(wave.acc, path.pixel, component(direct), le);
+        add(
+            wave.acc,
+            path.pixel,
+            PathTracer.emitted_component(&path),
+            le,
+        );
     }
     if path.depth >= ctx.settings.max_depth {
         return;

@@ -479,8 +479,8 @@ fn sampler_key(s: &mut Sampler) -> u64 {
 const GATHER_SPECULAR_BOUNCES: u32 = 4;
 
 /// Radiance arriving along a gather ray that hit `hit`, split as (direct, indirect): an
-/// emitter hit straight away is the BSDF-sampling half of direct lighting (MIS-weighted
-/// against the shadow rays); otherwise the reflected radiance of the first diffuse surface the
+/// emitter hit straight away, or the infinite lights when the ray leaves the scene, is the
+/// BSDF-sampling half of direct lighting (MIS-weighted against the shadow rays); otherwise the reflected radiance of the first diffuse surface the
 /// ray reaches (through at most a few specular/glossy bounces), from the irradiance cache or
 /// the global map. Emitters reached through specular or glossy bounces count zero: the caustic
 /// map has that light (L (S|G)+ paths, see `photon::trace`).
@@ -494,17 +494,21 @@ pub fn gather_radiance(
     let Some(global) = &pass.maps.global else {
         return (Vec3::ZERO, Vec3::ZERO);
     };
+    let n_g = pass.settings.gather_samples.max(1) as f32;
+    // The gather's weight holds 1/n_g; the heuristic's sample counts do the rest.
+    let mis =
+        |light_pdf: f32| super::power_heuristic(n_g * g.pdf, g.light_samples as f32 * light_pdf);
     let mut direct = Vec3::ZERO;
+    if hit.is_none() {
+        direct = ctx.lights.escaped(g.ray.d, mis);
+    }
     if let Some(h) = hit {
         let mesh = &ctx.scene.meshes[h.mesh as usize];
         if let Some(li) = mesh.area_light {
             let p = mesh.point(h.prim, h.u, h.v);
             let ng = mesh.geometric_normal(h.prim, h.u, h.v);
             let le = ctx.lights.le(li as usize, ng, -g.ray.d);
-            let light_pdf = ctx.lights.pdf_area(li as usize, g.ray.o, p, ng);
-            let n_g = pass.settings.gather_samples.max(1) as f32;
-            // The gather's weight holds 1/n_g; the heuristic's sample counts do the rest.
-            direct = le * super::power_heuristic(n_g * g.pdf, g.light_samples as f32 * light_pdf);
+            direct = le * mis(ctx.lights.pdf_area(li as usize, g.ray.o, p, ng));
         }
     }
     (direct, reflected(ctx, pass, global, g, hit, buf))

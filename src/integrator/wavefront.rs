@@ -108,6 +108,9 @@ pub trait Shade: Sync {
     type Extra: Default;
     /// Shades `path`'s `hit`.
     fn shade(&self, ctx: &RenderContext, path: PathState, hit: &Hit, wave: &mut Wave<Self::Extra>);
+    /// The component that light emitted towards `path` counts towards: an emitter it hits, or
+    /// the infinite lights when it leaves the scene (see [`escaped`]).
+    fn emitted_component(&self, path: &PathState) -> Component;
     /// Entries waiting in `extra` (flushed at [`BATCH`] and at the end of each wave).
     fn pending(&self, _extra: &Self::Extra) -> usize {
         0
@@ -194,7 +197,6 @@ fn wave<S: Shade>(
     b.shadows.clear();
     b.next.clear();
     for (path, hit) in b.paths.drain(..).zip(b.hits.iter()) {
-        // No infinite lights: an escaping path carries nothing.
         if let Some(hit) = hit {
             let mut w = Wave {
                 acc,
@@ -203,6 +205,13 @@ fn wave<S: Shade>(
                 extra,
             };
             shader.shade(ctx, path, hit, &mut w);
+        } else if ctx.lights.has_infinite() {
+            add(
+                acc,
+                path.pixel,
+                shader.emitted_component(&path),
+                escaped(ctx, &path),
+            );
         }
         // Bounded batches: a point adds a bounded number of shadow rays and deferred entries
         // beyond BATCH before they are traced.
@@ -220,6 +229,21 @@ fn wave<S: Shade>(
         .secondary_rays
         .fetch_add(b.next.len() as u64, Ordering::Relaxed);
     std::mem::swap(&mut b.paths, &mut b.next);
+}
+
+/// What a path that leaves the scene sees of the infinite lights, times its throughput: with
+/// full weight after the camera or a delta bounce, else power-heuristic-weighted against light
+/// sampling (the BSDF density of the last bounce against the lights' density of the direction).
+pub fn escaped(ctx: &RenderContext, path: &PathState) -> Vec3 {
+    let d = path.ray.d.normalize_or_zero();
+    let le = ctx.lights.escaped(d, |light_pdf| {
+        if path.prev_pdf > 0.0 {
+            super::power_heuristic(path.prev_pdf, light_pdf)
+        } else {
+            1.0
+        }
+    });
+    path.beta * le
 }
 
 /// Traces a batch of shadow rays and adds the unoccluded contributions.

@@ -10,18 +10,28 @@
 //! LightSource "spot" "rgb I" [ 10 10 10 ] "point3 from" [ 0 2 0 ] "point3 to" [ 0 0 0 ]
 //!     "float coneangle" [ 30 ] "float conedelta" [ 5 ]
 //! LightSource "distant" "rgb L" [ 3 3 3 ] "point3 from" [ 0 1 0 ] "point3 to" [ 0 0 0 ]
+//! LightSource "infinite" "string filename" "sky.exr"
 //! ```
 //! One file per variant; [`Lights`] dispatches over the closed set.
+//!
+//! Shadow rays and photons pick a light in proportion to its power through an alias table
+//! (pbrt-v4's `PowerLightSampler`); rays that leave the scene see the infinite lights
+//! ([`Lights::escaped`]).
 mod area;
 mod distant;
+mod infinite;
 mod point;
 mod spot;
 
 pub use area::AreaLight;
+pub use infinite::EnvMap;
 
-use crate::math::{luminance, Vec2, Vec3};
-use crate::sampling::warp::Distribution1D;
+use crate::math::{luminance, Frame, Vec2, Vec3};
+use crate::sampling::alias::AliasTable;
+use crate::sampling::warp::square_to_disk_concentric;
 use crate::scene::{Light, Scene};
+use std::f32::consts::PI;
+use std::sync::Arc;
 
 /// A light sample seen from a receiving point.
 #[derive(Clone, Copy, Debug)]
@@ -46,7 +56,9 @@ pub struct LightSample {
 #[derive(Clone, Debug)]
 pub struct Lights {
     areas: Vec<Option<AreaLight>>,
-    select: Distribution1D,
+    /// The infinite lights: (index in the scene's lights, map).
+    envs: Vec<(usize, Arc<EnvMap>)>,
+    select: AliasTable,
     /// Centre and radius of the scene's bounding sphere (distant lights start outside it).
     center: Vec3,
     radius: f32,
@@ -73,16 +85,23 @@ impl Lights {
                 _ => None,
             })
             .collect();
+        let envs = scene
+            .lights
+            .iter()
+            .enumerate()
+            .filter_map(|(i, l)| match l {
+                Light::Infinite { map } => Some((i, map.clone())),
+                _ => None,
+            })
+            .collect();
         let mut lights = Lights {
             areas,
-            select: Distribution1D::default(),
+            envs,
+            select: AliasTable::default(),
             center,
             radius,
         };
-        let powers: Vec<f32> = (0..scene.lights.len())
-            .map(|i| lights.power(scene, i).max(0.0))
-            .collect();
-        lights.select = Distribution1D::new(&powers);
+        lights.select = AliasTable::new(&lights.powers(scene));
         lights
     }
 
@@ -98,25 +117,41 @@ impl Lights {
                 ..
             } => spot::power(*intensity, *cos_falloff_start, *cos_falloff_end),
             Light::Distant { l, .. } => distant::power(*l, self.radius),
+            Light::Infinite { map } => map.power(self.radius),
         }
     }
 
     /// Probability that `sample` picks light `i`.
     pub fn selection_pmf(&self, i: usize) -> f32 {
-        if i < self.select.len() {
-            self.select.pmf(i)
-        } else {
-            0.0
-        }
+        self.select.pmf(i)
     }
 
     pub fn is_empty(&self) -> bool {
-        self.select.total() <= 0.0
+        self.select.is_empty()
+    }
+
+    /// Whether the scene has infinite lights (rays that leave it carry radiance).
+    pub fn has_infinite(&self) -> bool {
+        !self.envs.is_empty()
+    }
+
+    /// Radiance arriving along a ray that leaves the scene in unit direction `d`: the sum over
+    /// the infinite lights of `Le(-d)`, each times `weight(pdf)` where `pdf` is the density
+    /// with which [`Self::sample`] would have produced that direction from that light
+    /// (selection included), for MIS; `weight` returns 1 where there is no MIS.
+    pub fn escaped(&self, d: Vec3, weight: impl Fn(f32) -> f32) -> Vec3 {
+        self.envs.iter().fold(Vec3::ZERO, |acc, (i, map)| {
+            let le = map.le(d);
+            if le.max_element() <= 0.0 {
+                return acc;
+            }
+            acc + le * weight(self.selection_pmf(*i) * map.pdf(d))
+        })
     }
 
     /// Picks a light in proportion to power (`u_sel`) and a point on it (`u`) as seen from `p`.
     pub fn sample(&self, scene: &Scene, p: Vec3, u_sel: f32, u: Vec2) -> Option<LightSample> {
-        let (i, pmf, _) = self.select.sample(u_sel)?;
+        let (i, pmf) = self.select.sample(u_sel)?;
         let mut s = match &scene.lights[i] {
             Light::Area { .. } => self.areas[i].as_ref()?.sample(&scene.meshes, p, u)?,
             Light::Point { pos, intensity } => point::sample(*pos, *intensity, p)?,
@@ -135,6 +170,19 @@ impl Lights {
                 p,
             )?,
             Light::Distant { dir, l } => distant::sample(*dir, *l, p, self.center, self.radius),
+            Light::Infinite { map } => {
+                let (wi, li, pdf) = map.sample(u)?;
+                let far = (p - self.center).length() + 2.0 * self.radius;
+                LightSample {
+                    li,
+                    wi,
+                    p: p + wi * far,
+                    n: Vec3::ZERO,
+                    err: Vec3::ZERO,
+                    pdf,
+                    delta: false,
+                }
+            }
         };
         s.pdf *= pmf;
         (s.pdf > 0.0 && s.li.max_element() > 0.0).then_some(s)
@@ -217,7 +265,71 @@ impl Lights {
             Light::Distant { dir, l } => {
                 Some(distant::emit(*dir, *l, self.center, self.radius, u_pos))
             }
+            Light::Infinite { map } => self.emit_env(map, u_pos, u_dir),
         }
+    }
+
+    /// A photon from an infinite light (pbrt-v4's `SampleLe`): a direction from the map's
+    /// distribution (`u_dir`), an origin uniform on the disc of the scene's radius `R` that
+    /// faces it, outside the scene (`u_pos`); flux `Le pi R^2 / pdf_dir`.
+    fn emit_env(&self, map: &EnvMap, u_pos: Vec2, u_dir: Vec2) -> Option<Emission> {
+        let (w, le, pdf) = map.sample(u_dir)?;
+        let dir = -w;
+        let d = square_to_disk_concentric(u_pos) * self.radius;
+        let frame = Frame::from_normal(dir);
+        let p = self.center - dir * (2.0 * self.radius) + frame.s * d.x + frame.t * d.y;
+        Some(Emission {
+            p,
+            n: Vec3::ZERO,
+            err: Vec3::ZERO,
+            dir,
+            flux: finite_flux(le, PI as f64 * (self.radius as f64).powi(2) / pdf as f64),
+        })
+    }
+
+    /// A caustic photon from light `i`: as [`Self::emit`], except that an infinite light aims
+    /// it at the bounding spheres `targets` of the specular objects (only photons whose first
+    /// hit is specular can start a caustic path): the origin is uniform over the discs those
+    /// spheres cast on the emission plane along the photon's direction, a disc chosen by its
+    /// area with `u_pos.x`, and the flux divides by that density (`k / (pi sum r^2)` where `k`
+    /// discs overlap at the origin).
+    pub fn emit_caustic(
+        &self,
+        scene: &Scene,
+        i: usize,
+        u_pos: Vec2,
+        u_dir: Vec2,
+        targets: &[(Vec3, f32)],
+    ) -> Option<Emission> {
+        let Light::Infinite { map } = &scene.lights[i] else {
+            return self.emit(scene, i, u_pos, u_dir);
+        };
+        let areas: Vec<f32> = targets.iter().map(|&(_, r)| r * r).collect();
+        let (t, _, rem) = crate::sampling::warp::Distribution1D::new(&areas).sample(u_pos.x)?;
+        let (w, le, pdf_dir) = map.sample(u_dir)?;
+        let dir = -w;
+        let frame = Frame::from_normal(dir);
+        let (c, r) = targets[t];
+        let d = square_to_disk_concentric(Vec2::new(rem, u_pos.y)) * r;
+        // On the plane 2R upstream of the scene's centre, across from the target's centre.
+        let upstream = (c - self.center).dot(dir) + 2.0 * self.radius;
+        let p = c - dir * upstream + frame.s * d.x + frame.t * d.y;
+        let covering = targets
+            .iter()
+            .filter(|&&(c, r)| {
+                let v = c - p;
+                (v - dir * v.dot(dir)).length_squared() <= r * r
+            })
+            .count()
+            .max(1);
+        let total = areas.iter().map(|&a| a as f64).sum::<f64>() * PI as f64;
+        Some(Emission {
+            p,
+            n: Vec3::ZERO,
+            err: Vec3::ZERO,
+            dir,
+            flux: finite_flux(le, total / (covering as f64 * pdf_dir as f64)),
+        })
     }
 
     /// The sample domain a projection map of light `i` restricts.
@@ -235,6 +347,8 @@ impl Lights {
             Light::Area { .. } => self.areas[i]
                 .as_ref()
                 .is_some_and(|a| a.plane_normal().is_some()),
+            // Photons leave from anywhere on a disc that turns with the direction.
+            Light::Infinite { .. } => false,
             _ => true,
         }
     }
@@ -245,6 +359,7 @@ impl Lights {
             Light::Area { mesh, .. } => bounding_sphere(&scene.meshes[*mesh as usize].positions),
             Light::Point { pos, .. } | Light::Spot { pos, .. } => (*pos, 0.0),
             Light::Distant { .. } => (self.center, self.radius),
+            Light::Infinite { .. } => (self.center, 3.0 * self.radius),
         }
     }
 
@@ -254,6 +369,14 @@ impl Lights {
             .map(|i| self.power(scene, i).max(0.0))
             .collect()
     }
+}
+
+/// `le * k` computed in f64 and kept finite (at most `f32::MAX` per channel): an infinite
+/// light's photon flux grows with the scene's area.
+fn finite_flux(le: Vec3, k: f64) -> Vec3 {
+    (le.as_dvec3() * k)
+        .min(glam::DVec3::splat(f32::MAX as f64))
+        .as_vec3()
 }
 
 /// A (not minimal) bounding sphere of points: the centre of their box, and the farthest point.

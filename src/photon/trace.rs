@@ -23,6 +23,8 @@
 //!   caustic map's sharp, small discs. A bounce counts towards a caustic chain when the
 //!   surface has no diffuse lobe ([`is_caustic_surface`]).
 //! - Photons trapped by total internal reflection end at `max_bounces`.
+//! - Caustic photons of infinite lights start only where they can reach a specular object
+//!   ([`Lights::emit_caustic`]): a disc of the scene's radius would waste almost all of them.
 use super::projection::ProjectionMap;
 use super::{Photon, PhotonMap};
 use crate::accel::{Accel, RayKind};
@@ -321,7 +323,11 @@ fn trace_one(
         return (false, 0);
     };
     *restricted = u;
-    let Some(e) = lights.emit(scene, light, u_pos, u_dir) else {
+    let e = match kind {
+        MapKind::Global => lights.emit(scene, light, u_pos, u_dir),
+        MapKind::Caustic => lights.emit_caustic(scene, light, u_pos, u_dir, targets),
+    };
+    let Some(e) = e else {
         return (false, 0);
     };
     let mut power = e.flux * (map.fraction() / count as f32);

@@ -11,6 +11,7 @@
 //!   permutations of `0..spp`, so each row and each column of the `spp x spp` grid holds one
 //!   sample.
 //! - [`Pattern::Independent`]: plain hashed uniform numbers (for reference and tests).
+pub mod alias;
 pub mod warp;
 
 use crate::math::Vec2;

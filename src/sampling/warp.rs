@@ -123,6 +123,104 @@ impl Distribution1D {
     }
 }
 
+/// Piecewise-constant density over [0,1]^2 on a `width x height` grid of non-negative values
+/// (pbrt-v4's `PiecewiseConstant2D`): a row by its sum (marginal), then a column within it
+/// (conditional). Cell `(x, y)` has density `f(x, y) / mean(f)`.
+#[derive(Clone, Debug, Default)]
+pub struct Distribution2D {
+    width: usize,
+    height: usize,
+    rows: Vec<Distribution1D>,
+    marginal: Distribution1D,
+}
+
+impl Distribution2D {
+    /// `f` holds `width * height` values row by row (row 0 first). An all-zero grid samples
+    /// nothing.
+    pub fn new(f: &[f32], width: usize, height: usize) -> Distribution2D {
+        let rows: Vec<Distribution1D> = f
+            .chunks_exact(width.max(1))
+            .take(height)
+            .map(Distribution1D::new)
+            .collect();
+        let sums: Vec<f32> = rows.iter().map(|r| r.total()).collect();
+        Distribution2D {
+            width,
+            height,
+            rows,
+            marginal: Distribution1D::new(&sums),
+        }
+    }
+
+    /// A point of the square for `u`, its density and its cell `(x, y)` (the point can round
+    /// onto the next cell's edge); keeps `u`'s stratification (each coordinate is re-stretched
+    /// inside its cell).
+    pub fn sample(&self, u: Vec2) -> Option<(Vec2, f32, (usize, usize))> {
+        let (y, py, ry) = self.marginal.sample(u.y)?;
+        let (x, px, rx) = self.rows[y].sample(u.x)?;
+        let p = Vec2::new(
+            (x as f32 + rx) / self.width as f32,
+            (y as f32 + ry) / self.height as f32,
+        );
+        let pdf = py * px * (self.width * self.height) as f32;
+        Some((p.min(Vec2::splat(super::ONE_MINUS_EPSILON)), pdf, (x, y)))
+    }
+
+    /// The cell holding `p` (clamped to the grid).
+    pub fn cell(&self, p: Vec2) -> (usize, usize) {
+        let at = |v: f32, n: usize| ((v * n as f32).max(0.0) as usize).min(n.max(1) - 1);
+        (at(p.x, self.width), at(p.y, self.height))
+    }
+
+    /// Density of [`Self::sample`] at `p`.
+    pub fn pdf(&self, p: Vec2) -> f32 {
+        if self.marginal.total() <= 0.0 {
+            return 0.0;
+        }
+        let (x, y) = self.cell(p);
+        self.marginal.pmf(y) * self.rows[y].pmf(x) * (self.width * self.height) as f32
+    }
+
+    /// Bytes held (one f32 per cell and per row).
+    pub fn bytes(&self) -> u64 {
+        ((self.width + 1) * self.height * 4) as u64
+    }
+}
+
+/// pbrt-v4's equal-area octahedral map of the unit square onto the sphere (Clarberg): the
+/// inner diamond `|2u-1| + |2v-1| < 1` is the upper hemisphere (z > 0), the corners the lower
+/// one; equal areas of the square map to equal solid angles (4 pi times the area).
+pub fn equal_area_square_to_sphere(p: Vec2) -> Vec3 {
+    let (u, v) = (2.0 * p.x - 1.0, 2.0 * p.y - 1.0);
+    let (up, vp) = (u.abs(), v.abs());
+    let signed = 1.0 - (up + vp);
+    let r = 1.0 - signed.abs();
+    let phi = if r == 0.0 { 1.0 } else { (vp - up) / r + 1.0 } * FRAC_PI_4;
+    let z = (1.0 - r * r).copysign(signed);
+    let s = r * (2.0 - r * r).max(0.0).sqrt();
+    Vec3::new(phi.cos().copysign(u) * s, phi.sin().copysign(v) * s, z)
+}
+
+/// The inverse of [`equal_area_square_to_sphere`] for a unit vector `d` (exact `atan`, where
+/// pbrt-v4 uses a polynomial fit of it).
+pub fn equal_area_sphere_to_square(d: Vec3) -> Vec2 {
+    let (x, y, z) = (d.x.abs(), d.y.abs(), d.z.abs());
+    let r = (1.0 - z).max(0.0).sqrt();
+    let (a, b) = (x.max(y), x.min(y));
+    let b = if a == 0.0 { 0.0 } else { b / a };
+    let mut phi = b.atan() * (2.0 / PI);
+    if x < y {
+        phi = 1.0 - phi;
+    }
+    let mut v = phi * r;
+    let mut u = r - v;
+    if d.z < 0.0 {
+        (u, v) = (1.0 - v, 1.0 - u);
+    }
+    let (u, v) = (u.copysign(d.x), v.copysign(d.y));
+    Vec2::new(0.5 * (u + 1.0), 0.5 * (v + 1.0))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

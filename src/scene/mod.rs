@@ -405,6 +405,9 @@ pub enum Light {
     /// `LightSource "distant"`: radiance `l` arriving along unit `dir` (the direction the
     /// light travels, from `from` to `to`); irradiance on a surface facing it is `l`.
     Distant { dir: Vec3, l: Vec3 },
+    /// `LightSource "infinite"`: radiance arriving from every direction at infinity, constant
+    /// or from an equal-area image, oriented by the CTM (see [`crate::light::EnvMap`]).
+    Infinite { map: Arc<crate::light::EnvMap> },
 }
 
 /// `Camera "perspective"`: pinhole; `fov` (degrees) spans the shorter image axis (pbrt-v4).
@@ -555,6 +558,17 @@ impl Scene {
             }
         }
         h
+    }
+
+    /// Bytes the environment maps of `infinite` lights hold (texels and sampling tables).
+    pub fn light_map_bytes(&self) -> u64 {
+        self.lights
+            .iter()
+            .map(|l| match l {
+                Light::Infinite { map } => map.bytes(),
+                _ => 0,
+            })
+            .sum()
     }
 
     pub fn triangle_count(&self) -> usize {

@@ -58,7 +58,7 @@ pub struct MemoryEstimate {
     /// no caustic map in a scene without specular surfaces.
     pub photons: u64,
     /// The decoded texture images and MIP pyramids, each counted once however many textures
-    /// share it.
+    /// share it, and the environment maps with their sampling tables.
     pub textures: u64,
 }
 
@@ -76,7 +76,7 @@ impl MemoryEstimate {
             geometry,
             film: scene.film.xres as u64 * scene.film.yres as u64 * PIXEL_BYTES,
             photons: photons * PHOTON_BYTES,
-            textures: scene.textures.decoded_bytes(),
+            textures: scene.textures.decoded_bytes() + scene.light_map_bytes(),
         }
     }
 

@@ -28,11 +28,39 @@
 //! `from`/`to` go through the CTM; a distant light's `dir` is the direction light travels
 //! (`to - from`, transformed as a vector). Distant `illuminance`, spectra and blackbodies, and
 //! other light types are unsupported.
+//!
+//! `LightSource "infinite"` (see [`crate::light::EnvMap`]):
+//!
+//! ```text
+//! LightSource "infinite" "rgb L" [ 0.4 0.45 0.5 ] "float illuminance" 3
+//! Rotate -90 1 0 0
+//! LightSource "infinite" "string filename" "sky.exr" "float scale" 1.5
+//! ```
+//! - `L` (`rgb`, or a constant `spectrum`) or `filename`, not both; neither: `L` = (1, 1, 1).
+//!   pbrt-v4 scales a light's spectrum to one nit, so a constant spectrum is an equal-energy
+//!   white of luminance 1 whatever its value: in sRGB (1.2048, 0.9483, 0.9088).
+//! - `filename`: a square image (EXR, PFM; PNG and others decode as sRGB) in pbrt-v4's
+//!   equal-area octahedral parameterisation (non-square: an error, as in pbrt-v4). Texels must
+//!   be finite; negative ones count as 0.
+//! - `scale` multiplies. `illuminance` E (> 0) rescales so that a surface facing the light's
+//!   +z (before the CTM) receives illuminance E from the upper hemisphere. A constant `L` is
+//!   multiplied by `E / pi`, as pbrt-v4 does (its RGB value is not normalised: `L` (2, 2, 2)
+//!   gives 2E); an image by `E / E_map`, `E_map` the sum over the texels whose centre is above
+//!   the horizon of `luminance * cos(theta) * 4 pi / N`. pbrt-v4 weighs those texels `2 pi / N`
+//!   (half their solid angle), which makes its image lights twice as bright as asked and twice
+//!   as bright as a constant `L` with the same `illuminance`; photon follows the integral.
+//! - The CTM's linear part orients the map: a rotation, possibly with a uniform scale or a
+//!   mirror; anything else (it would not preserve solid angle) is an error.
+//! - `portal` is an error (not supported).
 
-use super::params::ParamSet;
+use super::params::{ParamSet, ParamType};
 use super::shapes::xform_point;
+use crate::light::EnvMap;
 use crate::math::{Mat3, Mat4, Vec3};
 use crate::scene::{Light, Loc, SceneError};
+use crate::texture::{Encoding, Image};
+use std::path::Path;
+use std::sync::Arc;
 
 /// An `AreaLightSource "diffuse"` waiting for the shapes it applies to.
 #[derive(Clone, Debug, PartialEq)]
@@ -153,17 +181,20 @@ pub fn area_light(ty: &str, params: &mut ParamSet, loc: &Loc) -> Result<AreaSpec
     })
 }
 
-/// `LightSource "point" | "spot" | "distant"` under the CTM `ctm`.
+/// `LightSource "point" | "spot" | "distant" | "infinite"` under the CTM `ctm`; image files
+/// are relative to `base_dir`.
 pub fn light_source(
     ty: &str,
     params: &mut ParamSet,
     loc: &Loc,
     ctm: &Mat4,
+    base_dir: &Path,
 ) -> Result<Light, SceneError> {
     let light = match ty {
         "point" => point(params, loc, ctm)?,
         "spot" => spot(params, loc, ctm)?,
         "distant" => distant(params, loc, ctm)?,
+        "infinite" => infinite(params, loc, ctm, base_dir)?,
         other => {
             return Err(SceneError::at(
                 loc,
@@ -263,4 +294,134 @@ fn distant(params: &mut ParamSet, loc: &Loc, ctm: &Mat4) -> Result<Light, SceneE
         dir: direction(from, to, ctm, loc)?,
         l,
     })
+}
+
+/// sRGB of an equal-energy spectrum of luminance 1 (XYZ (1, 1, 1)): a constant `spectrum L`.
+const EQUAL_ENERGY_RGB: Vec3 = Vec3::new(1.204_784_3, 0.948_300_8, 0.908_842_7);
+
+/// `LightSource "infinite"`: `L` or `filename`, `scale`, `illuminance`, oriented by the CTM.
+fn infinite(
+    params: &mut ParamSet,
+    loc: &Loc,
+    ctm: &Mat4,
+    base_dir: &Path,
+) -> Result<Light, SceneError> {
+    if let Some(p) = params.get_param("portal") {
+        return Err(p.err("portal infinite lights are not supported"));
+    }
+    let scale = params.get_float("scale", 1.0)?;
+    if !(scale.is_finite() && scale >= 0.0) {
+        let p = params.peek("scale").expect("given");
+        return Err(p.err(format!("must be finite and >= 0, got {scale}")));
+    }
+    let illuminance = params.get_float_opt("illuminance")?;
+    if let Some(e) = illuminance {
+        if !(e.is_finite() && e as f64 <= MAX_LIGHT_VALUE as f64) {
+            let p = params.peek("illuminance").expect("given");
+            return Err(p.err(format!(
+                "must be finite and at most {MAX_LIGHT_VALUE:e}, got {e}"
+            )));
+        }
+    }
+    // pbrt-v4 ignores a non-positive illuminance.
+    let illuminance = illuminance.filter(|&e| e > 0.0);
+    let filename = params.get_string_opt("filename")?;
+    if let (Some(_), Some(p)) = (&filename, params.peek("L")) {
+        return Err(p.err("an infinite light takes \"L\" or \"filename\", not both"));
+    }
+    let map = match filename {
+        Some(name) => {
+            let rotation = light_rotation(ctm, loc)?;
+            let image = env_image(&base_dir.join(&name), loc)?;
+            let k = match illuminance {
+                Some(e) => {
+                    let upper = EnvMap::upper_illuminance(&image);
+                    if upper <= 0.0 {
+                        let p = params.peek("illuminance").expect("given");
+                        return Err(
+                            p.err("the image is black above the horizon: no illuminance to scale")
+                        );
+                    }
+                    e as f64 / upper
+                }
+                None => 1.0,
+            };
+            let big = image
+                .texels
+                .iter()
+                .fold(0.0f32, |m, t| m.max(t.max_element()));
+            let k = scaled(params, "scale", loc, Vec3::splat(big), scale as f64 * k)?;
+            let k = if big > 0.0 { k.x / big } else { 0.0 };
+            EnvMap::new(image, k, rotation)
+        }
+        None => {
+            let l = infinite_l(params)?;
+            let k = scale as f64 * illuminance.map_or(1.0, |e| e as f64 / std::f64::consts::PI);
+            EnvMap::constant(scaled(params, "scale", loc, l, k)?)
+        }
+    };
+    Ok(Light::Infinite { map: Arc::new(map) })
+}
+
+/// An infinite light's constant `L`: `rgb` (each component in range), a constant `spectrum`
+/// (pbrt-v4's one-nit equal-energy white), or (1, 1, 1).
+fn infinite_l(params: &mut ParamSet) -> Result<Vec3, SceneError> {
+    let Some(p) = params.peek("L") else {
+        return Ok(Vec3::ONE);
+    };
+    if p.ty != ParamType::Spectrum {
+        return light_rgb(params, "L");
+    }
+    let p = params.get_param("L").expect("just peeked");
+    let constant = match p.floats() {
+        Some(v) if v.len() >= 2 && v.len() % 2 == 0 => {
+            let x = v[1];
+            x > 0.0 && x.is_finite() && v.chunks(2).all(|c| c[1] == x)
+        }
+        _ => false,
+    };
+    if constant {
+        Ok(EQUAL_ENERGY_RGB)
+    } else {
+        Err(p.err(
+            "only a constant positive spectrum (wavelength, value pairs of one value) or an rgb is supported here",
+        ))
+    }
+}
+
+/// The rotation (possibly with a mirror) the CTM's linear part makes after taking out a
+/// uniform scale; an error for a singular, sheared or non-uniformly scaled CTM.
+fn light_rotation(ctm: &Mat4, loc: &Loc) -> Result<Mat3, SceneError> {
+    let m = Mat3::from_mat4(*ctm);
+    let s = m.determinant().abs().cbrt();
+    let r = m * (1.0 / s);
+    let off = (r.transpose() * r - Mat3::IDENTITY)
+        .to_cols_array()
+        .iter()
+        .fold(0.0f32, |a, v| a.max(v.abs()));
+    if s.is_finite() && s > 0.0 && off <= 1e-3 {
+        return Ok(r);
+    }
+    Err(SceneError::at(
+        loc,
+        "an infinite light's transform must be a rotation (with at most a uniform scale or a mirror)",
+    ))
+}
+
+/// Reads an environment image: square, every texel finite.
+fn env_image(path: &Path, loc: &Loc) -> Result<Image, SceneError> {
+    let err =
+        |m: String| SceneError::at(loc, format!("infinite light \"{}\": {m}", path.display()));
+    let image = super::textures::read_image(path, Encoding::Srgb).map_err(err)?;
+    if image.width != image.height {
+        return Err(err(format!(
+            "the image is {}x{}, not square: not an equal-area environment map",
+            image.width, image.height
+        )));
+    }
+    if let Some(i) = image.texels.iter().position(|t| !t.is_finite()) {
+        let (x, y) = (i % image.width, i / image.width);
+        return Err(err(format!("texel ({x}, {y}) is not finite")));
+    }
+    Ok(image)
 }

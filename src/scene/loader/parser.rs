@@ -459,7 +459,7 @@ impl Builder {
                 self.world_only(t.text, &loc)?;
                 let (ty, at) = string_arg(tok, "a light type")?;
                 let mut params = read_params(tok)?;
-                let light = light_source(&ty, &mut params, &at, &self.gs.ctm)?;
+                let light = light_source(&ty, &mut params, &at, &self.gs.ctm, &self.base_dir)?;
                 self.lights.push(light);
             }
             "Include" | "Import" => {

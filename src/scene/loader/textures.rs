@@ -304,7 +304,8 @@ pub fn read_image(path: &Path, encoding: Encoding) -> Result<Image, String> {
 }
 
 /// Decodes a PFM image (`PF` colour or `Pf` grey; width height; scale, negative for
-/// little-endian; rows of f32 from the bottom up) into rows from the top down.
+/// little-endian, whose magnitude multiplies the values as in pbrt-v4; rows of f32 from the
+/// bottom up) into rows from the top down.
 pub fn read_pfm(bytes: &[u8]) -> Result<Image, String> {
     // The header is three whitespace-separated lines: magic, "width height", scale.
     let mut fields = Vec::new();
@@ -343,13 +344,20 @@ pub fn read_pfm(bytes: &[u8]) -> Result<Image, String> {
             pixels.len()
         ));
     }
+    // pbrt-v4 multiplies the values by |scale| when it is not 1.
+    let factor = if scale.is_finite() && scale != 0.0 {
+        scale.abs()
+    } else {
+        1.0
+    };
     let value = |b: &[u8]| {
         let b = [b[0], b[1], b[2], b[3]];
-        if scale < 0.0 {
-            f32::from_le_bytes(b)
-        } else {
-            f32::from_be_bytes(b)
-        }
+        factor
+            * if scale < 0.0 {
+                f32::from_le_bytes(b)
+            } else {
+                f32::from_be_bytes(b)
+            }
     };
     let texels = (0..h)
         .rev()
@@ -389,6 +397,12 @@ mod tests {
                 vec![Vec3::new(4.0, 5.0, 6.0), Vec3::new(1.0, 2.0, 3.0)]
             );
         }
+        let mut scaled = b"PF\n1 1\n-2.5\n".to_vec();
+        scaled.extend([1.0f32, 2.0, 4.0].iter().flat_map(|v| v.to_le_bytes()));
+        assert_eq!(
+            read_pfm(&scaled).unwrap().texels,
+            vec![Vec3::new(2.5, 5.0, 10.0)]
+        );
         let mut grey = b"Pf 2 1 -1\n".to_vec();
         grey.extend([0.5f32, 0.25].iter().flat_map(|v| v.to_le_bytes()));
         assert_eq!(

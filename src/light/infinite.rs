@@ -1,0 +1,194 @@
+//! Environment light: `LightSource "infinite"`, radiance arriving from every direction at
+//! infinity, constant or from an image in pbrt-v4's equal-area octahedral parameterisation.
+//!
+//! ```text
+//! AttributeBegin
+//!   Rotate -90 1 0 0                       # the CTM orients the map
+//!   LightSource "infinite" "string filename" "sky.exr" "float scale" 2
+//! AttributeEnd
+//! LightSource "infinite" "rgb L" [ 0.5 0.5 0.5 ]
+//! ```
+//! (the loader, `scene/loader/lights.rs`, reads the parameters.)
+//!
+//! A constant `L` is a 1x1 map, so one code path serves both (the equal-area map makes a
+//! uniform square sample a uniform sphere sample). As in pbrt-v4's `ImageInfiniteLight`:
+//! - `Le(w)`: the direction in the light's frame (`light_from_world w`) goes to the square by
+//!   [`equal_area_sphere_to_square`] and reads the *nearest* texel (so radiance is constant
+//!   over each texel, and each texel covers a solid angle of `4 pi / N` for `N` texels);
+//! - light sampling draws a point of the square from a [`Distribution2D`] over the texels
+//!   (by luminance here, where pbrt-v4 weighs texels by their channel average), with
+//!   solid-angle density `pdf_square / (4 pi)`; a texel of zero weight has zero radiance, so
+//!   the density covers all the light;
+//! - caustic photons are aimed at the specular and glossy objects
+//!   ([`super::Lights::emit_caustic`]);
+//! - photons (`SampleLe`): a direction from the same distribution and an origin uniform on a
+//!   disc of the scene's bounding-sphere radius `R` perpendicular to it, outside the scene:
+//!   flux `Le / (pdf_dir * 1 / (pi R^2))`; the light's power is `4 pi^2 R^2 mean(L)`.
+use super::scalar_power;
+use crate::math::{luminance, Mat3, Vec2, Vec3};
+use crate::sampling::warp::{
+    equal_area_sphere_to_square, equal_area_square_to_sphere, Distribution2D,
+};
+use crate::texture::Image;
+use std::f32::consts::PI;
+use std::fmt;
+
+/// An environment map ready to evaluate and sample.
+#[derive(Clone)]
+pub struct EnvMap {
+    res: usize,
+    /// Radiance per texel (scale applied), row `y` covering `v` in `[y, y + 1) / res`.
+    texels: Vec<Vec3>,
+    dist: Distribution2D,
+    world_from_light: Mat3,
+    light_from_world: Mat3,
+    mean: Vec3,
+    /// A hash of the texels (so that scenes with different maps hash differently).
+    hash: u64,
+}
+
+impl fmt::Debug for EnvMap {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "EnvMap {}x{} texels {:016x} world_from_light {:?}",
+            self.res, self.res, self.hash, self.world_from_light
+        )
+    }
+}
+
+impl PartialEq for EnvMap {
+    fn eq(&self, other: &EnvMap) -> bool {
+        self.res == other.res
+            && self.hash == other.hash
+            && self.world_from_light == other.world_from_light
+    }
+}
+
+impl EnvMap {
+    /// A map from a square image times `scale` (negative and non-finite texels count as 0;
+    /// the loader rejects non-finite ones first), oriented by the rotation `world_from_light`.
+    /// Takes the image's texels (no copy: an environment image can be large).
+    pub fn new(image: Image, scale: f32, world_from_light: Mat3) -> EnvMap {
+        debug_assert_eq!(image.width, image.height);
+        let res = image.width;
+        let mut texels = image.texels;
+        for t in texels.iter_mut() {
+            let v = *t * scale;
+            *t = if v.is_finite() {
+                v.max(Vec3::ZERO)
+            } else {
+                Vec3::ZERO
+            };
+        }
+        let weights: Vec<f32> = texels.iter().map(|&t| luminance(t).max(0.0)).collect();
+        let sum = texels
+            .iter()
+            .fold(glam::DVec3::ZERO, |a, t| a + t.as_dvec3());
+        let hash = texels.iter().fold(0u64, |h, t| {
+            crate::sampling::hash(&[
+                h,
+                t.x.to_bits() as u64,
+                t.y.to_bits() as u64,
+                t.z.to_bits() as u64,
+            ])
+        });
+        EnvMap {
+            res,
+            dist: Distribution2D::new(&weights, res, res),
+            mean: (sum / texels.len().max(1) as f64).as_vec3(),
+            texels,
+            world_from_light,
+            light_from_world: world_from_light.transpose(),
+            hash,
+        }
+    }
+
+    /// A constant radiance `l` (a 1x1 map).
+    pub fn constant(l: Vec3) -> EnvMap {
+        let image = Image {
+            width: 1,
+            height: 1,
+            texels: vec![l],
+        };
+        EnvMap::new(image, 1.0, Mat3::IDENTITY)
+    }
+
+    /// Texels per side.
+    pub fn resolution(&self) -> usize {
+        self.res
+    }
+
+    /// The mean radiance over the sphere (texels have equal solid angles).
+    pub fn mean(&self) -> Vec3 {
+        self.mean
+    }
+
+    /// Bytes held: the texels and the sampling distribution.
+    pub fn bytes(&self) -> u64 {
+        (self.texels.len() * 12) as u64 + self.dist.bytes()
+    }
+
+    /// Radiance of texel `(x, y)`.
+    pub fn texel(&self, x: usize, y: usize) -> Vec3 {
+        self.texels[y * self.res + x]
+    }
+
+    /// The point of the square a world direction `w` (towards the environment) falls on.
+    pub fn square_point(&self, w: Vec3) -> Vec2 {
+        equal_area_sphere_to_square((self.light_from_world * w).normalize_or_zero())
+    }
+
+    /// The world direction of point `p` of the square.
+    pub fn direction(&self, p: Vec2) -> Vec3 {
+        (self.world_from_light * equal_area_square_to_sphere(p)).normalize_or_zero()
+    }
+
+    /// Radiance arriving from direction `w` (unit, pointing towards the environment).
+    pub fn le(&self, w: Vec3) -> Vec3 {
+        let (x, y) = self.dist.cell(self.square_point(w));
+        self.texel(x, y)
+    }
+
+    /// Solid-angle density with which [`Self::sample`] returns `w`.
+    pub fn pdf(&self, w: Vec3) -> f32 {
+        self.dist.pdf(self.square_point(w)) / (4.0 * PI)
+    }
+
+    /// A direction towards the environment, its radiance and its solid-angle density.
+    pub fn sample(&self, u: Vec2) -> Option<(Vec3, Vec3, f32)> {
+        let (p, pdf, (x, y)) = self.dist.sample(u)?;
+        let w = self.direction(p);
+        (pdf > 0.0).then(|| (w, self.texel(x, y), pdf / (4.0 * PI)))
+    }
+
+    /// Emitted power through the scene's bounding sphere of radius `radius` (computed in f64,
+    /// at most `f32::MAX`: a huge scene under a bright sky must not make it infinite).
+    pub fn power(&self, radius: f32) -> f32 {
+        let r = radius as f64;
+        let p = 4.0 * std::f64::consts::PI.powi(2) * r * r * scalar_power(self.mean) as f64;
+        p.min(f32::MAX as f64) as f32
+    }
+
+    /// Illuminance (the cosine-weighted integral of `L`) on a surface facing `+z` of the
+    /// light's frame, with pbrt-v4's rule: the texels whose centre lies above the horizon, each
+    /// of solid angle `4 pi / N` (pbrt-v4's code weighs them `2 pi / N`, which is half the
+    /// integral: see the loader). Luminance of the texels.
+    pub fn upper_illuminance(image: &Image) -> f64 {
+        let n = image.width;
+        let mut sum = 0.0f64;
+        for y in 0..image.height {
+            for x in 0..n {
+                let p = Vec2::new(
+                    (x as f32 + 0.5) / n as f32,
+                    (y as f32 + 0.5) / image.height as f32,
+                );
+                let w = equal_area_square_to_sphere(p);
+                if w.z > 0.0 {
+                    sum += (luminance(image.texels[y * n + x]) * w.z) as f64;
+                }
+            }
+        }
+        sum * 4.0 * std::f64::consts::PI / (n * image.height) as f64
+    }
+}
