@@ -30,7 +30,7 @@ use crate::accel::Hit;
 use crate::bsdf::Bsdf;
 use crate::light::LightSample;
 use crate::math::{spawn_origin, Frame, Ray, Vec2, Vec3};
-use crate::scene::{Material, Mesh, Scene};
+use crate::scene::{Material, MaterialKind, Mesh, Scene};
 use crate::texture::{Tex, TexCoord};
 
 /// A ray hit, ready to shade.
@@ -86,7 +86,7 @@ impl<'s> SurfaceInteraction<'s> {
     /// The BSDF at this point, its textures looked up here. A bump-mapped material first
     /// moves the shading normal (and `frame`, `wo` with it).
     pub fn bsdf(&mut self, scene: &Scene) -> Bsdf {
-        let m = &scene.materials[self.mesh.material as usize];
+        let m = self.material(scene);
         let tc = if material_needs_differentials(m) {
             self.tex_coord(scene)
         } else {
@@ -96,6 +96,44 @@ impl<'s> SurfaceInteraction<'s> {
             self.bump(d, &tc);
         }
         Bsdf::new(&m.kind, &tc)
+    }
+
+    /// The material at this point: the mesh's, with every `mix` resolved as pbrt-v4's
+    /// `MixMaterial::ChooseMaterial` does: `amount` a <= 0 picks the first, a >= 1 the second,
+    /// else the second when a hash of the point and `wo` (and the two materials) is below a.
+    pub fn material<'a>(&self, scene: &'a Scene) -> &'a Material {
+        let mut m = &scene.materials[self.mesh.material as usize];
+        // Mixes name materials defined before them, so chains end; the bound is for safety.
+        for _ in 0..64 {
+            let MaterialKind::Mix {
+                materials, amount, ..
+            } = &m.kind
+            else {
+                break;
+            };
+            let a = amount.eval_float(&TexCoord::point(self.uv));
+            let second = if a <= 0.0 {
+                false
+            } else if a >= 1.0 {
+                true
+            } else {
+                let bits = |v: Vec3| v.to_array().map(|x| x.to_bits() as u64);
+                let (p, w) = (bits(self.p), bits(self.wo_world));
+                let h = crate::sampling::hash(&[
+                    p[0],
+                    p[1],
+                    p[2],
+                    w[0],
+                    w[1],
+                    w[2],
+                    materials[0] as u64,
+                    materials[1] as u64,
+                ]);
+                crate::sampling::to_unit(h) < a
+            };
+            m = &scene.materials[materials[second as usize] as usize];
+        }
+        m
     }
 
     /// The texture lookup at this point with its footprint (one pixel step in x and y).

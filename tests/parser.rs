@@ -2244,3 +2244,28 @@ fn interface_material_names_media() {
         "{e}"
     );
 }
+
+/// `mix` names two materials defined earlier; anything else is an error at the parameter.
+#[test]
+fn mix_material_errors() {
+    let dir = TempDir::new("photon-mix-err");
+    let cases = [
+        (
+            "MakeNamedMaterial \"a\" \"string type\" \"diffuse\"\nMaterial \"mix\" \"string materials\" [ \"a\" \"b\" ]\n",
+            "unknown named material \"b\"",
+        ),
+        (
+            "MakeNamedMaterial \"a\" \"string type\" \"diffuse\"\nMaterial \"mix\" \"string materials\" [ \"a\" ]\n",
+            "expected two material names",
+        ),
+        ("Material \"mix\"\n", "mix needs \"string materials\""),
+    ];
+    for (i, (body, want)) in cases.iter().enumerate() {
+        let path = dir.write(&format!("m{i}.pbrt"), format!("WorldBegin\n{body}"));
+        let e = load(&path).unwrap_err().to_string();
+        assert!(
+            e.contains(want) && e.contains(&format!("m{i}.pbrt:")),
+            "{e}"
+        );
+    }
+}

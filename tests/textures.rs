@@ -376,3 +376,64 @@ fn textured_cornell_box_matches_mitsuba() {
     );
     assert!(text.contains("relMSE 0.00"), "{text}");
 }
+
+/// `mix` (pbrt-v4's stochastic `MixMaterial`): every hit takes one of the two materials, the
+/// second with probability `amount`. A floor mixing black and white 0.8 at amount 0.25 shows
+/// each pixel (1 spp, one hit) as exactly 0 or 0.8 E / pi, the white share near 0.25; with
+/// `amount` a 0/1 checkerboard the choice follows the cells exactly.
+#[test]
+fn mix_material_picks_one_material_per_hit() {
+    let dir = TempDir::new("photon-mix");
+    let named = r#"MakeNamedMaterial "black" "string type" "diffuse" "rgb reflectance" [ 0 0 0 ]
+MakeNamedMaterial "white" "string type" "diffuse" "rgb reflectance" [ 0.8 0.8 0.8 ]"#;
+    let white = 0.8 * E / PI;
+    let scene = floor_scene(
+        6.0,
+        48,
+        1,
+        named,
+        r#"Material "mix" "string materials" [ "black" "white" ] "float amount" 0.25"#,
+    );
+    let (_, px) = render(&dir.write("mix.pbrt", scene));
+    let floor: Vec<f32> = px
+        .iter()
+        .filter(|(_, uv)| (0.0..1.0).contains(&uv.x) && (0.0..1.0).contains(&uv.y))
+        .map(|(c, _)| c.x)
+        .collect();
+    assert!(floor.len() > 1000, "{}", floor.len());
+    assert!(
+        floor
+            .iter()
+            .all(|&v| v.abs() < 1e-6 || (v / white - 1.0).abs() < 1e-3),
+        "a pixel that is neither material"
+    );
+    let share = floor.iter().filter(|&&v| v > 0.0).count() as f64 / floor.len() as f64;
+    // Binomial: sd sqrt(0.25 0.75 / n) < 0.014 for n > 1000; 4 sd.
+    assert!((share - 0.25).abs() < 0.055, "white share {share}");
+    // amount a checkerboard of 0 and 1: black where even, white where odd.
+    let scene = floor_scene(
+        6.0,
+        48,
+        1,
+        &format!(
+            "{named}\nTexture \"pick\" \"float\" \"checkerboard\" \"float uscale\" 4 \"float vscale\" 4 \"float tex1\" 0 \"float tex2\" 1"
+        ),
+        r#"Material "mix" "string materials" [ "black" "white" ] "texture amount" "pick""#,
+    );
+    let (_, px) = render(&dir.write("mix2.pbrt", scene));
+    let mut n = 0;
+    for (c, uv) in px {
+        let st = uv * 4.0;
+        if !(0.0..4.0).contains(&st.x) || !(0.0..4.0).contains(&st.y) {
+            continue;
+        }
+        if (st.x - st.x.round()).abs() < 0.1 || (st.y - st.y.round()).abs() < 0.1 {
+            continue;
+        }
+        let odd = (st.x.floor() as i32 + st.y.floor() as i32) % 2 == 1;
+        let want = if odd { white } else { 0.0 };
+        assert!((c.x - want).abs() < 1e-3 * white, "{uv}: {} vs {want}", c.x);
+        n += 1;
+    }
+    assert!(n > 800, "{n}");
+}

@@ -290,6 +290,7 @@ impl MaterialKind {
                 }
                 f
             }
+            MaterialKind::Mix { flags, .. } => *flags,
         }
     }
 
@@ -392,6 +393,9 @@ impl Bsdf {
                 let base = conductor(metal, roughness, coat.eta, tc);
                 Bsdf::CoatedConductor(coated(coat, interface, base, tc))
             }
+            // SurfaceInteraction::bsdf resolves a mix to one of its materials first; a mix
+            // that reaches here unresolved reflects nothing.
+            MaterialKind::Mix { .. } => Bsdf::Diffuse(Diffuse::new(Vec3::ZERO)),
         }
     }
 

@@ -266,6 +266,15 @@ pub enum MaterialKind {
         metal: Metal,
         roughness: Roughness,
     },
+    /// `"mix"`: at each hit one of two named materials defined earlier (indices into
+    /// `Scene::materials`), the second with probability `amount` (pbrt-v4's stochastic
+    /// `MixMaterial`: a hash of the point and `wo` against `amount`; see
+    /// [`crate::interaction::SurfaceInteraction::bsdf`]). `flags` is the union of theirs.
+    Mix {
+        materials: [u32; 2],
+        amount: Tex,
+        flags: crate::bsdf::BxdfFlags,
+    },
 }
 
 /// The textures of a conductor's index.
@@ -311,6 +320,7 @@ impl MaterialKind {
                 v.extend([&interface.u, &interface.v, &roughness.u, &roughness.v]);
                 v
             }
+            MaterialKind::Mix { amount, .. } => vec![amount],
         };
         if let MaterialKind::CoatedDiffuse { coat, .. }
         | MaterialKind::CoatedConductor { coat, .. } = self

@@ -18,6 +18,7 @@
 //! Material "conductor" "rgb reflectance" [ 0.9 0.6 0.3 ]                 # eta 1, k from r
 //! Material "diffuse" "texture reflectance" "wood" "texture displacement" "bumps"
 //! Material "conductor" "texture roughness" "scratches" "texture reflectance" "tint"
+//! Material "mix" "string materials" [ "wood" "paint" ] "texture amount" "wear"
 //! ```
 //!
 //! - Parameters pbrt-v4 lets be textures may be: diffuse `reflectance`; conductor `eta`, `k`,
@@ -57,12 +58,28 @@ use crate::texture::{Tex, Textures};
 
 /// Builds material `ty` from `params` (all of which must be used); `loc` is where the type is
 /// named; `textures` are those defined so far.
+/// What a material may refer to: the textures and the named materials defined before it.
+pub struct MaterialContext<'a> {
+    pub textures: &'a Textures,
+    pub named: &'a std::collections::HashMap<String, u32>,
+    pub materials: &'a [Material],
+}
+
 pub fn make_material(
     ty: &str,
     params: &mut ParamSet,
     loc: &Loc,
-    textures: &Textures,
+    cx: &MaterialContext,
 ) -> Result<Material, SceneError> {
+    let textures = cx.textures;
+    if ty == "mix" {
+        let kind = mix(params, loc, cx)?;
+        params.check_unused()?;
+        return Ok(Material {
+            kind,
+            displacement: None,
+        });
+    }
     let kind =
         match ty {
             "diffuse" => MaterialKind::Diffuse {
@@ -110,6 +127,36 @@ pub fn make_material(
     };
     params.check_unused()?;
     Ok(Material { kind, displacement })
+}
+
+/// `mix`: `"string materials" [ "a" "b" ]` (named materials defined earlier) and `amount`
+/// (float or float texture, default 0.5: the probability of the second).
+fn mix(params: &mut ParamSet, loc: &Loc, cx: &MaterialContext) -> Result<MaterialKind, SceneError> {
+    let Some(p) = params.get_param("materials") else {
+        return Err(SceneError::at(
+            loc,
+            "mix needs \"string materials\" naming two materials",
+        ));
+    };
+    let names: Vec<String> = match p.strings() {
+        Some(v) if v.len() == 2 => v.to_vec(),
+        _ => return Err(p.err("expected two material names")),
+    };
+    let mut materials = [0u32; 2];
+    let mut flags = crate::bsdf::BxdfFlags::default();
+    for (i, name) in names.iter().enumerate() {
+        let Some(&idx) = cx.named.get(name) else {
+            return Err(p.err(format!("unknown named material \"{name}\"")));
+        };
+        materials[i] = idx;
+        flags = flags | cx.materials[idx as usize].kind.flags();
+    }
+    let amount = tex(params, "amount", false, 0.5, cx.textures)?;
+    Ok(MaterialKind::Mix {
+        materials,
+        amount,
+        flags,
+    })
 }
 
 /// A parameter that may be a texture: `spectrum` (RGB) or float, `default` when absent.

@@ -33,7 +33,7 @@
 //! camera-from-world; its inverse becomes `world_from_camera` and the named system "camera".
 
 use super::lights::{area_light, light_source, AreaSpec};
-use super::materials::make_material;
+use super::materials::{make_material, MaterialContext};
 use super::params::{Param, ParamSet, ParamType, ParamValues};
 use super::shapes;
 use super::tokenizer::{unescape, TokKind, Token, Tokenizer};
@@ -562,7 +562,8 @@ impl Builder {
         match what {
             "Material" => {
                 let mut params = read_params(tok)?;
-                let m = self.or_default(make_material(&name, &mut params, &at, &self.textures))?;
+                let m = make_material(&name, &mut params, &at, &self.material_context());
+                let m = self.or_default(m)?;
                 self.materials.push(m);
                 self.gs.material = MatRef::Index(self.materials.len() as u32 - 1);
             }
@@ -574,7 +575,8 @@ impl Builder {
                         format!("named material \"{name}\" redefined"),
                     ));
                 }
-                let m = self.or_default(named_material(&mut params, &at, &self.textures))?;
+                let m = named_material(&mut params, &at, &self.material_context());
+                let m = self.or_default(m)?;
                 self.materials.push(m);
                 self.named_materials
                     .insert(name, self.materials.len() as u32 - 1);
@@ -618,6 +620,15 @@ impl Builder {
         }
         map.insert(name, Arc::new(tex));
         Ok(())
+    }
+
+    /// What building a material may refer to: textures and named materials defined so far.
+    fn material_context(&self) -> MaterialContext<'_> {
+        MaterialContext {
+            textures: &self.textures,
+            named: &self.named_materials,
+            materials: &self.materials,
+        }
     }
 
     /// A material that failed to build: in collect mode the error is recorded and the default
@@ -871,7 +882,7 @@ fn not_utf8(file: &Arc<PathBuf>, e: std::string::FromUtf8Error) -> SceneError {
 fn named_material(
     params: &mut ParamSet,
     at: &Loc,
-    textures: &crate::texture::Textures,
+    cx: &MaterialContext,
 ) -> Result<Material, SceneError> {
     let Some(ty) = params.get_string_opt("type")? else {
         return Err(SceneError::at(
@@ -880,7 +891,7 @@ fn named_material(
         ));
     };
     let ty_loc = params.loc("type").cloned().unwrap_or_else(|| at.clone());
-    make_material(&ty, params, &ty_loc, textures)
+    make_material(&ty, params, &ty_loc, cx)
 }
 
 /// Skips what is left of a directive that failed: everything up to the next directive word.
