@@ -243,7 +243,10 @@ impl<'s> SurfaceInteraction<'s> {
 
 /// Whether any texture of `m` reads its footprint, or `m` is bump mapped.
 fn material_needs_differentials(m: &Material) -> bool {
-    m.displacement.is_some() || m.kind.textures().iter().any(|t| t.needs_differentials())
+    let mut any = m.displacement.is_some();
+    m.kind
+        .for_each_texture(&mut |t| any |= t.needs_differentials());
+    any
 }
 
 /// The `(du, dv)` that best explains the surface step `dp` (least squares against `dpdu`,

@@ -32,18 +32,7 @@ fn blocks(img: &RgbImage, n: usize) -> Vec<f64> {
 fn enclosed_lamp_matches_mitsuba() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let dir = TempDir::new("photon-lamp");
-    let out = dir.0.join("lamp.exr");
-    let run = common::photon()
-        .args(["render", "--res", "64x64", "--spp", "16", "--no-png", "-o"])
-        .arg(&out)
-        .arg(root.join("scenes/lamp-enclosed.pbrt"))
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    let out = common::render_repo_scene("scenes/lamp-enclosed.pbrt", "64x64", 16, &dir, "lamp.exr");
     let img = read_exr(&out).unwrap();
     let reference = read_exr(&root.join("scenes/mitsuba/lamp-enclosed-reference-128.exr"))
         .unwrap()

@@ -350,18 +350,8 @@ fn huge_image_header_is_refused_before_decoding() {
 fn textured_cornell_box_matches_mitsuba() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let dir = TempDir::new("photon-tex-mitsuba");
-    let out = dir.0.join("tex.exr");
-    let run = common::photon()
-        .args(["render", "--res", "64x64", "--spp", "16", "--no-png", "-o"])
-        .arg(&out)
-        .arg(root.join("scenes/cornell-textured.pbrt"))
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    let out =
+        common::render_repo_scene("scenes/cornell-textured.pbrt", "64x64", 16, &dir, "tex.exr");
     let cmp = common::photon()
         .args(["compare", "--max-relmse", "0.006"])
         .arg(&out)

@@ -277,57 +277,66 @@ pub enum MaterialKind {
     },
 }
 
-/// The textures of a conductor's index.
-fn metal(m: &Metal) -> Vec<&Tex> {
+/// Calls `f` on the textures of a conductor's index.
+fn metal(m: &Metal, f: &mut dyn FnMut(&Tex)) {
     match m {
-        Metal::EtaK { eta, k } => vec![eta, k],
-        Metal::Reflectance(r) => vec![r],
+        Metal::EtaK { eta, k } => {
+            f(eta);
+            f(k);
+        }
+        Metal::Reflectance(r) => f(r),
     }
 }
 
 impl MaterialKind {
-    /// Every colour and float parameter (constant or texture) of the model.
-    pub fn textures(&self) -> Vec<&Tex> {
-        let mut out = match self {
-            MaterialKind::Diffuse { reflectance } => vec![reflectance],
-            MaterialKind::Dielectric { roughness, .. } => vec![&roughness.u, &roughness.v],
+    /// Calls `f` on every colour and float parameter (constant or texture) of the model,
+    /// without allocating (it runs for every hit that builds a BSDF).
+    pub fn for_each_texture(&self, f: &mut dyn FnMut(&Tex)) {
+        let rough = |r: &Roughness, f: &mut dyn FnMut(&Tex)| {
+            f(&r.u);
+            f(&r.v);
+        };
+        match self {
+            MaterialKind::Diffuse { reflectance } => f(reflectance),
+            MaterialKind::Dielectric { roughness, .. } => rough(roughness, f),
             MaterialKind::Conductor {
                 metal: m,
                 roughness,
             } => {
-                let mut v = metal(m);
-                v.extend([&roughness.u, &roughness.v]);
-                v
+                metal(m, f);
+                rough(roughness, f);
             }
-            MaterialKind::ThinDielectric { .. } => vec![],
+            MaterialKind::ThinDielectric { .. } => {}
             MaterialKind::DiffuseTransmission {
                 reflectance,
                 transmittance,
                 ..
-            } => vec![reflectance, transmittance],
+            } => {
+                f(reflectance);
+                f(transmittance);
+            }
             MaterialKind::CoatedDiffuse {
                 reflectance,
                 roughness,
-                ..
-            } => vec![reflectance, &roughness.u, &roughness.v],
+                coat,
+            } => {
+                f(reflectance);
+                rough(roughness, f);
+                coat.for_each_texture(f);
+            }
             MaterialKind::CoatedConductor {
                 interface,
                 metal: m,
                 roughness,
-                ..
+                coat,
             } => {
-                let mut v = metal(m);
-                v.extend([&interface.u, &interface.v, &roughness.u, &roughness.v]);
-                v
+                metal(m, f);
+                rough(interface, f);
+                rough(roughness, f);
+                coat.for_each_texture(f);
             }
-            MaterialKind::Mix { amount, .. } => vec![amount],
-        };
-        if let MaterialKind::CoatedDiffuse { coat, .. }
-        | MaterialKind::CoatedConductor { coat, .. } = self
-        {
-            out.extend([&coat.thickness, &coat.albedo, &coat.g]);
+            MaterialKind::Mix { amount, .. } => f(amount),
         }
-        out
     }
 }
 
@@ -341,6 +350,14 @@ pub struct Coat {
     pub g: Tex,
     pub max_depth: u32,
     pub n_samples: u32,
+}
+
+impl Coat {
+    fn for_each_texture(&self, f: &mut dyn FnMut(&Tex)) {
+        f(&self.thickness);
+        f(&self.albedo);
+        f(&self.g);
+    }
 }
 
 /// A conductor's complex index of refraction: `eta` and `k` (RGB, named spectra or textures),

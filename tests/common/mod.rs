@@ -339,3 +339,31 @@ pub fn render_with(
     let pool = photon::tools::thread_pool(threads).expect("thread pool");
     pool.install(|| photon::integrator::render(scene, &accel, &settings, kind, &|_, _| {}))
 }
+
+/// Renders the repository's `scene` (a path relative to the crate root) with the default
+/// integrator at `res` (`WxH`) and `spp` into `dir/name`, asserting success; returns the EXR.
+#[allow(dead_code)]
+pub fn render_repo_scene(scene: &str, res: &str, spp: u32, dir: &TempDir, name: &str) -> PathBuf {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = dir.0.join(name);
+    let run = photon()
+        .args([
+            "render",
+            "--res",
+            res,
+            "--spp",
+            &spp.to_string(),
+            "--no-png",
+            "-o",
+        ])
+        .arg(&out)
+        .arg(root.join(scene))
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    out
+}
