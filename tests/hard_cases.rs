@@ -332,6 +332,7 @@ fn lone_floor_case((s, y0, tilt): (f32, f32, f32)) -> Result<(), String> {
         projection_resolution: 32,
         seed: 3,
         pattern: Pattern::Stratified,
+        receiver_alpha: photon::photon::trace::RECEIVER_ALPHA,
     };
     let maps = trace::trace(&sc, &acc, &lights, &settings);
     let global = maps.global.expect("photons on the floor");
@@ -739,6 +740,7 @@ LightSource "point" "rgb I" [ 1 1 1 ] "point3 from" [ 0.01 0.02 0.03 ]
         projection_resolution: 32,
         seed: 11,
         pattern: Pattern::Stratified,
+        receiver_alpha: photon::photon::trace::RECEIVER_ALPHA,
     };
     let t = std::time::Instant::now();
     let maps = trace::trace(&sc, &acc, &lights, &settings);

@@ -50,6 +50,7 @@ fn trace_settings(global: u64, caustic: u64, projection_maps: bool) -> TraceSett
         projection_resolution: 64,
         seed: 7,
         pattern: Pattern::Stratified,
+        receiver_alpha: photon::photon::trace::RECEIVER_ALPHA,
     }
 }
 

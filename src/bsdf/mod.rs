@@ -488,6 +488,19 @@ impl Bsdf {
         }
     }
 
+    /// The smaller GGX alpha of a single rough microfacet lobe (a rough conductor or
+    /// dielectric), `None` for every other BSDF: what decides where photons are stored on
+    /// glossy surfaces (see `photon::trace::is_receiver`). The coated BSDFs are left out: their
+    /// `f` is a random walk, too costly to evaluate once per photon of an estimate.
+    pub fn glossy_alpha(&self) -> Option<f32> {
+        let d = match self {
+            Bsdf::Conductor(c) if !c.is_smooth() => c.distrib,
+            Bsdf::Dielectric(d) if !d.is_smooth() => d.distrib,
+            _ => return None,
+        };
+        Some(d.alpha_x().min(d.alpha_y()))
+    }
+
     /// A rough albedo for Russian roulette: the diffuse reflectance, 1 for (thin) dielectrics,
     /// the normal-incidence Fresnel reflectance for a conductor, `R + T` for diffuse
     /// transmission, and for a coat its normal-incidence reflectance plus the rest times the

@@ -12,7 +12,9 @@
 //! Components: light reaching the camera after at most one non-delta scattering event is
 //! `direct`; light arriving through further specular/glossy bounces is `specular`.
 use super::photonmap::{self, Gather};
-use super::wavefront::{self, add, Component, PathState, Shade, Shadow, Wave, CAMERA_DIMS};
+use super::wavefront::{
+    self, add, Component, Covered, PathState, Shade, Shadow, Wave, CAMERA_DIMS,
+};
 use super::{charge, power_heuristic, RenderContext};
 use crate::accel::{Hit, RayKind};
 use crate::bsdf::TransportMode;
@@ -82,8 +84,9 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<Ga
     let scene = ctx.scene;
     let mut si = SurfaceInteraction::new(scene, hit, &path.ray);
 
-    // Emission seen along the ray.
-    if let Some(li) = si.area_light() {
+    // Emission seen along the ray (unless the caustic photons of a glossy surface the path
+    // left through delta bounces only have counted it).
+    if let (Some(li), false) = (si.area_light(), path.covered == Covered::Specular) {
         let le = ctx.lights.le(li, si.ng, si.wo_world);
         if le.max_element() > 0.0 {
             let w = if path.prev_pdf > 0.0 {
@@ -205,6 +208,22 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<Ga
         }
     }
 
+    // Caustics on a rough glossy surface: the caustic photons stored on such surfaces, each
+    // weighted by the BSDF towards wo.
+    let mut receiver = false;
+    if let (Some(pass), false) = (&ctx.photons, flags.has_diffuse()) {
+        let buf = &mut wave.extra.buf;
+        if let Some(l) = photonmap::at_glossy(pass, &ctx.counters.lookup_ns, &si, &bsdf, buf) {
+            receiver = true;
+            let c = if path.depth == 0 {
+                Component::Caustic
+            } else {
+                Component::Specular
+            };
+            add(wave.acc, path.pixel, c, path.beta * l);
+        }
+    }
+
     // Continue through specular and glossy surfaces.
     if !(flags.has_specular() || flags.has_glossy()) {
         return;
@@ -231,6 +250,7 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<Ga
         prev_pdf: bsdf.mis_pdf(wo, &bs),
         prev_p: si.p,
         prev_delta: path.prev_delta && bs.specular,
+        covered: path.covered.after(receiver, bs.specular),
         ..path
     });
 }

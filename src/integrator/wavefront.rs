@@ -38,7 +38,36 @@ pub struct PathState {
     pub prev_delta: bool,
     /// Product of `eta^2` over the delta refractions so far (for roulette).
     pub eta_scale: f32,
+    /// Whether light this path finds next is already counted by a photon estimate.
+    pub covered: Covered,
     pub sampler: Sampler,
+}
+
+/// Where a camera path stands towards the caustic photons of rough glossy surfaces: the
+/// estimate at such a surface counts every L S+ G path through it, so the path traced on
+/// from it must not count an emitter it reaches through delta bounces only.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Covered {
+    /// Nothing is covered.
+    #[default]
+    No,
+    /// The last vertex was a receiver (its caustic estimate taken) and the path left it by a
+    /// non-delta sample: an emitter hit next is direct light (MIS-weighted), still counted.
+    Next,
+    /// Delta bounces only since such a vertex: emitters (and the infinite lights) count zero.
+    Specular,
+}
+
+impl Covered {
+    /// The state after a bounce: `receiver` says whether the vertex took a caustic estimate
+    /// from glossy photons, `delta` whether the sampled lobe was a delta one.
+    pub fn after(self, receiver: bool, delta: bool) -> Covered {
+        match (receiver, delta, self) {
+            (true, false, _) => Covered::Next,
+            (_, true, Covered::Next | Covered::Specular) => Covered::Specular,
+            _ => Covered::No,
+        }
+    }
 }
 
 impl PathState {
@@ -53,6 +82,7 @@ impl PathState {
             prev_p: ray.o,
             prev_delta: true,
             eta_scale: 1.0,
+            covered: Covered::No,
             sampler,
         }
     }
@@ -233,8 +263,12 @@ fn wave<S: Shade>(
 
 /// What a path that leaves the scene sees of the infinite lights, times its throughput: with
 /// full weight after the camera or a delta bounce, else power-heuristic-weighted against light
-/// sampling (the BSDF density of the last bounce against the lights' density of the direction).
+/// sampling (the BSDF density of the last bounce against the lights' density of the direction);
+/// zero when photons already count it ([`Covered::Specular`]).
 pub fn escaped(ctx: &RenderContext, path: &PathState) -> Vec3 {
+    if path.covered == Covered::Specular {
+        return Vec3::ZERO; // an L S+ G path: the glossy surface's caustic photons have it
+    }
     let d = path.ray.d.normalize_or_zero();
     let le = ctx.lights.escaped(d, |light_pdf| {
         if path.prev_pdf > 0.0 {
@@ -271,5 +305,27 @@ fn resolve_shadows(
         if !blocked {
             add(acc, s.pixel, s.component, s.contrib);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Covered::{self, *};
+
+    #[test]
+    fn covered_drops_only_delta_chains_after_a_receiver() {
+        // receiver -> glossy sample: the next emitter is direct light (kept).
+        assert_eq!(No.after(true, false), Next);
+        // ... then delta bounces: L S+ G paths, which the receiver's photons have.
+        assert_eq!(Next.after(false, true), Specular);
+        assert_eq!(Specular.after(false, true), Specular);
+        // Any non-delta bounce that is no receiver ends the cover.
+        assert_eq!(Specular.after(false, false), No);
+        assert_eq!(Next.after(false, false), No);
+        // Delta bounces without a receiver before them cover nothing.
+        assert_eq!(No.after(false, true), No);
+        // A receiver that continues by a delta lobe covers nothing of that lobe.
+        assert_eq!(No.after(true, true), No);
+        assert_eq!(Covered::default(), No);
     }
 }

@@ -18,6 +18,7 @@
 //! estimate unbiased for a uniform density (Jensen's `k / (pi r^2)` is `k / (k - 1)` too high).
 use super::kdtree::KnnResult;
 use super::map::PhotonMap;
+use super::record::Photon;
 use crate::math::Vec3;
 use std::f32::consts::PI;
 
@@ -124,6 +125,36 @@ pub fn irradiance_with(
     params: &EstimateParams,
     buf: &mut KnnResult,
 ) -> (Vec3, usize, f32) {
+    estimate_by(map, p, n, params, buf, true, |ph| ph.power())
+}
+
+/// Radiance estimate at `p` on a surface with unit geometric normal `n` whose BSDF is not
+/// Lambertian: `L = sum_i w(d_i^2, r^2) f(wo, wi_i) Phi_i` (Jensen's eq. 7.6, with the kernel
+/// over the disc). `f_power(photon)` returns `f(wo, -photon.dir) * photon.power`. Photons
+/// from both sides take part (the BSDF decides: zero across a reflector, transmission through
+/// a rough dielectric); the disc and count guards are those of [`irradiance_with`].
+pub fn radiance_with(
+    map: &PhotonMap,
+    p: Vec3,
+    n: Vec3,
+    params: &EstimateParams,
+    buf: &mut KnnResult,
+    f_power: impl Fn(&Photon) -> Vec3,
+) -> (Vec3, usize, f32) {
+    estimate_by(map, p, n, params, buf, false, f_power)
+}
+
+/// The guarded k-nearest search and the kernel-weighted sum of `value(photon)` behind both
+/// estimates; `side`: only photons arriving against `n` take part.
+fn estimate_by(
+    map: &PhotonMap,
+    p: Vec3,
+    n: Vec3,
+    params: &EstimateParams,
+    buf: &mut KnnResult,
+    side: bool,
+    value: impl Fn(&Photon) -> Vec3,
+) -> (Vec3, usize, f32) {
     let f = params.disc_fraction;
     // Ellipsoid metric d2 + (1/f^2 - 1) h^2 = t^2 + h^2 / f^2.
     let stretch = if f > 0.0 && f < 1.0 {
@@ -134,7 +165,7 @@ pub fn irradiance_with(
         f32::INFINITY // f <= 0 or NaN: only photons exactly on the plane
     };
     map.knn_by(p, params.k, params.max_r2, buf, |ph, off, d2| {
-        if ph.flags() & params.exclude_flags != 0 || !ph.arrives_against(n) {
+        if ph.flags() & params.exclude_flags != 0 || (side && !ph.arrives_against(n)) {
             return None;
         }
         let h = off.dot(n);
@@ -159,14 +190,14 @@ pub fn irradiance_with(
                 .filter(|nb| nb.d2 <= r2s)
                 .fold((Vec3::ZERO, 0), |(acc, n), nb| {
                     (
-                        acc + map.photon(nb.idx).power() * params.kernel.weight(nb.d2, r2s),
+                        acc + value(map.photon(nb.idx)) * params.kernel.weight(nb.d2, r2s),
                         n + 1,
                     )
                 });
         return (sum, n, r2s);
     }
     let sum = neighbors.iter().fold(Vec3::ZERO, |acc, nb| {
-        acc + map.photon(nb.idx).power() * params.kernel.weight(nb.d2, r2)
+        acc + value(map.photon(nb.idx)) * params.kernel.weight(nb.d2, r2)
     });
     (sum, used, r2)
 }
@@ -272,6 +303,72 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    #[test]
+    fn glossy_radiance_is_the_bsdf_weighted_density() {
+        // Photons uniform over the unit square, arriving from a uniform radiance field L_i
+        // over the upper hemisphere (cosine-distributed directions): E = pi L_i, and the
+        // radiance a rough conductor reflects towards wo is L_i times its directional albedo
+        // (computed here by brute-force quadrature of f cos). A layer of photons from below,
+        // 100 times brighter, must count zero (no transmission).
+        let metal = crate::bsdf::Conductor::new(
+            Vec3::new(0.2, 0.9, 1.1),
+            Vec3::new(3.9, 2.4, 2.2),
+            0.3,
+            0.3,
+        );
+        let n = 400_000usize;
+        let l_i = 2.0f32;
+        let power = Vec3::splat(std::f32::consts::PI * l_i / n as f32); // E A / n, A = 1
+        let mut s = 11u64;
+        let mut photons = Vec::with_capacity(2 * n);
+        for _ in 0..n {
+            let p = Vec3::new(rng(&mut s), rng(&mut s), 0.0);
+            let u = crate::math::Vec2::new(rng(&mut s), rng(&mut s));
+            let wi = crate::sampling::warp::square_to_cosine_hemisphere(u);
+            photons.push(Photon::new(p, power, -wi, 0));
+            let q = Vec3::new(rng(&mut s), rng(&mut s), 0.0);
+            photons.push(Photon::new(q, power * 100.0, wi, 0));
+        }
+        let map = PhotonMap::new(&photons).unwrap();
+        let mut buf = KnnResult::new();
+        for wo in [
+            Vec3::Z,
+            Vec3::new(0.6, 0.0, 0.8),
+            Vec3::new(0.0, -0.9, 0.43589),
+        ] {
+            let wo = wo.normalize();
+            // Directional albedo by a 512 x 1024 midpoint rule over (cos theta, phi).
+            let mut albedo = Vec3::ZERO;
+            let (nt, np) = (512, 1024);
+            for i in 0..nt {
+                let c = (i as f32 + 0.5) / nt as f32;
+                let sin = (1.0 - c * c).sqrt();
+                for j in 0..np {
+                    let phi = 2.0 * PI * (j as f32 + 0.5) / np as f32;
+                    let wi = Vec3::new(sin * phi.cos(), sin * phi.sin(), c);
+                    albedo += metal.f(wo, wi) * c;
+                }
+            }
+            let albedo = albedo * (2.0 * PI / (nt * np) as f32);
+            let params = EstimateParams::new(200, 0.01);
+            let queries = 400;
+            let mut sum = Vec3::ZERO;
+            for _ in 0..queries {
+                let p = Vec3::new(0.1 + 0.8 * rng(&mut s), 0.1 + 0.8 * rng(&mut s), 0.0);
+                let (l, used, _) = radiance_with(&map, p, Vec3::Z, &params, &mut buf, |ph| {
+                    metal.f(wo, -ph.dir()) * ph.power()
+                });
+                assert!(used >= 199, "both layers take part in the search: {used}");
+                sum += l;
+            }
+            let got = sum / queries as f32;
+            let expect = albedo * l_i;
+            let rel = ((got - expect) / expect).abs().max_element();
+            println!("wo {wo:?}: {got:?} vs {expect:?} (rel {rel:.4})");
+            assert!(rel < 0.03, "wo {wo:?}: {got:?} vs {expect:?}");
         }
     }
 

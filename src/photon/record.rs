@@ -44,6 +44,8 @@ impl Photon {
     /// Flag bit: the photon reached this surface through surfaces without a diffuse lobe only,
     /// at least one of them glossy (a glossy caustic: L (S|G)* G (S|G)* D).
     pub const GLOSSY: u8 = 4;
+    /// Flag bit: a caustic photon stored on a rough glossy surface (not a diffuse one).
+    pub const ON_GLOSSY: u8 = 8;
 
     /// A photon at `pos` carrying RGB `power`, travelling along the unit vector `dir`
     /// (direction of travel, i.e. pointing into the surface it hit), with free-form `flags`.

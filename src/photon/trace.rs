@@ -17,6 +17,11 @@
 //!   of which was glossy, so that estimates can leave out what shadow rays and the caustic
 //!   map already give; the caustic map keeps light -> specular+ -> diffuse paths, shot with
 //!   projection maps aimed at the specular objects.
+//! - **Rough glossy receivers**: caustic photons that reach a rough glossy surface (a single
+//!   GGX lobe at least [`TraceSettings::receiver_alpha`] wide, [`is_receiver`]) through
+//!   specular bounces are kept too, flagged `ON_GLOSSY`, in a map of their own
+//!   ([`PhotonMaps::caustic_glossy`]): a glass ball on a rough-metal floor gets its caustic
+//!   from them even in a scene without a single diffuse surface.
 //! - **Glossy caustics** (light that reaches a room only through a metal lamp shade) are
 //!   caustics too, but spread wide: the renderer estimates them from the `GLOSSY` photons of
 //!   the global map with the global map's radius (see `integrator::photonmap`), not from the
@@ -52,7 +57,14 @@ pub struct TraceSettings {
     pub projection_resolution: u32,
     pub seed: u64,
     pub pattern: Pattern,
+    /// Rough glossy surfaces whose GGX alpha is at least this receive caustic photons
+    /// ([`is_receiver`]; infinity: none do).
+    pub receiver_alpha: f32,
 }
+
+/// The default of [`TraceSettings::receiver_alpha`]: lobes at least this wide get caustic
+/// photons (see `scenes/glass-on-metal.pbrt` for the measurement behind it).
+pub const RECEIVER_ALPHA: f32 = 0.1;
 
 /// Which map a photon is shot for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -68,6 +80,8 @@ pub struct TraceStats {
     pub global_stored: usize,
     pub caustic_emitted: u64,
     pub caustic_stored: usize,
+    /// Of `caustic_stored`, the photons on rough glossy surfaces.
+    pub caustic_glossy_stored: usize,
     /// Caustic photons whose first hit was specular / caustic photons emitted.
     pub caustic_efficiency: f64,
     /// The same for photons emitted over the whole domain (as without projection maps).
@@ -89,6 +103,9 @@ pub struct PhotonMaps {
     /// in `global`'s tree order; used to precompute irradiance.
     pub global_normals: Vec<Vec3>,
     pub caustic: Option<PhotonMap>,
+    /// The caustic photons that landed on rough glossy surfaces ([`is_receiver`]), estimated
+    /// with the BSDF of the point that reads them.
+    pub caustic_glossy: Option<PhotonMap>,
     pub stats: TraceStats,
 }
 
@@ -103,6 +120,16 @@ struct Landing {
 /// ends there).
 pub fn is_caustic_surface(flags: crate::bsdf::BxdfFlags) -> bool {
     (flags.has_specular() || flags.has_glossy()) && !flags.has_diffuse()
+}
+
+/// Whether a surface with this BSDF receives caustic photons as a rough glossy surface (it
+/// has no diffuse lobe, and a single microfacet lobe at least `min_alpha` wide): light that
+/// reaches it through specular bounces (L S+ G) is then a density estimate with the BSDF per
+/// photon where the camera sees it, instead of rare paths that must find the light through
+/// the glass. Narrow lobes are left to tracing: their estimate would need photons in a small
+/// cone of directions. The renderer asks the same question of the same BSDF.
+pub fn is_receiver(bsdf: &Bsdf, min_alpha: f32) -> bool {
+    !bsdf.flags().has_diffuse() && bsdf.glossy_alpha().is_some_and(|a| a >= min_alpha)
 }
 
 /// The bounding spheres of all objects that may be specular somewhere: the targets of the
@@ -207,19 +234,33 @@ pub fn trace(scene: &Scene, accel: &Accel, lights: &Lights, s: &TraceSettings) -
     let t = Instant::now();
     stats.global_stored = global.len();
     stats.caustic_stored = caustic.len();
-    let (global_map, global_normals) = build_map(global);
-    let (caustic_map, _) = build_map(caustic);
+    // Photons on glossy surfaces first, in place (a second vector of landings would raise
+    // the peak bytes per photon).
+    let mut caustic = caustic;
+    let mut split = 0;
+    for j in 0..caustic.len() {
+        if caustic[j].photon.has(Photon::ON_GLOSSY) {
+            caustic.swap(split, j);
+            split += 1;
+        }
+    }
+    stats.caustic_glossy_stored = split;
+    let (global_map, global_normals) = build_map(&global);
+    drop(global);
+    let (glossy_map, _) = build_map(&caustic[..split]);
+    let (caustic_map, _) = build_map(&caustic[split..]);
     stats.build_seconds = t.elapsed().as_secs_f64();
     PhotonMaps {
         global: global_map,
         global_normals,
         caustic: caustic_map,
+        caustic_glossy: glossy_map,
         stats,
     }
 }
 
 /// Builds a map (and the normals in its order) from landed photons; `None` when empty.
-fn build_map(landings: Vec<Landing>) -> (Option<PhotonMap>, Vec<Vec3>) {
+fn build_map(landings: &[Landing]) -> (Option<PhotonMap>, Vec<Vec3>) {
     if landings.is_empty() {
         return (None, Vec::new());
     }
@@ -364,6 +405,17 @@ fn trace_one(
         }
         let dir = -si.wo_world;
         let facing = if si.ng.dot(dir) < 0.0 { si.ng } else { -si.ng };
+        if kind == MapKind::Caustic
+            && specular_chain
+            && bounce > 0
+            && power.max_element() > 0.0
+            && is_receiver(&bsdf, s.receiver_alpha)
+        {
+            out.push(Landing {
+                photon: Photon::new(si.p, power, dir, Photon::CAUSTIC | Photon::ON_GLOSSY),
+                normal: facing,
+            });
+        }
         if flags.has_diffuse() {
             let store = match kind {
                 MapKind::Global => true,
