@@ -17,6 +17,8 @@ Reproduce (what was run; ~25 min on a shared 2-core machine, nice'd):
       --out /work/mitsuba-ref/cornell-glass-reference --json cornell-glass-reference.json
   nice -n 5 venv/bin/python render_reference.py --xml cornell-textured.xml --res 64 \
       --pass-spp 4096 --minutes 6 --out cornell-textured-reference-64   (49152 spp, 158 s)
+  nice -n 15 venv/bin/python render_reference.py --xml glass-on-metal.xml --res 128 \
+      --pass-spp 4096 --minutes 14 --out glass-on-metal-reference-128   (389120 spp, 836 s)
 LLVM: Dr.Jit needs a recent libLLVM. The system's LLVM 14/15 failed here ("LLVM ERROR: Cannot
 select: fminimum"), so DRJIT_LIBLLVM_PATH is pointed at rustup's libLLVM 22 when it is not set.
 """
