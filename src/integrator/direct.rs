@@ -187,6 +187,7 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<Ga
             ls,
             guide.as_ref(),
             &si,
+            &bsdf,
             f_d,
             path.beta,
             path.pixel,

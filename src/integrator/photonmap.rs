@@ -412,8 +412,12 @@ pub fn gather_pdf(si: &SurfaceInteraction, guide: Option<&GatherGuide>, wi: Vec3
     q * local.z / std::f32::consts::PI
 }
 
-/// Photon-map radiance at the diffuse point `si` (diffuse BRDF value `f_d`), and its gather
-/// rays pushed to `gathers` with throughput `beta`, drawn by `guide` when there is one.
+/// Photon-map radiance at the diffuse point `si` (BSDF `bsdf`, whose value towards the normal
+/// `f_d` stands for the whole of it in the photon estimates), and its gather rays pushed to
+/// `gathers` with throughput `beta`, drawn by `guide` when there is one. A gather ray's weight
+/// is `f cos / pdf` with the BSDF's own value where it is not Lambertian (a coated diffuse
+/// surface: the coat's glossy lobe then reflects what the gather rays find, environment light
+/// and emitters included, as the shadow rays' MIS partner must).
 #[allow(clippy::too_many_arguments)]
 pub fn at_diffuse(
     pass: &PhotonPass,
@@ -421,6 +425,7 @@ pub fn at_diffuse(
     light_samples: u32,
     guide: Option<&GatherGuide>,
     si: &SurfaceInteraction,
+    bsdf: &Bsdf,
     f_d: Vec3,
     beta: Vec3,
     pixel: usize,
@@ -469,6 +474,7 @@ pub fn at_diffuse(
     let (nx, ny) = strata(g);
     let frame = Frame::from_normal(n);
     let weight = beta * f_d * (std::f32::consts::PI / g as f32);
+    let lambertian = matches!(bsdf, Bsdf::Diffuse(_));
     let o = si.spawn(n);
     for k in 0..g {
         let j = sampler.next_2d();
@@ -480,6 +486,13 @@ pub fn at_diffuse(
         let local = crate::sampling::warp::square_to_cosine_hemisphere(u);
         let d = frame.to_world(local);
         let pdf = q * local.z / std::f32::consts::PI;
+        let w = if lambertian {
+            weight / q
+        } else {
+            let wi = si.frame.to_local(d);
+            let f = bsdf.f(si.wo, wi, TransportMode::Radiance);
+            beta * f * (wi.z.abs() / (pdf * g as f32))
+        };
         let gs = Sampler::new(
             Pattern::Independent,
             sampler_key(sampler),
@@ -490,7 +503,7 @@ pub fn at_diffuse(
         gathers.push(Gather {
             pixel,
             ray: Ray::new(o, d),
-            weight: weight / q,
+            weight: w,
             pdf,
             light_samples,
             primary,
