@@ -294,6 +294,21 @@ impl MaterialKind {
         }
     }
 
+    /// Whether the BSDF may somewhere have a sharp lobe: a delta one, or the microfacet lobe
+    /// of a conductor or dielectric narrower than `min_alpha` (GGX alpha; a textured
+    /// roughness counts as possibly sharp). Caustic photons are aimed at such objects and go
+    /// on through them (see `photon::trace::is_sharp_bounce`).
+    pub fn has_sharp_lobe(&self, min_alpha: f32) -> bool {
+        let narrow = |r: &Roughness| r.constant().is_none_or(|(u, v)| u.min(v) < min_alpha);
+        match self {
+            MaterialKind::Dielectric { eta, roughness } => {
+                *eta != 1.0 && narrow(roughness) || self.flags().has_specular()
+            }
+            MaterialKind::Conductor { roughness, .. } => narrow(roughness),
+            _ => self.flags().has_specular(),
+        }
+    }
+
     /// Whether the surface reflects nothing anywhere (a diffuse or diffuse-transmission
     /// material with constant black colours): no photon map is needed for it.
     pub fn is_black(&self) -> bool {

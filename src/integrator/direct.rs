@@ -22,6 +22,7 @@ use crate::film::Radiance;
 use crate::interaction::SurfaceInteraction;
 use crate::math::{Ray, Vec3};
 use crate::photon::guide::GuideSlot;
+use crate::photon::trace;
 use crate::photon::KnnResult;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
@@ -131,8 +132,15 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<Ga
         _ => None,
     };
 
+    // Sharp bounces after a receiver: light arriving here is in the receiver's caustic
+    // photons (L (S|G)+ G paths with near-smooth G), so this vertex casts no shadow rays when
+    // its only non-delta lobe is near-smooth.
+    let sharp_alpha = ctx.photons.and_then(photonmap::caustic_alpha);
+    let covered_here = path.covered != Covered::No
+        && sharp_alpha.is_some_and(|a| bsdf.glossy_alpha().is_some_and(|g| g < a));
+
     // Direct light by shadow rays.
-    if flags.has_non_specular() && !ctx.lights.is_empty() {
+    if flags.has_non_specular() && !ctx.lights.is_empty() && !covered_here {
         for _ in 0..ls {
             let u_sel = path.sampler.next_1d();
             let u = path.sampler.next_2d();
@@ -251,7 +259,10 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<Ga
         prev_pdf: bsdf.mis_pdf(wo, &bs),
         prev_p: si.p,
         prev_delta: path.prev_delta && bs.specular,
-        covered: path.covered.after(receiver, bs.specular),
+        covered: path.covered.after(
+            receiver,
+            sharp_alpha.is_some_and(|a| trace::is_sharp_bounce(&bsdf, bs.specular, a)),
+        ),
         ..path
     });
 }

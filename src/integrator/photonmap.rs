@@ -225,7 +225,8 @@ pub struct PhotonPass {
 }
 
 /// Which maps the scene needs, (global, caustic), and why a map it does not need is skipped:
-/// the global map needs a lit diffuse surface, the caustic map a specular surface and a
+/// the global map needs a lit diffuse surface, the caustic map a sharp surface (specular, or
+/// glossy narrower than `receiver_alpha`) and a
 /// surface to store caustic photons on (diffuse, or glossy without a diffuse lobe when
 /// `receiver_alpha` is finite).
 pub fn needed_maps(scene: &Scene, receiver_alpha: f32) -> (bool, bool, Vec<&'static str>) {
@@ -238,7 +239,7 @@ pub fn needed_maps(scene: &Scene, receiver_alpha: f32) -> (bool, bool, Vec<&'sta
     let any_diffuse = kinds().any(|k| k.flags().has_diffuse() && !k.is_black());
     let any_glossy = receiver_alpha.is_finite()
         && kinds().any(|k| k.flags().has_glossy() && !k.flags().has_diffuse());
-    let any_specular = kinds().any(|k| k.flags().has_specular());
+    let any_specular = kinds().any(|k| k.has_sharp_lobe(receiver_alpha));
     let mut skipped = Vec::new();
     if scene.lights.is_empty() {
         skipped.push("photon maps (no light)");
@@ -248,7 +249,7 @@ pub fn needed_maps(scene: &Scene, receiver_alpha: f32) -> (bool, bool, Vec<&'sta
         skipped.push("global map (no lit diffuse surface)");
     }
     if !any_specular {
-        skipped.push("caustic map and projection maps (no specular surface)");
+        skipped.push("caustic map and projection maps (no specular or near-smooth surface)");
     } else if !(any_diffuse || any_glossy) {
         skipped.push("caustic map and projection maps (no diffuse or rough glossy receiver)");
     }
@@ -556,11 +557,18 @@ pub fn gather_radiance(
     (direct, reflected(ctx, pass, global, g, hit, buf))
 }
 
+/// The GGX alpha below which glossy lobes count as sharp (caustic chains go on through them,
+/// wider ones receive caustic photons), when this pass shot caustic photons; `None` otherwise
+/// (then nothing is covered by photons on the camera side).
+pub fn caustic_alpha(pass: &PhotonPass) -> Option<f32> {
+    (pass.settings.trace.caustic_photons > 0).then_some(pass.settings.trace.receiver_alpha)
+}
+
 /// The caustic radiance towards `si.wo` at a rough glossy point (L S+ G paths) from the
 /// caustic photons on glossy surfaces, each weighted by `bsdf` (see
 /// [`crate::photon::estimate::radiance_with`]); `None` when the point is no receiver
 /// ([`trace::is_receiver`]) or no caustic photons were shot. A `Some` means the camera path
-/// must not count emitters it reaches from here through delta bounces only
+/// must not count light it finds from here through sharp bounces only
 /// ([`super::wavefront::Covered`]).
 pub fn at_glossy(
     pass: &PhotonPass,
@@ -569,9 +577,7 @@ pub fn at_glossy(
     bsdf: &Bsdf,
     buf: &mut KnnResult,
 ) -> Option<Vec3> {
-    if pass.settings.trace.caustic_photons == 0
-        || !trace::is_receiver(bsdf, pass.settings.trace.receiver_alpha)
-    {
+    if !trace::is_receiver(bsdf, caustic_alpha(pass)?) {
         return None;
     }
     let Some(map) = &pass.maps.caustic_glossy else {
@@ -673,7 +679,7 @@ pub fn describe(pass: &PhotonPass) -> Vec<String> {
     )];
     if st.caustic_emitted > 0 {
         lines.push(format!(
-            "caustic efficiency: {:.1}% of caustic photons reach a specular surface ({:.1}% without projection maps); marked fraction per light {:?}",
+            "caustic efficiency: {:.1}% of caustic photons reach a specular or near-smooth surface ({:.1}% without projection maps); marked fraction per light {:?}",
             100.0 * st.caustic_efficiency,
             100.0 * st.caustic_efficiency_unrestricted,
             st.marked_fraction.iter().map(|f| (f * 1000.0).round() / 1000.0).collect::<Vec<_>>()

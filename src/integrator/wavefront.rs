@@ -44,8 +44,10 @@ pub struct PathState {
 }
 
 /// Where a camera path stands towards the caustic photons of rough glossy surfaces: the
-/// estimate at such a surface counts every L S+ G path through it, so the path traced on
-/// from it must not count an emitter it reaches through delta bounces only.
+/// estimate at such a surface counts every L (S|G)+ G path through it whose bounces before it
+/// were sharp (delta or near-smooth, `photon::trace::is_sharp_bounce`), so the path traced on
+/// from it must not count light it finds through sharp bounces only: emitters hit after them,
+/// and shadow rays from near-smooth vertices.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Covered {
     /// Nothing is covered.
@@ -54,15 +56,16 @@ pub enum Covered {
     /// The last vertex was a receiver (its caustic estimate taken) and the path left it by a
     /// non-delta sample: an emitter hit next is direct light (MIS-weighted), still counted.
     Next,
-    /// Delta bounces only since such a vertex: emitters (and the infinite lights) count zero.
+    /// Sharp bounces only since such a vertex: emitters (and the infinite lights) count zero.
     Specular,
 }
 
 impl Covered {
     /// The state after a bounce: `receiver` says whether the vertex took a caustic estimate
-    /// from glossy photons, `delta` whether the sampled lobe was a delta one.
-    pub fn after(self, receiver: bool, delta: bool) -> Covered {
-        match (receiver, delta, self) {
+    /// from glossy photons, `sharp` whether the bounce was sharp (a delta lobe, or a
+    /// near-smooth one; a receiver's own lobe is never near-smooth).
+    pub fn after(self, receiver: bool, sharp: bool) -> Covered {
+        match (receiver, sharp, self) {
             (true, false, _) => Covered::Next,
             (_, true, Covered::Next | Covered::Specular) => Covered::Specular,
             _ => Covered::No,

@@ -11,22 +11,26 @@
 //!   power becomes `power * w / q`: Jensen's Russian roulette (fewer photons of unchanged
 //!   power) and, per channel, RGB roulette (`rho_c / rho_avg`). The power already carries the
 //!   cosine; it is never multiplied in again.
-//! - **Storage**, only at surfaces with a diffuse lobe: the global map keeps every such hit,
-//!   flagged `DIRECT` when it came straight from the light, `CAUSTIC` after specular (delta)
-//!   bounces only, and `GLOSSY` after bounces off surfaces without a diffuse lobe at least one
-//!   of which was glossy, so that estimates can leave out what shadow rays and the caustic
-//!   map already give; the caustic map keeps light -> specular+ -> diffuse paths, shot with
-//!   projection maps aimed at the specular objects.
-//! - **Rough glossy receivers**: caustic photons that reach a rough glossy surface (a single
-//!   GGX lobe at least [`TraceSettings::receiver_alpha`] wide, [`is_receiver`]) through
-//!   specular bounces are kept too, flagged `ON_GLOSSY`, in a map of their own
+//! - **Sharp and wide lobes**: a bounce is *sharp* when its lobe is a delta one or the single
+//!   microfacet lobe of a conductor or dielectric narrower than
+//!   [`TraceSettings::receiver_alpha`] (`glossyalpha`, 0.1): near-smooth glass focuses light
+//!   almost as sharply as smooth glass ([`is_sharp_bounce`]). Wider glossy lobes are
+//!   *receivers* ([`is_receiver`]).
+//! - **Storage**, at surfaces with a diffuse lobe: the global map keeps every such hit,
+//!   flagged `DIRECT` when it came straight from the light, `CAUSTIC` after sharp bounces only,
+//!   and `GLOSSY` after bounces off surfaces without a diffuse lobe, at least one of them not
+//!   sharp, so that estimates can leave out what shadow rays and the caustic map already give;
+//!   the caustic map keeps light -> sharp+ -> diffuse paths (L (S|G)+ D with near-smooth G),
+//!   shot with projection maps aimed at the objects that may be sharp.
+//! - **Rough glossy receivers**: caustic photons that reach a receiver through sharp bounces
+//!   are kept too, flagged `ON_GLOSSY`, in a map of their own
 //!   ([`PhotonMaps::caustic_glossy`]): a glass ball on a rough-metal floor gets its caustic
 //!   from them even in a scene without a single diffuse surface.
 //! - **Glossy caustics** (light that reaches a room only through a metal lamp shade) are
 //!   caustics too, but spread wide: the renderer estimates them from the `GLOSSY` photons of
 //!   the global map with the global map's radius (see `integrator::photonmap`), not from the
-//!   caustic map's sharp, small discs. A bounce counts towards a caustic chain when the
-//!   surface has no diffuse lobe ([`is_caustic_surface`]).
+//!   caustic map's sharp, small discs. A bounce counts towards such a chain when the surface
+//!   has no diffuse lobe ([`is_caustic_surface`]).
 //! - Photons trapped by total internal reflection end at `max_bounces`.
 //! - Caustic photons of infinite lights start only where they can reach a specular object
 //!   ([`Lights::emit_caustic`]): a disc of the scene's radius would waste almost all of them.
@@ -85,7 +89,8 @@ pub struct TraceStats {
     pub caustic_stored: usize,
     /// Of `caustic_stored`, the photons on rough glossy surfaces.
     pub caustic_glossy_stored: usize,
-    /// Caustic photons whose first hit was specular / caustic photons emitted.
+    /// Caustic photons whose first hit was sharp (specular or near-smooth) / caustic photons
+    /// emitted.
     pub caustic_efficiency: f64,
     /// The same for photons emitted over the whole domain (as without projection maps).
     pub caustic_efficiency_unrestricted: f64,
@@ -135,17 +140,32 @@ pub fn is_receiver(bsdf: &Bsdf, min_alpha: f32) -> bool {
     !bsdf.flags().has_diffuse() && bsdf.glossy_alpha().is_some_and(|a| a >= min_alpha)
 }
 
-/// The bounding spheres of all objects that may be specular somewhere: the targets of the
-/// caustic projection maps.
-pub fn caustic_targets(scene: &Scene) -> Vec<(Vec3, f32)> {
+/// Whether a photon that left a surface with this BSDF by a sample that was `specular` took
+/// a *sharp* bounce: a delta lobe, or the single microfacet lobe of a rough conductor or
+/// dielectric narrower than `min_alpha` (near-smooth glass and metal focus light almost as
+/// sharply as smooth ones). Caustic paths are chains of sharp bounces (L (S|G)+ D with the G
+/// near-smooth); wider glossy lobes end them, at a receiver ([`is_receiver`]).
+pub fn is_sharp_bounce(bsdf: &Bsdf, specular: bool, min_alpha: f32) -> bool {
+    specular || bsdf.glossy_alpha().is_some_and(|a| a < min_alpha)
+}
+
+/// Whether caustic photons go on through a surface with this BSDF: it has a delta lobe or a
+/// near-smooth microfacet lobe ([`is_sharp_bounce`]).
+pub fn is_sharp_surface(bsdf: &Bsdf, min_alpha: f32) -> bool {
+    bsdf.flags().has_specular() || bsdf.glossy_alpha().is_some_and(|a| a < min_alpha)
+}
+
+/// The bounding spheres of all objects that may be sharp somewhere (a delta or near-smooth
+/// lobe, see [`crate::scene::MaterialKind::has_sharp_lobe`]): the targets of the caustic
+/// projection maps.
+pub fn caustic_targets(scene: &Scene, min_alpha: f32) -> Vec<(Vec3, f32)> {
     scene
         .meshes
         .iter()
         .filter(|m| {
             scene.materials[m.material as usize]
                 .kind
-                .flags()
-                .has_specular()
+                .has_sharp_lobe(min_alpha)
         })
         .map(|m| m.sphere.unwrap_or_else(|| bounding_sphere(&m.positions)))
         .collect()
@@ -177,7 +197,7 @@ pub fn trace(scene: &Scene, accel: &Accel, lights: &Lights, s: &TraceSettings) -
     let start = Instant::now();
     let mut stats = TraceStats::default();
     let powers = lights.powers(scene);
-    let targets = caustic_targets(scene);
+    let targets = caustic_targets(scene, s.receiver_alpha);
     let global = if s.global_photons > 0 {
         let counts = allocate(s.global_photons, &powers);
         stats.global_emitted = counts.iter().sum();
@@ -389,10 +409,10 @@ fn trace_one(
     };
     let mut ray = Ray::new(o, e.dir);
     let mut rays = 0;
-    // Every bounce so far was off a surface without a diffuse lobe; every sampled lobe was a
-    // delta one.
+    // Every bounce so far was off a surface without a diffuse lobe; every bounce was sharp
+    // (a delta or near-smooth lobe, `is_sharp_bounce`).
     let mut caustic_chain = true;
-    let mut specular_chain = true;
+    let mut sharp_chain = true;
     let mut first_specular = false;
     for bounce in 0..s.max_bounces {
         rays += 1;
@@ -404,12 +424,12 @@ fn trace_one(
         let flags = bsdf.flags();
         let caustic_surface = is_caustic_surface(flags);
         if bounce == 0 {
-            first_specular = flags.has_specular();
+            first_specular = is_sharp_surface(&bsdf, s.receiver_alpha);
         }
         let dir = -si.wo_world;
         let facing = if si.ng.dot(dir) < 0.0 { si.ng } else { -si.ng };
         if kind == MapKind::Caustic
-            && specular_chain
+            && sharp_chain
             && bounce > 0
             && power.max_element() > 0.0
             && is_receiver(&bsdf, s.receiver_alpha)
@@ -422,10 +442,10 @@ fn trace_one(
         if flags.has_diffuse() {
             let store = match kind {
                 MapKind::Global => true,
-                MapKind::Caustic => specular_chain && bounce > 0,
+                MapKind::Caustic => sharp_chain && bounce > 0,
             };
             if store && power.max_element() > 0.0 {
-                let flags = match (bounce, specular_chain, caustic_chain) {
+                let flags = match (bounce, sharp_chain, caustic_chain) {
                     (0, _, _) => Photon::DIRECT,
                     (_, true, _) => Photon::CAUSTIC,
                     (_, false, true) => Photon::GLOSSY,
@@ -437,18 +457,20 @@ fn trace_one(
                 });
             }
         }
-        if kind == MapKind::Caustic && !flags.has_specular() {
-            break; // a caustic path ends at its first non-specular surface
+        let sharp_surface = is_sharp_surface(&bsdf, s.receiver_alpha);
+        if kind == MapKind::Caustic && !sharp_surface {
+            break; // a caustic path ends at its first surface that is not sharp
         }
         let Some(sc) = scatter(&si, &bsdf, sampler) else {
             break;
         };
-        if kind == MapKind::Caustic && !sc.specular {
-            break; // the sampled lobe was not a delta one (a glossy or diffuse part)
+        let sharp = is_sharp_bounce(&bsdf, sc.specular, s.receiver_alpha);
+        if kind == MapKind::Caustic && !sharp {
+            break; // the sampled lobe was a wide glossy or a diffuse one
         }
         power *= sc.power_scale;
         caustic_chain &= caustic_surface;
-        specular_chain &= sc.specular;
+        sharp_chain &= sharp;
         ray = sc.ray;
     }
     (first_specular, rays)
@@ -521,7 +543,7 @@ fn unrestricted_efficiency(
             };
             if let Some(h) = accel.intersect(RayKind::Photon, &Ray::new(o, e.dir)) {
                 let material = &scene.materials[scene.meshes[h.mesh as usize].material as usize];
-                hits += material.kind.flags().has_specular() as u64;
+                hits += material.kind.has_sharp_lobe(s.receiver_alpha) as u64;
             }
         }
     }
