@@ -1,8 +1,10 @@
-//! Film: the pixel filter and per-pixel accumulation.
+//! Film: the pixel filter, per-pixel accumulation, the crop window's pixels and the sensor's
+//! per-sample clamp.
 //!
 //! ```text
 //! PixelFilter "triangle" "float xradius" [ 1 ] "float yradius" [ 1 ]
 //! Film "rgb" "integer xresolution" [ 256 ] "integer yresolution" [ 256 ]
+//!     "float iso" [ 100 ] "float maxcomponentvalue" [ 10 ] "float cropwindow" [ 0 .5 0 1 ]
 //! ```
 //! Like pbrt-v4, filters are applied by importance sampling: each camera sample is offset from
 //! its pixel centre by a draw from the filter's own distribution and counts with weight 1 in
@@ -11,6 +13,17 @@
 //! through a tabulated tabulated CDF.
 use crate::math::{Vec2, Vec3};
 use crate::scene::FilterDesc;
+
+/// The pixels `[x0, x1) x [y0, y1)` (returned as `[x0, x1, y0, y1]`) a render of a `w x h`
+/// image computes: all of them, or those of the film's `cropwindow` (fractions `[x0, x1, y0,
+/// y1]`), rounded as pbrt-v4 does: each bound is `ceil(resolution * fraction)`.
+pub fn pixel_bounds(crop: Option<[f32; 4]>, w: u32, h: u32) -> [u32; 4] {
+    let Some(c) = crop else {
+        return [0, w, 0, h];
+    };
+    let at = |res: u32, f: f32| ((res as f32 * f).ceil() as u32).min(res);
+    [at(w, c[0]), at(w, c[1]), at(h, c[2]), at(h, c[3])]
+}
 
 /// Resolution of the tabulated Gaussian tabulated CDF.
 const TABLE: usize = 1024;
@@ -130,6 +143,28 @@ impl std::ops::Mul<f32> for Radiance {
             caustic: self.caustic * s,
             indirect: self.indirect * s,
         }
+    }
+}
+
+/// CIE XYZ of a linear sRGB colour (D65 white; the matrix of IEC 61966-2-1).
+pub fn xyz_from_srgb(c: Vec3) -> Vec3 {
+    Vec3::new(
+        0.412_456_4 * c.x + 0.357_576_1 * c.y + 0.180_437_5 * c.z,
+        0.212_672_9 * c.x + 0.715_152_2 * c.y + 0.072_175 * c.z,
+        0.019_333_9 * c.x + 0.119_192 * c.y + 0.950_304_1 * c.z,
+    )
+}
+
+/// pbrt-v4's `maxcomponentvalue`: one camera sample's radiance, scaled (all components alike)
+/// so that the largest of the sensor's values is at most `max`. The default `cie1931` sensor's
+/// values are the CIE XYZ of the sample (times the imaging ratio, which the caller folds into
+/// `max`), so the clamp acts on the XYZ of the RGB sum, not on the RGB.
+pub fn clamp_sample(r: Radiance, max: f32) -> Radiance {
+    let m = xyz_from_srgb(r.total()).max_element();
+    if m > max {
+        r * (max / m)
+    } else {
+        r
     }
 }
 
