@@ -66,7 +66,10 @@ impl Camera {
     /// The pinhole ray through continuous raster position `p` (pixel `(x, y)` covers
     /// `[x, x+1) x [y, y+1)`), with a unit direction.
     pub fn generate_ray(&self, p: Vec2) -> Ray {
-        let d = self.world_from_camera.transform_vector3(self.pinhole_dir(p)).normalize();
+        let d = self
+            .world_from_camera
+            .transform_vector3(self.pinhole_dir(p))
+            .normalize();
         Ray::new(self.origin, d)
     }
 
@@ -80,7 +83,10 @@ impl Camera {
         let o = Vec3::new(lens.x, lens.y, 0.0);
         // The pinhole direction has z = 1: scaled by the focal distance it ends in the plane.
         let focus = self.pinhole_dir(p) * self.focal_distance;
-        let d = self.world_from_camera.transform_vector3(focus - o).normalize();
+        let d = self
+            .world_from_camera
+            .transform_vector3(focus - o)
+            .normalize();
         Ray::new(self.world_from_camera.transform_point3(o), d)
     }
 
@@ -179,6 +185,49 @@ mod tests {
             let angle = edge.d.dot(Vec3::Z).acos().to_degrees();
             assert!((angle - 30.0).abs() < 1e-3, "{w}x{h}: {angle}");
         }
+    }
+
+    /// Every lens ray through a raster point meets the pinhole ray through it on the plane in
+    /// focus; the lens centre gives the pinhole ray itself; lens points fill the disk.
+    #[test]
+    fn lens_rays_meet_on_the_focal_plane() {
+        let mut d = desc(50.0);
+        d.world_from_camera = Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0));
+        (d.lens_radius, d.focal_distance) = (0.3, 4.0);
+        let cam = Camera::new(&d, 64, 48);
+        let p = Vec2::new(10.3, 40.7);
+        let pin = cam.generate_ray(p);
+        let focus = pin.at(4.0 / pin.d.z);
+        let centre = cam.generate_ray_lens(p, Vec2::splat(0.5));
+        assert!((centre.o - pin.o).length() < 1e-6 && (centre.d - pin.d).length() < 1e-6);
+        let mut max_r = 0.0f32;
+        for i in 0..64 {
+            let u = Vec2::new((i % 8) as f32 / 8.0 + 0.05, (i / 8) as f32 / 8.0 + 0.05);
+            let r = cam.generate_ray_lens(p, u);
+            assert!((r.o.z - 3.0).abs() < 1e-6 && (r.d.length() - 1.0).abs() < 1e-5);
+            let lens = r.o - Vec3::new(1.0, 2.0, 3.0);
+            assert!(lens.length() <= 0.3 + 1e-6);
+            max_r = max_r.max(lens.length());
+            let hit = r.at((focus.z - r.o.z) / r.d.z);
+            assert!((hit - focus).length() < 1e-4, "{hit} {focus}");
+        }
+        assert!(max_r > 0.25, "{max_r}");
+    }
+
+    /// A screen window moves and scales the image: its centre column looks through the
+    /// window's centre, and the default window is `[-a, a] x [-1, 1]`.
+    #[test]
+    fn screen_window_maps_onto_the_raster() {
+        let mut d = desc(90.0);
+        d.screen_window = Some([0.0, 2.0, -1.0, 0.0]);
+        let cam = Camera::new(&d, 100, 50);
+        let r = cam.generate_ray(Vec2::new(50.0, 25.0));
+        let want = Vec3::new(1.0, -0.5, 1.0).normalize();
+        assert!((r.d - want).length() < 1e-6, "{}", r.d);
+        d.screen_window = Some([-2.0, 2.0, -1.0, 1.0]);
+        let a = Camera::new(&d, 100, 50).generate_ray(Vec2::new(3.0, 7.0));
+        let b = Camera::new(&desc(90.0), 100, 50).generate_ray(Vec2::new(3.0, 7.0));
+        assert!((a.d - b.d).length() < 1e-6);
     }
 
     /// Raster top-left looks towards camera (-x, +y).

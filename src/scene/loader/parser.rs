@@ -1277,7 +1277,9 @@ fn camera(
     }
     let lens_radius = params.get_float("lensradius", 0.0)?;
     if !(lens_radius >= 0.0 && lens_radius <= super::extent::MAX_COORDINATE) {
-        let p = params.peek("lensradius").expect("a bad radius came from the file");
+        let p = params
+            .peek("lensradius")
+            .expect("a bad radius came from the file");
         return Err(p.err(format!(
             "must lie in [0, {:e}], got {lens_radius}",
             super::extent::MAX_COORDINATE
@@ -1285,7 +1287,9 @@ fn camera(
     }
     let focal_distance = params.get_float("focaldistance", 1e6)?;
     if !(focal_distance > 0.0 && focal_distance.is_finite()) {
-        let p = params.peek("focaldistance").expect("a bad distance came from the file");
+        let p = params
+            .peek("focaldistance")
+            .expect("a bad distance came from the file");
         return Err(p.err(format!("must be positive and finite, got {focal_distance}")));
     }
     let screen_window = screen_window(params)?;
@@ -1346,7 +1350,11 @@ fn screen_window(params: &mut ParamSet) -> Result<Option<[f32; 4]>, SceneError> 
 /// (`"cie1931"` only), `whitebalance` (0 only), `maxcomponentvalue`, `cropwindow`; `gbuffer`'s
 /// `coordinatesystem` (it only places the extra channels, which photon does not write: the
 /// returned note says so).
-fn film(ty: &str, params: &mut ParamSet, at: &Loc) -> Result<(FilmDesc, Option<String>), SceneError> {
+fn film(
+    ty: &str,
+    params: &mut ParamSet,
+    at: &Loc,
+) -> Result<(FilmDesc, Option<String>), SceneError> {
     if ty != "rgb" && ty != "gbuffer" {
         return Err(SceneError::at(
             at,
@@ -1380,7 +1388,9 @@ fn film(ty: &str, params: &mut ParamSet, at: &Loc) -> Result<(FilmDesc, Option<S
         return Err(p.err(format!("must be positive, got {}", film.max_component)));
     }
     film.crop = crop_window(params, res)?;
-    let note = (ty == "gbuffer").then(|| gbuffer(params, at, &film)).transpose()?;
+    let note = (ty == "gbuffer")
+        .then(|| gbuffer(params, at, &film))
+        .transpose()?;
     Ok((film, note))
 }
 
