@@ -1276,7 +1276,7 @@ fn camera(
         return Err(p.err("fov must lie in (0, 180) degrees"));
     }
     let lens_radius = params.get_float("lensradius", 0.0)?;
-    if !(lens_radius >= 0.0 && lens_radius <= super::extent::MAX_COORDINATE) {
+    if !(0.0..=super::extent::MAX_COORDINATE).contains(&lens_radius) {
         let p = params
             .peek("lensradius")
             .expect("a bad radius came from the file");
@@ -1383,7 +1383,7 @@ fn film(
         return Err(p.err(format!("must be positive and finite, got {}", film.iso)));
     }
     film.max_component = params.get_float("maxcomponentvalue", f32::INFINITY)?;
-    if !(film.max_component > 0.0) {
+    if film.max_component.is_nan() || film.max_component <= 0.0 {
         let p = params.peek("maxcomponentvalue").expect("given");
         return Err(p.err(format!("must be positive, got {}", film.max_component)));
     }
