@@ -87,6 +87,10 @@ impl Camera {
             .world_from_camera
             .transform_vector3(focus - o)
             .normalize();
+        if !d.is_finite() {
+            // A focal distance so large that the focus point overflows: the pinhole ray.
+            return self.generate_ray(p);
+        }
         Ray::new(self.world_from_camera.transform_point3(o), d)
     }
 

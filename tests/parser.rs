@@ -2302,7 +2302,10 @@ WorldBegin
             "\"float focaldistance\" 0",
             "\"float focaldistance\": must be positive",
         ),
-        ("\"float screenwindow\" [ -1 1 -1 ]", "four finite values"),
+        (
+            "\"float screenwindow\" [ -1 1 -1 ]",
+            "expected four values xmin xmax ymin ymax",
+        ),
         ("\"float screenwindow\" [ 1 -1 -1 1 ]", "min < max"),
         ("\"float frameaspectratio\" -1", "must be positive"),
         (

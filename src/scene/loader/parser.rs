@@ -1306,7 +1306,16 @@ fn camera(
     }
     let eye = world_from_camera.transform_point3(Vec3::ZERO);
     let max = super::extent::MAX_COORDINATE;
-    if eye.abs().max_element() > max {
+    // The lens's rim in world space (the camera transform may scale).
+    let rim = [Vec3::X, Vec3::Y]
+        .map(|a| {
+            world_from_camera
+                .transform_vector3(a * lens_radius)
+                .length()
+        })
+        .into_iter()
+        .fold(0.0, f32::max);
+    if eye.abs().max_element() + rim > max {
         return Err(SceneError::at(
             at,
             format!("the scene is too large: the camera is at {eye} (photon supports coordinates up to {max:e}; scale the scene down)"),
@@ -1328,9 +1337,12 @@ fn screen_window(params: &mut ParamSet) -> Result<Option<[f32; 4]>, SceneError> 
     let frame = params.get_float_opt("frameaspectratio")?;
     if let Some(w) = params.get_floats("screenwindow")? {
         let p = params.peek("screenwindow").expect("given");
-        let ok = w.len() == 4 && w.iter().all(|v| v.is_finite()) && w[0] < w[1] && w[2] < w[3];
+        let max = super::extent::MAX_COORDINATE;
+        let ok = w.len() == 4 && w.iter().all(|v| v.abs() <= max) && w[0] < w[1] && w[2] < w[3];
         if !ok {
-            return Err(p.err("expected four finite values xmin xmax ymin ymax with min < max"));
+            return Err(p.err(format!(
+                "expected four values xmin xmax ymin ymax within {max:e} with min < max"
+            )));
         }
         return Ok(Some([w[0], w[1], w[2], w[3]]));
     }
