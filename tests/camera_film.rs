@@ -8,6 +8,9 @@
 //!   same on 1 and 2 threads;
 //! - `iso` and `shutteropen`/`shutterclose` scale every pixel by `exposure * iso / 100`;
 //! - `cropwindow` renders exactly the pixels (pbrt-v4's `ceil` bounds) of the full render;
+//! - `whitebalance` 7500 (pbrt-v4's correlated temperature 7504 K: CIE D75, whose published
+//!   chromaticity is (0.29902, 0.31485)) turns an emitter of D75's colour neutral grey, and
+//!   6500 (D65, sRGB's white) leaves colours as they were;
 //! - `maxcomponentvalue` scales each camera sample so its largest XYZ component is the maximum:
 //!   with one emitter colour, every pixel (edge pixels included, whose mean is far below the
 //!   maximum) is the unclamped pixel times `max / max(XYZ(L))`.
@@ -289,5 +292,64 @@ Shape "trianglemesh" "point3 P" [ -0.61 -0.47 3  0.53 -0.47 3  0.53 0.71 3  -0.6
             edges += (mean > 0.0 && mean < 0.9 * max.min(m * ratio)) as u32;
         }
         assert!(edges >= 10, "{film}: {edges} edge pixels");
+    }
+}
+
+/// sRGB of the colour with chromaticity `(x, y)` and Y = 1 (the inverse of the IEC 61966-2-1
+/// matrix, to 4 digits).
+fn srgb_of_xy(x: f32, y: f32) -> [f32; 3] {
+    let (cx, cz) = (x / y, (1.0 - x - y) / y);
+    [
+        3.2405 * cx - 1.5371 - 0.4985 * cz,
+        -0.9693 * cx + 1.8760 + 0.0416 * cz,
+        0.0556 * cx - 0.2040 + 1.0572 * cz,
+    ]
+}
+
+#[test]
+fn white_balance_adapts_daylight_to_srgb_white() {
+    let scene = |l: [f32; 3], film: &str| {
+        load(&format!(
+            r#"Camera "perspective" "float fov" [ 40 ]
+Film "rgb" "integer xresolution" [ 8 ] "integer yresolution" [ 8 ] {film}
+WorldBegin
+Material "diffuse" "rgb reflectance" [ 0 0 0 ]
+AreaLightSource "diffuse" "rgb L" [ {} {} {} ] "bool twosided" true
+Shape "trianglemesh" "point3 P" [ -5 -5 3  5 -5 3  5 5 3  -5 5 3 ] "integer indices" [ 0 1 2 0 2 3 ]
+"#,
+            l[0], l[1], l[2]
+        ))
+    };
+    let d75 = srgb_of_xy(0.29902, 0.31485);
+    assert!(d75[2] > 1.1 * d75[0], "D75 is bluish: {d75:?}");
+    let img = render(
+        &scene(d75, "\"float whitebalance\" 7500"),
+        IntegratorKind::Direct,
+        1,
+        0,
+    )
+    .image;
+    for p in &img.pixels {
+        // Neutral, with the luminance kept near 1 (Bradford adapts Y only slightly). The
+        // daylight-locus formula photon uses puts D75 at (0.29904, 0.31497), (2e-5, 1.2e-4) off
+        // the published (integrated) value: that moves the channels apart by about 1e-3.
+        assert!(
+            (p[0] - p[2]).abs() < 2e-3 && (p[1] - p[2]).abs() < 2e-3,
+            "{p:?}"
+        );
+        assert!((p[1] - 1.0).abs() < 0.03, "{p:?}");
+    }
+    let colour = [0.8, 0.3, 0.1];
+    let img = render(
+        &scene(colour, "\"float whitebalance\" 6500"),
+        IntegratorKind::Direct,
+        1,
+        0,
+    )
+    .image;
+    for p in &img.pixels {
+        for c in 0..3 {
+            assert!((p[c] - colour[c]).abs() < 2e-3, "{p:?}");
+        }
     }
 }

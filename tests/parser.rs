@@ -2359,6 +2359,9 @@ WorldBegin
     // Ordered and clamped to [0, 1] per axis, as pbrt-v4 does.
     assert_eq!(s.film.crop, Some([0.1, 0.9, 0.0, 1.0]));
     assert_eq!(s.film.imaging_ratio(s.camera.exposure_time), 1.25);
+    assert_eq!(s.film.white_balance, 0.0);
+    let s = ok("Film \"rgb\" \"float whitebalance\" 9000\nWorldBegin\n");
+    assert_eq!(s.film.white_balance, 9000.0);
     let s = ok("Film \"rgb\"\nWorldBegin\n");
     assert_eq!(
         (s.film.iso, s.film.max_component, s.film.crop),
@@ -2376,8 +2379,8 @@ WorldBegin
             "sensor \"nikon_d850\" is not supported",
         ),
         (
-            "\"float whitebalance\" 5000",
-            "white balancing is not supported",
+            "\"float whitebalance\" 3000",
+            "must be 0 (none) or a daylight temperature in [3998, 100000] K",
         ),
         ("\"float iso\" 0", "\"float iso\": must be positive"),
         ("\"float maxcomponentvalue\" 0", "must be positive"),

@@ -67,6 +67,8 @@ pub struct RenderSettings {
     pub imaging_ratio: f32,
     /// The film's `maxcomponentvalue` (see [`film::clamp_sample`]), after the imaging ratio.
     pub max_component: f32,
+    /// The film's `whitebalance` as a matrix on every pixel (see [`film::white_balance`]).
+    pub white_balance: Option<crate::math::Mat3>,
 }
 
 impl RenderSettings {
@@ -107,6 +109,8 @@ impl RenderSettings {
             crop: scene.film.crop,
             imaging_ratio: scene.film.imaging_ratio(scene.camera.exposure_time),
             max_component: scene.film.max_component,
+            white_balance: (scene.film.white_balance != 0.0)
+                .then(|| film::white_balance(scene.film.white_balance)),
         })
     }
 
@@ -307,7 +311,7 @@ pub fn render_prepared(
         .collect();
 
     // Assemble the tiles into the combined image and one image per component (the pixels of
-    // the crop window, scaled by the imaging ratio).
+    // the crop window, scaled by the imaging ratio and white balanced).
     let (wu, hu) = ((w - bx0) as usize, (h - by0) as usize);
     let mut parts: [RgbImage; 4] = std::array::from_fn(|_| RgbImage::new(wu, hu));
     let mut image = RgbImage::new(wu, hu);
@@ -315,6 +319,9 @@ pub fn render_prepared(
     for ((x0, y0), mut px) in rendered {
         if ratio != 1.0 {
             px.iter_mut().for_each(|r| *r = *r * ratio);
+        }
+        if let Some(m) = settings.white_balance {
+            px.iter_mut().for_each(|r| *r = r.map(|v| m * v));
         }
         let tw = ((x0 + TILE).min(w) - x0) as usize;
         for (i, r) in px.iter().enumerate() {

@@ -484,6 +484,8 @@ pub struct FilmDesc {
     /// `cropwindow` `[x0, x1, y0, y1]` as fractions of the image, ordered and clamped to
     /// [0, 1]; only the pixels pbrt-v4's rounding puts inside are rendered.
     pub crop: Option<[f32; 4]>,
+    /// `whitebalance`: the colour temperature (kelvin) adapted to sRGB's white; 0: none.
+    pub white_balance: f32,
 }
 
 impl FilmDesc {
@@ -496,6 +498,7 @@ impl FilmDesc {
             iso: 100.0,
             max_component: f32::INFINITY,
             crop: None,
+            white_balance: 0.0,
         }
     }
 
@@ -596,7 +599,12 @@ impl Scene {
             text(format!("{:?}", self.filter)),
             text(format!(
                 "{:?}",
-                (self.film.iso, self.film.max_component, self.film.crop)
+                (
+                    self.film.iso,
+                    self.film.max_component,
+                    self.film.crop,
+                    self.film.white_balance
+                )
             )),
         ]);
         for m in &self.meshes {

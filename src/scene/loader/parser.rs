@@ -1359,7 +1359,7 @@ fn screen_window(params: &mut ParamSet) -> Result<Option<[f32; 4]>, SceneError> 
 }
 
 /// `Film "rgb"` or `"gbuffer"`: `xresolution`, `yresolution`, `filename`, `iso`, `sensor`
-/// (`"cie1931"` only), `whitebalance` (0 only), `maxcomponentvalue`, `cropwindow`; `gbuffer`'s
+/// (`"cie1931"` only), `whitebalance`, `maxcomponentvalue`, `cropwindow`; `gbuffer`'s
 /// `coordinatesystem` (it only places the extra channels, which photon does not write: the
 /// returned note says so).
 fn film(
@@ -1388,7 +1388,7 @@ fn film(
     }
     let mut film = FilmDesc::new(res[0], res[1]);
     film.filename = params.get_string_opt("filename")?;
-    sensor(params)?;
+    film.white_balance = sensor(params)?;
     film.iso = params.get_float("iso", 100.0)?;
     if !(film.iso > 0.0 && film.iso.is_finite()) {
         let p = params.peek("iso").expect("a bad iso came from the file");
@@ -1406,8 +1406,9 @@ fn film(
     Ok((film, note))
 }
 
-/// The sensor parameters photon supports: the default `cie1931` sensor without white balance.
-fn sensor(params: &mut ParamSet) -> Result<(), SceneError> {
+/// The sensor parameters photon supports: the default `cie1931` sensor, with or without white
+/// balance (its temperature, 0 for none, is returned).
+fn sensor(params: &mut ParamSet) -> Result<f32, SceneError> {
     let name = params.get_string("sensor", "cie1931")?;
     if name != "cie1931" {
         let p = params.peek("sensor").expect("given");
@@ -1415,11 +1416,15 @@ fn sensor(params: &mut ParamSet) -> Result<(), SceneError> {
             "sensor \"{name}\" is not supported (photon has only the default \"cie1931\")"
         )));
     }
-    if params.get_float("whitebalance", 0.0)? != 0.0 {
+    let t = params.get_float("whitebalance", 0.0)?;
+    let min = crate::film::MIN_WHITE_BALANCE;
+    if t != 0.0 && !(min..=1e5).contains(&t) {
         let p = params.peek("whitebalance").expect("given");
-        return Err(p.err("white balancing is not supported (only 0: none)"));
+        return Err(p.err(format!(
+            "must be 0 (none) or a daylight temperature in [{min:.0}, 100000] K, got {t} (pbrt-v4's blackbody white below it is not supported)"
+        )));
     }
-    Ok(())
+    Ok(t)
 }
 
 /// `cropwindow`: four values, each axis ordered and clamped to [0, 1] as pbrt-v4 does; an error
