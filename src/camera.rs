@@ -1,59 +1,117 @@
-//! The perspective pinhole camera (pbrt-v4 conventions).
+//! The perspective camera (pbrt-v4 conventions): a pinhole, or a thin lens.
 //!
 //! ```text
 //! LookAt 0 1 6.8  0 1 0  0 1 0     # or Transform / Scale ... before Camera
 //! Camera "perspective" "float fov" [ 19.5 ]
+//!     "float lensradius" [ 0.05 ] "float focaldistance" [ 6.8 ]   # depth of field
+//!     "float screenwindow" [ -1 1 -1 1 ]      # or "float frameaspectratio" [ 1.5 ]
 //! ```
-//! `fov` spans the shorter image axis. pbrt's screen window is `[-a, a] x [-1, 1]` for an image
-//! wider than tall (`a` = width / height), raster `y` grows downwards, and camera space looks
-//! down `+z` with `+y` up; raster `x` maps to camera `+x` (which pbrt's left-handed LookAt
-//! points to the viewer's left of world `+x`: published scenes add `Scale -1 1 1` to flip it).
+//! `fov` spans the shorter axis of the screen window, which is `[-a, a] x [-1, 1]` for an
+//! image wider than tall (`a` = width / height, or `frameaspectratio`) unless `screenwindow`
+//! gives it. Raster `y` grows downwards, and camera space looks down `+z` with `+y` up; raster
+//! `x` maps to camera `+x` (which pbrt's left-handed LookAt points to the viewer's left of
+//! world `+x`: published scenes add `Scale -1 1 1` to flip it).
+//!
+//! With `lensradius` > 0 a ray starts at a point of the lens disk (a concentric-disk warp of
+//! the pixel sample's lens dimensions, scaled by the radius, at z = 0 in camera space) and
+//! passes through the point where the pinhole ray meets the plane in focus, z =
+//! `focaldistance`: points on that plane are sharp, others blur into the image of the lens.
 use crate::math::{Mat4, Ray, Vec2, Vec3};
+use crate::sampling::warp::square_to_disk_concentric;
 use crate::scene::CameraDesc;
 
 #[derive(Clone, Debug)]
 pub struct Camera {
     world_from_camera: Mat4,
     origin: Vec3,
-    /// Half extents of the screen window at z = 1 in camera space.
+    /// Centre and half extents of the screen window at z = 1 in camera space.
+    centre: Vec2,
     half: Vec2,
     res: Vec2,
+    lens_radius: f32,
+    focal_distance: f32,
 }
 
 impl Camera {
     /// A camera for an image of `width x height` pixels.
     pub fn new(desc: &CameraDesc, width: u32, height: u32) -> Camera {
-        let aspect = width as f32 / height as f32;
         let tan_half = (desc.fov_deg.to_radians() * 0.5).tan();
-        let window = if aspect > 1.0 {
-            Vec2::new(aspect, 1.0)
-        } else {
-            Vec2::new(1.0, 1.0 / aspect)
-        };
+        let (centre, window) = screen_window(desc, width, height);
         Camera {
             world_from_camera: desc.world_from_camera,
             origin: desc.world_from_camera.transform_point3(Vec3::ZERO),
+            centre: centre * tan_half,
             half: window * tan_half,
             res: Vec2::new(width as f32, height as f32),
+            lens_radius: desc.lens_radius,
+            focal_distance: desc.focal_distance,
         }
     }
 
-    /// The ray through continuous raster position `p` (pixel `(x, y)` covers
+    /// Whether rays start on a lens (and [`Self::generate_ray_lens`] needs a lens sample).
+    pub fn has_lens(&self) -> bool {
+        self.lens_radius > 0.0
+    }
+
+    /// The camera-space direction (z = 1) of the pinhole ray through raster position `p`.
+    fn pinhole_dir(&self, p: Vec2) -> Vec3 {
+        let ndc = p / self.res;
+        Vec3::new(
+            (2.0 * ndc.x - 1.0) * self.half.x + self.centre.x,
+            (1.0 - 2.0 * ndc.y) * self.half.y + self.centre.y,
+            1.0,
+        )
+    }
+
+    /// The pinhole ray through continuous raster position `p` (pixel `(x, y)` covers
     /// `[x, x+1) x [y, y+1)`), with a unit direction.
     pub fn generate_ray(&self, p: Vec2) -> Ray {
-        let ndc = p / self.res;
-        let d_cam = Vec3::new(
-            (2.0 * ndc.x - 1.0) * self.half.x,
-            (1.0 - 2.0 * ndc.y) * self.half.y,
-            1.0,
-        );
-        let d = self.world_from_camera.transform_vector3(d_cam).normalize();
+        let d = self
+            .world_from_camera
+            .transform_vector3(self.pinhole_dir(p))
+            .normalize();
         Ray::new(self.origin, d)
+    }
+
+    /// The ray through raster position `p` from the lens point that `u_lens` (in [0, 1)^2)
+    /// picks, with a unit direction; the pinhole ray without a lens.
+    pub fn generate_ray_lens(&self, p: Vec2, u_lens: Vec2) -> Ray {
+        if !self.has_lens() {
+            return self.generate_ray(p);
+        }
+        let lens = square_to_disk_concentric(u_lens) * self.lens_radius;
+        let o = Vec3::new(lens.x, lens.y, 0.0);
+        // The pinhole direction has z = 1: scaled by the focal distance it ends in the plane.
+        let focus = self.pinhole_dir(p) * self.focal_distance;
+        let d = self
+            .world_from_camera
+            .transform_vector3(focus - o)
+            .normalize();
+        if !d.is_finite() {
+            // A focal distance so large that the focus point overflows: the pinhole ray.
+            return self.generate_ray(p);
+        }
+        Ray::new(self.world_from_camera.transform_point3(o), d)
     }
 
     pub fn position(&self) -> Vec3 {
         self.origin
     }
+}
+
+/// The centre and half extents of the camera's screen window, before the `fov` scale.
+fn screen_window(desc: &CameraDesc, width: u32, height: u32) -> (Vec2, Vec2) {
+    if let Some([x0, x1, y0, y1]) = desc.screen_window {
+        let centre = Vec2::new(0.5 * (x0 + x1), 0.5 * (y0 + y1));
+        return (centre, Vec2::new(0.5 * (x1 - x0), 0.5 * (y1 - y0)));
+    }
+    let aspect = width as f32 / height as f32;
+    let window = if aspect > 1.0 {
+        Vec2::new(aspect, 1.0)
+    } else {
+        Vec2::new(1.0, 1.0 / aspect)
+    };
+    (Vec2::ZERO, window)
 }
 
 /// How far one pixel step moves a point `p` on a surface with normal `n` (pbrt-v4's
@@ -62,6 +120,9 @@ impl Camera {
 /// offsets of `r * spread` along the camera's x and y axes (`r` the distance to the camera,
 /// `spread` the angle one pixel spans at the image centre), projected along the view ray onto
 /// the tangent plane, and scaled by `max(1/8, 1/sqrt(spp))` since pixels take several samples.
+/// With a thin lens this is still the pinhole footprint, as in pbrt-v4 (whose minimum
+/// differentials are those of the ray through the lens centre): defocus blur is not filtered.
+/// With a `screenwindow`, each axis uses its own pixel step.
 pub fn approximate_dp_dxy(
     desc: &CameraDesc,
     res: (u32, u32),
@@ -74,9 +135,15 @@ pub fn approximate_dp_dxy(
     let r = to_p.length();
     let d = to_p / r;
     let tan_half = (desc.fov_deg.to_radians() * 0.5).tan();
-    let spread = 2.0 * tan_half / res.0.min(res.1).max(1) as f32;
+    let spread = match desc.screen_window {
+        None => Vec2::splat(2.0 * tan_half / res.0.min(res.1).max(1) as f32),
+        Some([x0, x1, y0, y1]) => Vec2::new(
+            (x1 - x0) * tan_half / res.0.max(1) as f32,
+            (y1 - y0) * tan_half / res.1.max(1) as f32,
+        ),
+    };
     let scale = (1.0 / (spp.max(1) as f32).sqrt()).max(0.125) * r * spread;
-    let along = |axis: Vec3| {
+    let along = |axis: Vec3, scale: f32| {
         let e = desc
             .world_from_camera
             .transform_vector3(axis)
@@ -91,7 +158,7 @@ pub fn approximate_dp_dxy(
         };
         e - d * (n.dot(e) / nd)
     };
-    let (dx, dy) = (along(Vec3::X), along(Vec3::Y));
+    let (dx, dy) = (along(Vec3::X, scale.x), along(Vec3::Y, scale.y));
     if dx.is_finite() && dy.is_finite() {
         (dx, dy)
     } else {
@@ -104,10 +171,7 @@ mod tests {
     use super::*;
 
     fn desc(fov: f32) -> CameraDesc {
-        CameraDesc {
-            world_from_camera: Mat4::IDENTITY,
-            fov_deg: fov,
-        }
+        CameraDesc::pinhole(Mat4::IDENTITY, fov)
     }
 
     /// The centre ray looks down +z; the edge of the shorter axis is fov/2 off-axis.
@@ -125,6 +189,49 @@ mod tests {
             let angle = edge.d.dot(Vec3::Z).acos().to_degrees();
             assert!((angle - 30.0).abs() < 1e-3, "{w}x{h}: {angle}");
         }
+    }
+
+    /// Every lens ray through a raster point meets the pinhole ray through it on the plane in
+    /// focus; the lens centre gives the pinhole ray itself; lens points fill the disk.
+    #[test]
+    fn lens_rays_meet_on_the_focal_plane() {
+        let mut d = desc(50.0);
+        d.world_from_camera = Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0));
+        (d.lens_radius, d.focal_distance) = (0.3, 4.0);
+        let cam = Camera::new(&d, 64, 48);
+        let p = Vec2::new(10.3, 40.7);
+        let pin = cam.generate_ray(p);
+        let focus = pin.at(4.0 / pin.d.z);
+        let centre = cam.generate_ray_lens(p, Vec2::splat(0.5));
+        assert!((centre.o - pin.o).length() < 1e-6 && (centre.d - pin.d).length() < 1e-6);
+        let mut max_r = 0.0f32;
+        for i in 0..64 {
+            let u = Vec2::new((i % 8) as f32 / 8.0 + 0.05, (i / 8) as f32 / 8.0 + 0.05);
+            let r = cam.generate_ray_lens(p, u);
+            assert!((r.o.z - 3.0).abs() < 1e-6 && (r.d.length() - 1.0).abs() < 1e-5);
+            let lens = r.o - Vec3::new(1.0, 2.0, 3.0);
+            assert!(lens.length() <= 0.3 + 1e-6);
+            max_r = max_r.max(lens.length());
+            let hit = r.at((focus.z - r.o.z) / r.d.z);
+            assert!((hit - focus).length() < 1e-4, "{hit} {focus}");
+        }
+        assert!(max_r > 0.25, "{max_r}");
+    }
+
+    /// A screen window moves and scales the image: its centre column looks through the
+    /// window's centre, and the default window is `[-a, a] x [-1, 1]`.
+    #[test]
+    fn screen_window_maps_onto_the_raster() {
+        let mut d = desc(90.0);
+        d.screen_window = Some([0.0, 2.0, -1.0, 0.0]);
+        let cam = Camera::new(&d, 100, 50);
+        let r = cam.generate_ray(Vec2::new(50.0, 25.0));
+        let want = Vec3::new(1.0, -0.5, 1.0).normalize();
+        assert!((r.d - want).length() < 1e-6, "{}", r.d);
+        d.screen_window = Some([-2.0, 2.0, -1.0, 1.0]);
+        let a = Camera::new(&d, 100, 50).generate_ray(Vec2::new(3.0, 7.0));
+        let b = Camera::new(&desc(90.0), 100, 50).generate_ray(Vec2::new(3.0, 7.0));
+        assert!((a.d - b.d).length() < 1e-6);
     }
 
     /// Raster top-left looks towards camera (-x, +y).

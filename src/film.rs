@@ -1,16 +1,29 @@
-//! Film: the pixel filter and per-pixel accumulation.
+//! Film: the pixel filter, per-pixel accumulation, the crop window's pixels and the sensor's
+//! per-sample clamp.
 //!
 //! ```text
 //! PixelFilter "triangle" "float xradius" [ 1 ] "float yradius" [ 1 ]
 //! Film "rgb" "integer xresolution" [ 256 ] "integer yresolution" [ 256 ]
+//!     "float iso" [ 100 ] "float maxcomponentvalue" [ 10 ] "float cropwindow" [ 0 .5 0 1 ]
 //! ```
 //! Like pbrt-v4, filters are applied by importance sampling: each camera sample is offset from
 //! its pixel centre by a draw from the filter's own distribution and counts with weight 1 in
 //! that pixel only, so a pixel is the plain mean of its samples and tiles never share pixels.
 //! Box and triangle filters are sampled exactly; the Gaussian (pbrt's, `g(x) - g(radius)`)
 //! through a tabulated tabulated CDF.
-use crate::math::{Vec2, Vec3};
+use crate::math::{Mat3, Vec2, Vec3};
 use crate::scene::FilterDesc;
+
+/// The pixels `[x0, x1) x [y0, y1)` (returned as `[x0, x1, y0, y1]`) a render of a `w x h`
+/// image computes: all of them, or those of the film's `cropwindow` (fractions `[x0, x1, y0,
+/// y1]`), rounded as pbrt-v4 does: each bound is `ceil(resolution * fraction)`.
+pub fn pixel_bounds(crop: Option<[f32; 4]>, w: u32, h: u32) -> [u32; 4] {
+    let Some(c) = crop else {
+        return [0, w, 0, h];
+    };
+    let at = |res: u32, f: f32| ((res as f32 * f).ceil() as u32).min(res);
+    [at(w, c[0]), at(w, c[1]), at(h, c[2]), at(h, c[3])]
+}
 
 /// Resolution of the tabulated Gaussian tabulated CDF.
 const TABLE: usize = 1024;
@@ -112,6 +125,18 @@ impl Radiance {
     }
 }
 
+impl Radiance {
+    /// `f` applied to each component.
+    pub fn map(&self, f: impl Fn(Vec3) -> Vec3) -> Radiance {
+        Radiance {
+            direct: f(self.direct),
+            specular: f(self.specular),
+            caustic: f(self.caustic),
+            indirect: f(self.indirect),
+        }
+    }
+}
+
 impl std::ops::AddAssign for Radiance {
     fn add_assign(&mut self, o: Radiance) {
         self.direct += o.direct;
@@ -130,6 +155,67 @@ impl std::ops::Mul<f32> for Radiance {
             caustic: self.caustic * s,
             indirect: self.indirect * s,
         }
+    }
+}
+
+/// CIE XYZ from linear sRGB (D65 white; the matrix of IEC 61966-2-1), by rows.
+const XYZ_FROM_SRGB: [[f32; 3]; 3] = [
+    [0.412_456_4, 0.357_576_1, 0.180_437_5],
+    [0.212_672_9, 0.715_152_2, 0.072_175],
+    [0.019_333_9, 0.119_192, 0.950_304_1],
+];
+
+/// A matrix from its rows.
+fn rows(r: [[f32; 3]; 3]) -> Mat3 {
+    Mat3::from_cols_array_2d(&r).transpose()
+}
+
+/// CIE XYZ of a linear sRGB colour.
+pub fn xyz_from_srgb(c: Vec3) -> Vec3 {
+    rows(XYZ_FROM_SRGB) * c
+}
+
+/// The lowest colour temperature `whitebalance` takes: pbrt-v4 uses a blackbody spectrum
+/// instead of CIE daylight below a correlated colour temperature of 4000 K.
+pub const MIN_WHITE_BALANCE: f32 = 4000.0 * 1.4380 / 1.4388;
+
+/// pbrt-v4's `whitebalance` for the default `cie1931` sensor as a matrix on linear sRGB: the
+/// sensor's XYZ go through a von Kries adaptation in Bradford's LMS space (pbrt-v4's
+/// `WhiteBalance`) from the white of CIE daylight at `temperature` kelvin to sRGB's D65 white.
+/// pbrt-v4 takes the daylight white from the spectrum it builds (with CIE's S0, S1, S2 tables)
+/// for the daylight-locus chromaticity; photon takes that chromaticity itself (CIE 15's
+/// formula on pbrt-v4's correlated temperature `T 1.4388 / 1.4380`), which the spectrum is
+/// built to have. `temperature` must be at least [`MIN_WHITE_BALANCE`].
+pub fn white_balance(temperature: f32) -> Mat3 {
+    let cct = temperature as f64 * 1.4388 / 1.4380;
+    let x = if cct <= 7000.0 {
+        -4.607e9 / cct.powi(3) + 2.9678e6 / cct.powi(2) + 0.09911e3 / cct + 0.244063
+    } else {
+        -2.0064e9 / cct.powi(3) + 1.9018e6 / cct.powi(2) + 0.24748e3 / cct + 0.23704
+    };
+    let y = -3.0 * x * x + 2.870 * x - 0.275;
+    let xyz = |x: f64, y: f64| Vec3::new((x / y) as f32, 1.0, ((1.0 - x - y) / y) as f32);
+    let lms_from_xyz = rows([
+        [0.8951, 0.2664, -0.1614],
+        [-0.7502, 1.7135, 0.0367],
+        [0.0389, -0.0685, 1.0296],
+    ]);
+    let (src, dst) = (lms_from_xyz * xyz(x, y), lms_from_xyz * xyz(0.3127, 0.3290));
+    let adapt = lms_from_xyz.inverse() * Mat3::from_diagonal(dst / src) * lms_from_xyz;
+    let xyz_from_srgb = rows(XYZ_FROM_SRGB);
+    xyz_from_srgb.inverse() * adapt * xyz_from_srgb
+}
+
+/// pbrt-v4's `maxcomponentvalue`: one camera sample's radiance, scaled (all components alike)
+/// so that the largest of the sensor's values is at most `max`. The default `cie1931` sensor's
+/// values are the CIE XYZ of the sample (times the imaging ratio, which the caller folds into
+/// `max`), so the clamp acts on the XYZ of the RGB sum, not on the RGB.
+pub fn clamp_sample(r: Radiance, max: f32) -> Radiance {
+    let m = xyz_from_srgb(r.total()).max_element();
+    if m > max {
+        r * (max / m)
+    } else {
+        r
     }
 }
 

@@ -19,11 +19,7 @@ use std::time::Instant;
 /// A scene holding `meshes`, everything else simple.
 fn scene_of(meshes: Vec<Mesh>) -> Scene {
     Scene {
-        film: FilmDesc {
-            xres: 16,
-            yres: 16,
-            filename: None,
-        },
+        film: FilmDesc::new(16, 16),
         ..Scene::with_geometry(
             meshes,
             vec![photon::scene::Material::from(

@@ -16,7 +16,7 @@ pub mod wavefront;
 
 use crate::accel::Accel;
 use crate::camera::Camera;
-use crate::film::{Filter, Radiance};
+use crate::film::{self, Filter, Radiance};
 use crate::imageio::RgbImage;
 use crate::light::Lights;
 use crate::math::{Ray, Vec2};
@@ -61,6 +61,14 @@ pub struct RenderSettings {
     pub photon: photonmap::PhotonSettings,
     /// Samples per pixel of each pass when rendering in passes (`"integer passspp"`).
     pub pass_spp: u32,
+    /// The film's `cropwindow` (fractions of `width x height`; see [`film::pixel_bounds`]).
+    pub crop: Option<[f32; 4]>,
+    /// pbrt-v4's imaging ratio (`exposure time * iso / 100`): every pixel is scaled by it.
+    pub imaging_ratio: f32,
+    /// The film's `maxcomponentvalue` (see [`film::clamp_sample`]), after the imaging ratio.
+    pub max_component: f32,
+    /// The film's `whitebalance` as a matrix on every pixel (see [`film::white_balance`]).
+    pub white_balance: Option<crate::math::Mat3>,
 }
 
 impl RenderSettings {
@@ -98,7 +106,26 @@ impl RenderSettings {
             light_samples: 1,
             photon,
             pass_spp: pass_spp as u32,
+            crop: scene.film.crop,
+            imaging_ratio: scene.film.imaging_ratio(scene.camera.exposure_time),
+            max_component: scene.film.max_component,
+            white_balance: (scene.film.white_balance != 0.0)
+                .then(|| film::white_balance(scene.film.white_balance)),
         })
+    }
+
+    /// The pixels `[x0, x1, y0, y1]` a render computes (the crop window's, at least one).
+    pub fn pixel_bounds(&self) -> [u32; 4] {
+        let [x0, x1, y0, y1] = film::pixel_bounds(self.crop, self.width, self.height);
+        // A crop window that holds a pixel at the file's resolution may hold none at `--res`.
+        let (x0, y0) = (x0.min(self.width - 1), y0.min(self.height - 1));
+        [x0, x1.max(x0 + 1), y0, y1.max(y0 + 1)]
+    }
+
+    /// The size of the image a render writes: the crop window's.
+    pub fn image_size(&self) -> (u32, u32) {
+        let [x0, x1, y0, y1] = self.pixel_bounds();
+        (x1 - x0, y1 - y0)
     }
 }
 
@@ -255,9 +282,10 @@ pub fn render_prepared(
         counters: Counters::default(),
         photons,
     };
-    let (w, h) = (settings.width, settings.height);
-    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
-        .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
+    let [bx0, w, by0, h] = settings.pixel_bounds();
+    let tiles: Vec<(u32, u32)> = (by0..h)
+        .step_by(TILE as usize)
+        .flat_map(|y| (bx0..w).step_by(TILE as usize).map(move |x| (x, y)))
         .collect();
     let total = tiles.len() as u64;
     let done = AtomicU64::new(0);
@@ -282,14 +310,22 @@ pub fn render_prepared(
         })
         .collect();
 
-    // Assemble the tiles into the combined image and one image per component.
-    let (wu, hu) = (w as usize, h as usize);
+    // Assemble the tiles into the combined image and one image per component (the pixels of
+    // the crop window, scaled by the imaging ratio and white balanced).
+    let (wu, hu) = ((w - bx0) as usize, (h - by0) as usize);
     let mut parts: [RgbImage; 4] = std::array::from_fn(|_| RgbImage::new(wu, hu));
     let mut image = RgbImage::new(wu, hu);
-    for ((x0, y0), px) in rendered {
+    let ratio = settings.imaging_ratio;
+    for ((x0, y0), mut px) in rendered {
+        if ratio != 1.0 {
+            px.iter_mut().for_each(|r| *r = *r * ratio);
+        }
+        if let Some(m) = settings.white_balance {
+            px.iter_mut().for_each(|r| *r = r.map(|v| m * v));
+        }
         let tw = ((x0 + TILE).min(w) - x0) as usize;
         for (i, r) in px.iter().enumerate() {
-            let (x, y) = (x0 as usize + i % tw, y0 as usize + i / tw);
+            let (x, y) = ((x0 - bx0) as usize + i % tw, (y0 - by0) as usize + i / tw);
             let k = y * wu + x;
             for (part, v) in parts
                 .iter_mut()
@@ -320,6 +356,11 @@ pub fn render_prepared(
     }
 }
 
+/// The sample dimensions of a thin lens's 2D sample: far above every dimension the
+/// integrators use (they start at [`wavefront::CAMERA_DIMS`] and add a few per bounce), so a
+/// lens changes no other sample and a scene without one draws exactly what it drew before.
+pub const LENS_DIM: u32 = 1 << 31;
+
 /// The camera ray through pixel `(x, y)` for sample index `sample`, and the pixel's sample
 /// stream positioned after the two dimensions the pixel filter used.
 pub fn camera_sample(ctx: &RenderContext, x: u32, y: u32, sample: u32) -> (Ray, Sampler) {
@@ -327,9 +368,14 @@ pub fn camera_sample(ctx: &RenderContext, x: u32, y: u32, sample: u32) -> (Ray, 
     let pixel_id = y as u64 * s.width as u64 + x as u64;
     let mut sampler = Sampler::new(s.pattern, s.seed, pixel_id, sample, s.spp);
     let offset = ctx.filter.sample(sampler.next_2d());
-    let ray = ctx
-        .camera
-        .generate_ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset);
+    let p = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset;
+    let ray = if ctx.camera.has_lens() {
+        let mut lens = sampler.clone();
+        lens.set_dimension(LENS_DIM);
+        ctx.camera.generate_ray_lens(p, lens.next_2d())
+    } else {
+        ctx.camera.generate_ray(p)
+    };
     (ray, sampler)
 }
 

@@ -90,8 +90,8 @@ impl PartialHeader {
         PartialHeader {
             scene: format!("{:016x}", scene.content_hash()),
             seed: settings.seed,
-            width: settings.width as usize,
-            height: settings.height as usize,
+            width: settings.image_size().0 as usize,
+            height: settings.image_size().1 as usize,
             settings: format!("integrator {kind:?}, backend {backend}, {s:?}"),
         }
     }
@@ -437,7 +437,8 @@ pub fn render_for_time(
     budget_s: f64,
 ) -> (RenderOutput, u32) {
     let start = std::time::Instant::now();
-    let (w, h) = (settings.width as usize, settings.height as usize);
+    let (w, h) = settings.image_size();
+    let (w, h) = (w as usize, h as usize);
     let mut sums = vec![[0f64; 12]; w * h];
     let mut totals = RenderOutput::empty();
     let (mut pass_spp, mut spp_done, mut k) = (settings.pass_spp.max(1), 0u32, 0u64);

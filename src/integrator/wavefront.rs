@@ -191,6 +191,15 @@ pub fn render_tile<S: Shade>(
     let spp = ctx.settings.spp.max(1);
     let n = ((x1 - x0) * (y1 - y0)) as usize;
     let mut acc = vec![Radiance::default(); n];
+    // With `maxcomponentvalue`, each sample index gathers into its own buffer and is clamped
+    // when all its waves are done (a sample's light arrives over several waves); without it,
+    // straight into `acc` (the sums, and so the image, stay what they always were).
+    let clamp = ctx.settings.max_component / ctx.settings.imaging_ratio;
+    let mut one = if clamp.is_finite() {
+        vec![Radiance::default(); n]
+    } else {
+        Vec::new()
+    };
     let mut b = Buffers::default();
     let mut extra = S::Extra::default();
     for sample in 0..spp {
@@ -204,9 +213,13 @@ pub fn render_tile<S: Shade>(
             .fetch_add(b.paths.len() as u64, Ordering::Relaxed);
         // The first wave is the camera rays, every later one their bounces.
         let mut kind = RayKind::Camera;
+        let sums = if one.is_empty() { &mut acc } else { &mut one };
         while !b.paths.is_empty() {
-            wave(ctx, shader, kind, &mut b, &mut extra, &mut acc);
+            wave(ctx, shader, kind, &mut b, &mut extra, sums);
             kind = RayKind::Bounce;
+        }
+        for (a, r) in acc.iter_mut().zip(one.iter_mut()) {
+            *a += crate::film::clamp_sample(std::mem::take(r), clamp);
         }
     }
     let inv = 1.0 / spp as f32;

@@ -101,10 +101,7 @@ pub fn sphere_scene(triangles: usize) -> Scene {
         eye.extend(1.0),
     );
     Scene {
-        camera: CameraDesc {
-            world_from_camera,
-            fov_deg: 40.0,
-        },
+        camera: CameraDesc::pinhole(world_from_camera, 40.0),
         path: PathBuf::from(format!("sphere-{}", short_count(triangles))),
         ..Scene::with_geometry(
             vec![sphere, floor],

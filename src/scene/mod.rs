@@ -437,21 +437,75 @@ pub enum Light {
     Infinite { map: Arc<crate::light::EnvMap> },
 }
 
-/// `Camera "perspective"`: pinhole; `fov` (degrees) spans the shorter image axis (pbrt-v4).
+/// `Camera "perspective"`: `fov` (degrees) spans the shorter image axis of the screen window
+/// (pbrt-v4); a thin lens when `lens_radius > 0`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CameraDesc {
     /// Camera-to-world transform (the inverse of the CTM at `Camera`). pbrt's camera space:
     /// looks down +z, +y up, and raster x grows towards camera -x... see `camera.rs`.
     pub world_from_camera: Mat4,
     pub fov_deg: f32,
+    /// Thin-lens radius in camera-space units (`lensradius`; 0: a pinhole).
+    pub lens_radius: f32,
+    /// Distance of the plane in focus along camera +z (`focaldistance`).
+    pub focal_distance: f32,
+    /// pbrt's screen window `[xmin, xmax, ymin, ymax]` when the file sets it (`screenwindow`,
+    /// or `frameaspectratio`); `None`: derived from the image's aspect ratio.
+    pub screen_window: Option<[f32; 4]>,
+    /// `shutterclose - shutteropen`: the exposure time of the film's imaging ratio.
+    pub exposure_time: f32,
 }
 
-/// `Film "rgb"`.
+impl CameraDesc {
+    /// A pinhole camera with pbrt-v4's defaults for everything but the transform and `fov`.
+    pub fn pinhole(world_from_camera: Mat4, fov_deg: f32) -> CameraDesc {
+        CameraDesc {
+            world_from_camera,
+            fov_deg,
+            lens_radius: 0.0,
+            focal_distance: 1e6,
+            screen_window: None,
+            exposure_time: 1.0,
+        }
+    }
+}
+
+/// `Film "rgb"` (or `"gbuffer"`, rendered as an RGB film).
 #[derive(Clone, Debug, PartialEq)]
 pub struct FilmDesc {
     pub xres: u32,
     pub yres: u32,
     pub filename: Option<String>,
+    /// The sensor's `iso` (pbrt-v4's imaging ratio is `exposure time * iso / 100`).
+    pub iso: f32,
+    /// Each camera sample's colour is scaled so that its largest CIE XYZ component (the
+    /// default `cie1931` sensor's values, after the imaging ratio) is at most this.
+    pub max_component: f32,
+    /// `cropwindow` `[x0, x1, y0, y1]` as fractions of the image, ordered and clamped to
+    /// [0, 1]; only the pixels pbrt-v4's rounding puts inside are rendered.
+    pub crop: Option<[f32; 4]>,
+    /// `whitebalance`: the colour temperature (kelvin) adapted to sRGB's white; 0: none.
+    pub white_balance: f32,
+}
+
+impl FilmDesc {
+    /// A film of `xres x yres` with pbrt-v4's defaults for everything else.
+    pub fn new(xres: u32, yres: u32) -> FilmDesc {
+        FilmDesc {
+            xres,
+            yres,
+            filename: None,
+            iso: 100.0,
+            max_component: f32::INFINITY,
+            crop: None,
+            white_balance: 0.0,
+        }
+    }
+
+    /// pbrt-v4's imaging ratio for a camera exposing for `exposure_time`.
+    pub fn imaging_ratio(&self, exposure_time: f32) -> f32 {
+        exposure_time * self.iso / 100.0
+    }
 }
 
 /// `PixelFilter`: radii in pixels.
@@ -508,15 +562,8 @@ impl Scene {
             meshes,
             materials,
             lights,
-            camera: CameraDesc {
-                world_from_camera: Mat4::IDENTITY,
-                fov_deg: 45.0,
-            },
-            film: FilmDesc {
-                xres: 256,
-                yres: 256,
-                filename: None,
-            },
+            camera: CameraDesc::pinhole(Mat4::IDENTITY, 45.0),
+            film: FilmDesc::new(256, 256),
             filter: FilterDesc::Box {
                 radius: Vec2::splat(0.5),
             },
@@ -537,7 +584,7 @@ impl Scene {
 
     /// A 64-bit hash of everything that decides the image: geometry (vertex bits, indices,
     /// normals, uvs, material, light and alpha of each mesh; an image alpha by its settings and
-    /// size), materials, lights, camera and pixel filter
+    /// size), materials, lights, camera, pixel filter and the film's iso, clamp and crop window
     /// (the resolution is checked on its own). Partial renders carry it so that parts of different scenes never merge.
     pub fn content_hash(&self) -> u64 {
         use crate::sampling::hash;
@@ -550,6 +597,15 @@ impl Scene {
             text(format!("{:?}", self.lights)),
             text(format!("{:?}", self.camera)),
             text(format!("{:?}", self.filter)),
+            text(format!(
+                "{:?}",
+                (
+                    self.film.iso,
+                    self.film.max_component,
+                    self.film.crop,
+                    self.film.white_balance
+                )
+            )),
         ]);
         for m in &self.meshes {
             let bits = |v: &[f32]| {

@@ -322,6 +322,16 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
         build_s,
         if opts.robust { " (robust)" } else { "" }
     );
+    if settings.crop.is_some() {
+        let [x0, x1, y0, y1] = settings.pixel_bounds();
+        println!("film: crop window: pixels [{x0}, {x1}) x [{y0}, {y1}) of the image below");
+    }
+    if settings.imaging_ratio != 1.0 {
+        println!(
+            "film: imaging ratio {} (exposure time x iso / 100)",
+            settings.imaging_ratio
+        );
+    }
     println!(
         "render: {}x{}, {} spp ({:?}; file sampler \"{}\"), integrator {:?} (file asks for \"{}\"), max depth {}, {} threads",
         settings.width,

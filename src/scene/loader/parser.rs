@@ -134,15 +134,8 @@ impl Builder {
             spheres: Vec::new(),
             materials: Vec::new(),
             lights: Vec::new(),
-            camera: CameraDesc {
-                world_from_camera: Mat4::IDENTITY,
-                fov_deg: 90.0,
-            },
-            film: FilmDesc {
-                xres: 1280,
-                yres: 720,
-                filename: None,
-            },
+            camera: CameraDesc::pinhole(Mat4::IDENTITY, 90.0),
+            film: FilmDesc::new(1280, 720),
             filter: FilterDesc::Gaussian {
                 radius: Vec2::splat(1.5),
                 sigma: 0.5,
@@ -525,11 +518,20 @@ impl Builder {
         let mut params = read_params(tok)?;
         match what {
             "Camera" => {
-                self.camera = camera(&ty, &mut params, &at, &self.gs.ctm)?;
-                self.named_coords
-                    .insert("camera".to_string(), self.camera.world_from_camera);
+                // Defined before the camera is checked (as pbrt-v4 does), so that a rejected
+                // Camera does not make every later `CoordSysTransform "camera"` an error too.
+                let world_from_camera = inverse(&self.gs.ctm);
+                if world_from_camera.is_finite() {
+                    self.named_coords
+                        .insert("camera".to_string(), world_from_camera);
+                }
+                self.camera = camera(&ty, &mut params, &at, world_from_camera)?;
             }
-            "Film" => self.film = film(&ty, &mut params, &at)?,
+            "Film" => {
+                let (film, note) = film(&ty, &mut params, &at)?;
+                self.film = film;
+                self.notes.extend(note);
+            }
             "Sampler" => self.sampler = sampler(&ty, &mut params, &at)?,
             "PixelFilter" => self.filter = filter(&ty, &mut params, &at)?,
             "Accelerator" => {
@@ -1247,8 +1249,21 @@ impl Values {
     }
 }
 
-/// `Camera "perspective"`: `fov`, `lensradius` 0 only. The CTM is camera-from-world.
-fn camera(ty: &str, params: &mut ParamSet, at: &Loc, ctm: &Mat4) -> Result<CameraDesc, SceneError> {
+/// The inverse of `m` (a camera-from-world CTM), computed in f64: a camera-from-world scale
+/// near 1e-20 has a determinant below f32's range. Not finite when `m` is singular.
+fn inverse(m: &Mat4) -> Mat4 {
+    m.as_dmat4().inverse().as_mat4()
+}
+
+/// `Camera "perspective"`: `fov`, `lensradius`, `focaldistance`, `screenwindow`,
+/// `frameaspectratio`, `shutteropen`/`shutterclose` (their difference is the exposure time of
+/// the film's imaging ratio; photon has no motion blur).
+fn camera(
+    ty: &str,
+    params: &mut ParamSet,
+    at: &Loc,
+    world_from_camera: Mat4,
+) -> Result<CameraDesc, SceneError> {
     if ty != "perspective" {
         return Err(SceneError::at(
             at,
@@ -1260,37 +1275,99 @@ fn camera(ty: &str, params: &mut ParamSet, at: &Loc, ctm: &Mat4) -> Result<Camer
         let p = params.peek("fov").expect("a bad fov came from the file");
         return Err(p.err("fov must lie in (0, 180) degrees"));
     }
-    for name in ["screenwindow", "frameaspectratio", "focaldistance"] {
-        if let Some(p) = params.get_param(name) {
-            return Err(p.err("not supported by photon's perspective camera"));
-        }
+    let lens_radius = params.get_float("lensradius", 0.0)?;
+    if !(0.0..=super::extent::MAX_COORDINATE).contains(&lens_radius) {
+        let p = params
+            .peek("lensradius")
+            .expect("a bad radius came from the file");
+        return Err(p.err(format!(
+            "must lie in [0, {:e}], got {lens_radius}",
+            super::extent::MAX_COORDINATE
+        )));
     }
-    if params.get_float("lensradius", 0.0)? != 0.0 {
-        let p = params.peek("lensradius").expect("given");
-        return Err(p.err("depth of field is not supported (lensradius must be 0)"));
+    let focal_distance = params.get_float("focaldistance", 1e6)?;
+    if !(focal_distance > 0.0 && focal_distance.is_finite()) {
+        let p = params
+            .peek("focaldistance")
+            .expect("a bad distance came from the file");
+        return Err(p.err(format!("must be positive and finite, got {focal_distance}")));
     }
-    // Inverted in f64: a camera-from-world scale near 1e-20 has a determinant below f32's range.
-    let world_from_camera = ctm.as_dmat4().inverse().as_mat4();
+    let screen_window = screen_window(params)?;
+    let open = params.get_float("shutteropen", 0.0)?;
+    let close = params.get_float("shutterclose", 1.0)?;
+    let exposure_time = close - open;
+    if !(exposure_time > 0.0 && exposure_time.is_finite()) {
+        let p = params.peek("shutterclose").or(params.peek("shutteropen"));
+        let msg = format!("\"shutterclose\" ({close}) must be after \"shutteropen\" ({open})");
+        return Err(p.map_or_else(|| SceneError::at(at, &msg), |p| p.err(&msg)));
+    }
     if !world_from_camera.is_finite() {
         return Err(SceneError::at(at, "the camera transform is singular"));
     }
     let eye = world_from_camera.transform_point3(Vec3::ZERO);
     let max = super::extent::MAX_COORDINATE;
-    if eye.abs().max_element() > max {
+    // The lens's rim in world space (the camera transform may scale).
+    let rim = [Vec3::X, Vec3::Y]
+        .map(|a| {
+            world_from_camera
+                .transform_vector3(a * lens_radius)
+                .length()
+        })
+        .into_iter()
+        .fold(0.0, f32::max);
+    if eye.abs().max_element() + rim > max {
         return Err(SceneError::at(
             at,
             format!("the scene is too large: the camera is at {eye} (photon supports coordinates up to {max:e}; scale the scene down)"),
         ));
     }
     Ok(CameraDesc {
-        world_from_camera,
-        fov_deg,
+        lens_radius,
+        focal_distance,
+        screen_window,
+        exposure_time,
+        ..CameraDesc::pinhole(world_from_camera, fov_deg)
     })
 }
 
-/// `Film "rgb"`: `xresolution`, `yresolution`, `filename`.
-fn film(ty: &str, params: &mut ParamSet, at: &Loc) -> Result<FilmDesc, SceneError> {
-    if ty != "rgb" {
+/// The camera's `screenwindow` (four finite values, min < max on each axis), else the window
+/// `frameaspectratio` implies (pbrt-v4: `[-f, f] x [-1, 1]` for f > 1, else `[-1, 1] x
+/// [-1/f, 1/f]`), else `None` (the image's own aspect ratio decides).
+fn screen_window(params: &mut ParamSet) -> Result<Option<[f32; 4]>, SceneError> {
+    let frame = params.get_float_opt("frameaspectratio")?;
+    if let Some(w) = params.get_floats("screenwindow")? {
+        let p = params.peek("screenwindow").expect("given");
+        let max = super::extent::MAX_COORDINATE;
+        let ok = w.len() == 4 && w.iter().all(|v| v.abs() <= max) && w[0] < w[1] && w[2] < w[3];
+        if !ok {
+            return Err(p.err(format!(
+                "expected four values xmin xmax ymin ymax within {max:e} with min < max"
+            )));
+        }
+        return Ok(Some([w[0], w[1], w[2], w[3]]));
+    }
+    let Some(f) = frame else { return Ok(None) };
+    if !(f > 0.0 && f.is_finite()) {
+        let p = params.peek("frameaspectratio").expect("given");
+        return Err(p.err(format!("must be positive and finite, got {f}")));
+    }
+    Ok(Some(if f > 1.0 {
+        [-f, f, -1.0, 1.0]
+    } else {
+        [-1.0, 1.0, -1.0 / f, 1.0 / f]
+    }))
+}
+
+/// `Film "rgb"` or `"gbuffer"`: `xresolution`, `yresolution`, `filename`, `iso`, `sensor`
+/// (`"cie1931"` only), `whitebalance`, `maxcomponentvalue`, `cropwindow`; `gbuffer`'s
+/// `coordinatesystem` (it only places the extra channels, which photon does not write: the
+/// returned note says so).
+fn film(
+    ty: &str,
+    params: &mut ParamSet,
+    at: &Loc,
+) -> Result<(FilmDesc, Option<String>), SceneError> {
+    if ty != "rgb" && ty != "gbuffer" {
         return Err(SceneError::at(
             at,
             format!("unsupported film type \"{ty}\""),
@@ -1309,11 +1386,89 @@ fn film(ty: &str, params: &mut ParamSet, at: &Loc) -> Result<FilmDesc, SceneErro
         }
         *r = v as u32;
     }
-    Ok(FilmDesc {
-        xres: res[0],
-        yres: res[1],
-        filename: params.get_string_opt("filename")?,
-    })
+    let mut film = FilmDesc::new(res[0], res[1]);
+    film.filename = params.get_string_opt("filename")?;
+    film.white_balance = sensor(params)?;
+    film.iso = params.get_float("iso", 100.0)?;
+    if !(film.iso > 0.0 && film.iso.is_finite()) {
+        let p = params.peek("iso").expect("a bad iso came from the file");
+        return Err(p.err(format!("must be positive and finite, got {}", film.iso)));
+    }
+    film.max_component = params.get_float("maxcomponentvalue", f32::INFINITY)?;
+    if film.max_component.is_nan() || film.max_component <= 0.0 {
+        let p = params.peek("maxcomponentvalue").expect("given");
+        return Err(p.err(format!("must be positive, got {}", film.max_component)));
+    }
+    film.crop = crop_window(params, res)?;
+    let note = (ty == "gbuffer")
+        .then(|| gbuffer(params, at, &film))
+        .transpose()?;
+    Ok((film, note))
+}
+
+/// The sensor parameters photon supports: the default `cie1931` sensor, with or without white
+/// balance (its temperature, 0 for none, is returned).
+fn sensor(params: &mut ParamSet) -> Result<f32, SceneError> {
+    let name = params.get_string("sensor", "cie1931")?;
+    if name != "cie1931" {
+        let p = params.peek("sensor").expect("given");
+        return Err(p.err(format!(
+            "sensor \"{name}\" is not supported (photon has only the default \"cie1931\")"
+        )));
+    }
+    let t = params.get_float("whitebalance", 0.0)?;
+    let min = crate::film::MIN_WHITE_BALANCE;
+    if t != 0.0 && !(min..=1e5).contains(&t) {
+        let p = params.peek("whitebalance").expect("given");
+        return Err(p.err(format!(
+            "must be 0 (none) or a daylight temperature in [{min:.0}, 100000] K, got {t} (pbrt-v4's blackbody white below it is not supported)"
+        )));
+    }
+    Ok(t)
+}
+
+/// `cropwindow`: four values, each axis ordered and clamped to [0, 1] as pbrt-v4 does; an error
+/// if no pixel of the `res` image lies inside (pbrt-v4's "degenerate pixel bounds").
+fn crop_window(params: &mut ParamSet, res: [u32; 2]) -> Result<Option<[f32; 4]>, SceneError> {
+    let Some(c) = params.get_floats("cropwindow")? else {
+        return Ok(None);
+    };
+    let p = params.peek("cropwindow").expect("given");
+    if c.len() != 4 || c.iter().any(|v| !v.is_finite()) {
+        return Err(p.err("expected four finite values x0 x1 y0 y1"));
+    }
+    let axis = |a: f32, b: f32| [a.min(b).clamp(0.0, 1.0), a.max(b).clamp(0.0, 1.0)];
+    let ([x0, x1], [y0, y1]) = (axis(c[0], c[1]), axis(c[2], c[3]));
+    let crop = [x0, x1, y0, y1];
+    let b = crate::film::pixel_bounds(Some(crop), res[0], res[1]);
+    if b[0] >= b[1] || b[2] >= b[3] {
+        return Err(p.err(format!(
+            "no pixel of the {}x{} image lies inside [{x0}, {x1}] x [{y0}, {y1}]",
+            res[0], res[1]
+        )));
+    }
+    Ok(Some(crop))
+}
+
+/// `Film "gbuffer"`'s own parameters, which only shape its extra channels; the note to print.
+fn gbuffer(params: &mut ParamSet, at: &Loc, film: &FilmDesc) -> Result<String, SceneError> {
+    let system = params.get_string("coordinatesystem", "camera")?;
+    if system != "camera" && system != "world" {
+        let p = params.peek("coordinatesystem").expect("given");
+        return Err(p.err(format!(
+            "unknown coordinate system \"{system}\" (expected \"camera\" or \"world\")"
+        )));
+    }
+    if let Some(name) = &film.filename {
+        if !name.to_ascii_lowercase().ends_with(".exr") {
+            let p = params.peek("filename").expect("given");
+            return Err(p.err("Film \"gbuffer\" writes EXR only (pbrt-v4)"));
+        }
+    }
+    Ok(format!(
+        "{at}: Film \"gbuffer\" rendered as an RGB film: its extra channels (albedo, position, \
+         normals, variance) are not written"
+    ))
 }
 
 /// `Sampler`: any pbrt-v4 name; `pixelsamples`, or `xsamples` x `ysamples` (and `jitter`) for
