@@ -176,3 +176,38 @@ fn quad_light_irradiance() {
     assert!(mean_err < 0.01, "mean {mean_err}");
     assert!(err < 0.05, "worst pixel {err}");
 }
+
+/// The chromaticity (x, y) of a linear sRGB value, by the IEC 61966-2-1 sRGB-to-XYZ matrix.
+fn chromaticity(c: Vec3) -> (f32, f32) {
+    let x = 0.4124 * c.x + 0.3576 * c.y + 0.1805 * c.z;
+    let y = 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+    let z = 0.0193 * c.x + 0.1192 * c.y + 0.9505 * c.z;
+    (x / (x + y + z), y / (x + y + z))
+}
+
+/// A blackbody distant light straight down, `"blackbody L" [ 2856 ] "float scale" 3`: in
+/// pbrt-v4 its luminance is `scale` (the spectrum is divided by its photometric integral), and
+/// 2856 K is CIE illuminant A, chromaticity (0.44757, 0.40745). The floor's radiance is
+/// rho / pi * L per channel, so L recovered from the image must have luminance 3 and A's
+/// chromaticity.
+#[test]
+fn blackbody_light_renders_with_its_luminance() {
+    let distant = "LightSource \"distant\" \"blackbody L\" [ 2856 ] \"float scale\" 3 \"point3 from\" [ 0 1 0 ] \"point3 to\" [ 0 0 0 ]";
+    let (_, px) = render(
+        &write_scene("blackbody", 3.0, 16, 1, distant),
+        BackendKind::Embree,
+    );
+    for &(got, p) in &px {
+        let l = got * PI / rho();
+        let lum = 0.2126 * l.x + 0.7152 * l.y + 0.0722 * l.z;
+        let (x, y) = chromaticity(l);
+        assert!(
+            (lum - 3.0).abs() < 3e-3 * 3.0,
+            "at {p}: L {l}, luminance {lum}"
+        );
+        assert!(
+            (x - 0.44757).abs() < 1e-3 && (y - 0.40745).abs() < 1e-3,
+            "at {p}: ({x}, {y})"
+        );
+    }
+}

@@ -26,8 +26,13 @@
 //! Point and spot lights must lie within the supported coordinates (see `extent`).
 //!
 //! `from`/`to` go through the CTM; a distant light's `dir` is the direction light travels
-//! (`to - from`, transformed as a vector). Distant `illuminance`, spectra and blackbodies, and
-//! other light types are unsupported.
+//! (`to - from`, transformed as a vector).
+//!
+//! `L` and `I` may be a blackbody, `"blackbody L" [ 3000 ]` (kelvin), on every light here: as in
+//! pbrt-v4 its luminance is 1 before `scale`, `power` and `illuminance`, which then act as
+//! for an RGB value; the colour is pbrt-v4's `cie1931` film's sRGB of it (see
+//! [`super::blackbody`]). Distant `illuminance`, sampled spectra and other light types are
+//! unsupported.
 //!
 //! `LightSource "infinite"` (see [`crate::light::EnvMap`]):
 //!
@@ -36,7 +41,8 @@
 //! Rotate -90 1 0 0
 //! LightSource "infinite" "string filename" "sky.exr" "float scale" 1.5
 //! ```
-//! - `L` (`rgb`, or a constant `spectrum`) or `filename`, not both; neither: `L` = (1, 1, 1).
+//! - `L` (`rgb`, `blackbody`, or a constant `spectrum`) or `filename`, not both; neither:
+//!   `L` = (1, 1, 1).
 //!   pbrt-v4 scales a light's spectrum to one nit, so a constant spectrum is an equal-energy
 //!   white of luminance 1 whatever its value: in sRGB (1.2048, 0.9483, 0.9088).
 //! - `filename`: a square image (EXR, PFM; PNG and others decode as sRGB) in pbrt-v4's
@@ -51,7 +57,10 @@
 //!   as bright as a constant `L` with the same `illuminance`; photon follows the integral.
 //! - The CTM's linear part orients the map: a rotation, possibly with a uniform scale or a
 //!   mirror; anything else (it would not preserve solid angle) is an error.
-//! - `portal` is an error (not supported).
+//! - `portal` is an error (not supported). It is not only a sampling hint: pbrt-v4's
+//!   `PortalImageInfiniteLight::Le` is zero for a ray whose line from its origin does not pass
+//!   through the portal quad, so ignoring the portal would light a scene through every
+//!   opening instead of the portal alone.
 
 use super::params::{ParamSet, ParamType};
 use super::shapes::xform_point;
@@ -110,10 +119,14 @@ pub const MAX_LIGHT_VALUE: f32 = 1e20;
 /// must stay finite in f32.
 pub const MAX_LIGHT_POWER: f64 = 1e30;
 
-/// An RGB light value (`L`, `I`): every component finite, >= 0 and at most
+/// A light value (`L`, `I`) as RGB: an `rgb` as given, or a `blackbody` temperature as pbrt-v4's
+/// blackbody of luminance 1 ([`super::blackbody`]); every component finite, >= 0 and at most
 /// [`MAX_LIGHT_VALUE`]; errors at the parameter.
 fn light_rgb(params: &mut ParamSet, name: &str) -> Result<Vec3, SceneError> {
-    let v = params.get_rgb(name, Vec3::ONE)?;
+    let v = match params.peek(name) {
+        Some(p) if p.ty == ParamType::Blackbody => blackbody(params, name)?,
+        _ => params.get_rgb(name, Vec3::ONE)?,
+    };
     if v.cmpge(Vec3::ZERO).all() && v.max_element() <= MAX_LIGHT_VALUE {
         return Ok(v);
     }
@@ -122,6 +135,17 @@ fn light_rgb(params: &mut ParamSet, name: &str) -> Result<Vec3, SceneError> {
         "each component must be in [0, {MAX_LIGHT_VALUE:e}], got [{} {} {}]",
         v.x, v.y, v.z
     )))
+}
+
+/// The RGB of `"blackbody name" [ T ]`: T must be finite and > 0 (kelvin).
+fn blackbody(params: &mut ParamSet, name: &str) -> Result<Vec3, SceneError> {
+    let t = params.get_blackbody(name)?.expect("peeked");
+    super::blackbody::rgb(t as f64).ok_or_else(|| {
+        let p = params.peek(name).expect("peeked");
+        p.err(format!(
+            "the temperature must be finite and > 0 (kelvin), got {t}"
+        ))
+    })
 }
 
 /// The product `value * k` (from `scale` or `power`), checked against [`MAX_LIGHT_VALUE`];
@@ -307,7 +331,10 @@ fn infinite(
     base_dir: &Path,
 ) -> Result<Light, SceneError> {
     if let Some(p) = params.get_param("portal") {
-        return Err(p.err("portal infinite lights are not supported"));
+        return Err(p.err(
+            "portal infinite lights are not supported (pbrt-v4's portal light emits only \
+             through the portal quad, so it cannot be ignored)",
+        ));
     }
     let scale = params.get_float("scale", 1.0)?;
     if !(scale.is_finite() && scale >= 0.0) {
@@ -363,7 +390,7 @@ fn infinite(
     Ok(Light::Infinite { map: Arc::new(map) })
 }
 
-/// An infinite light's constant `L`: `rgb` (each component in range), a constant `spectrum`
+/// An infinite light's constant `L`: `rgb` (each component in range), `blackbody`, a constant `spectrum`
 /// (pbrt-v4's one-nit equal-energy white), or (1, 1, 1).
 fn infinite_l(params: &mut ParamSet) -> Result<Vec3, SceneError> {
     let Some(p) = params.peek("L") else {
