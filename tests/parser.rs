@@ -2525,3 +2525,21 @@ fn gzip_bomb_is_capped() {
     );
     assert_eq!(gunzip_capped(&bomb, 10 << 20).unwrap().len(), 10 << 20);
 }
+
+/// A sphere whose `Shape` fails after it was read (alpha on an emitter, as kroken's
+/// `lights.pbrt` has) is skipped in collect mode without a panic at the end (the sphere was
+/// queued for tessellation without its mesh before).
+#[test]
+fn failed_emitting_sphere_is_skipped_in_collect_mode() {
+    let dir = TempDir::new("photon-parser");
+    let path = dir.write(
+        "scene.pbrt",
+        "WorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\" \"blackbody L\" 6500\nShape \"sphere\" \"float radius\" 90 \"float alpha\" 0\nAttributeEnd\nShape \"sphere\"\n",
+    );
+    let got = photon::scene::loader::load_collecting(&path);
+    let msgs: Vec<String> = got.errors.iter().map(|e| e.to_string()).collect();
+    assert_eq!(msgs.len(), 1, "{msgs:?}");
+    assert!(msgs[0].contains(":4:") && msgs[0].contains("alpha on an emitting shape"));
+    assert_eq!(got.scene.meshes.len(), 1);
+    assert!(!got.scene.meshes[0].indices.is_empty());
+}

@@ -73,7 +73,7 @@ pub fn xyz(t: f64) -> Option<[f64; 3]> {
 /// negative component to 0); `None` unless `t` is finite and > 0.
 pub fn rgb(t: f64) -> Option<Vec3> {
     let [x, y, z] = xyz(t)?;
-    if !(y > 0.0) {
+    if y.is_nan() || y <= 0.0 {
         return None;
     }
     let v = [x / y, 1.0, z / y];

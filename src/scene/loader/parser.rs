@@ -797,6 +797,9 @@ impl Builder {
         let alpha_at = params.loc("alpha").cloned();
         let alpha = shapes::alpha(&mut params, &self.textures)?;
         let gs = &self.gs;
+        // A sphere to tessellate once the scene is read, registered only with its mesh (the
+        // shape can still fail below).
+        let mut sphere = None;
         let mut mesh = match ty.as_str() {
             "trianglemesh" => {
                 let obj = shapes::triangle_mesh(&mut params, &at)?;
@@ -817,7 +820,7 @@ impl Builder {
                     // An object's sphere may be instanced anywhere: the full tessellation.
                     shapes::tessellate(&spec, shapes::SPHERE_RINGS, &mut m);
                 } else {
-                    self.spheres.push((self.meshes.len(), spec));
+                    sphere = Some(spec);
                 }
                 m
             }
@@ -879,6 +882,9 @@ impl Builder {
                 l,
                 two_sided: spec.two_sided,
             });
+        }
+        if let Some(spec) = sphere {
+            self.spheres.push((self.meshes.len(), spec));
         }
         self.meshes.push(mesh);
         self.mesh_locs.push(at);
