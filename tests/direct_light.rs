@@ -105,7 +105,7 @@ fn point_light_irradiance() {
 #[test]
 fn spot_and_distant_light_irradiance() {
     // Spot pointing straight down from height 2: full intensity inside 20 degrees, none past 30.
-    let spot = "LightSource \"spot\" \"rgb I\" [ 5 5 5 ] \"point3 from\" [ 0 2 0 ] \"point3 to\" [ 0 0 0 ] \"float coneangle\" [ 30 ] \"float conedelta\" [ 10 ]";
+    let spot = "LightSource \"spot\" \"rgb I\" [ 5 5 5 ] \"point3 from\" [ 0 2 0 ] \"point3 to\" [ 0 0 0 ] \"float coneangle\" [ 30 ] \"float conedeltaangle\" [ 10 ]";
     let (_, px) = render(&write_scene("spot", 3.0, 48, 1, spot), BackendKind::Embree);
     let (mut inside, mut outside) = (0, 0);
     for &(got, p) in &px {

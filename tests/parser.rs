@@ -697,7 +697,7 @@ LightSource "point" "point3 from" [ 1 2 3 ] "rgb I" [ 1 2 3 ] "float scale" 2
 LightSource "point" "float power" 100
 Identity
 Rotate 90 0 0 1
-LightSource "spot" "point3 from" [ 0 5 0 ] "point3 to" [ 0 0 0 ] "float coneangle" 30 "float conedelta" 10
+LightSource "spot" "point3 from" [ 0 5 0 ] "point3 to" [ 0 0 0 ] "float coneangle" 30 "float conedeltaangle" 10
 LightSource "spot" "float power" 10
 Identity
 LightSource "distant" "point3 from" [ 0 10 0 ] "point3 to" [ 0 0 0 ] "rgb L" [ 1 1 1 ] "float scale" 2
@@ -2542,4 +2542,15 @@ fn failed_emitting_sphere_is_skipped_in_collect_mode() {
     assert!(msgs[0].contains(":4:") && msgs[0].contains("alpha on an emitting shape"));
     assert_eq!(got.scene.meshes.len(), 1);
     assert!(!got.scene.meshes[0].indices.is_empty());
+}
+
+/// pbrt-v4's spot light reads `conedeltaangle` (lights.cpp, `SpotLight::Create`), so a
+/// `conedelta` is an unused parameter there and here.
+#[test]
+fn spot_conedelta_is_conedeltaangle() {
+    assert_src_err(
+        "WorldBegin\nLightSource \"spot\"\n \"float conedelta\" 5\n",
+        3,
+        &["unused parameter \"float conedelta\""],
+    );
 }

@@ -8,7 +8,7 @@
 //! AttributeEnd
 //! LightSource "point" "rgb I" [ 10 10 10 ] "point3 from" [ 0 2 0 ]
 //! LightSource "spot" "rgb I" [ 10 10 10 ] "point3 from" [ 0 2 0 ] "point3 to" [ 0 0 0 ]
-//!     "float coneangle" [ 30 ] "float conedelta" [ 5 ]
+//!     "float coneangle" [ 30 ] "float conedeltaangle" [ 5 ]
 //! LightSource "distant" "rgb L" [ 3 3 3 ] "point3 from" [ 0 1 0 ] "point3 to" [ 0 0 0 ]
 //! LightSource "infinite" "string filename" "sky.exr"
 //! ```

@@ -4,7 +4,7 @@
 //! ```text
 //! AreaLightSource "diffuse" "rgb L" [ 17 12 4 ] "bool twosided" false "float scale" 1
 //! LightSource "point" "rgb I" [ 10 10 10 ] "point3 from" [ 0 2 0 ] "float power" 100
-//! LightSource "spot" "point3 from" [0 5 0] "point3 to" [0 0 0] "float coneangle" 30 "float conedelta" 5
+//! LightSource "spot" "point3 from" [0 5 0] "point3 to" [0 0 0] "float coneangle" 30 "float conedeltaangle" 5
 //! LightSource "distant" "rgb L" [ 3 3 3 ] "point3 from" [0 1 0] "point3 to" [0 0 0]
 //! ```
 //!
@@ -17,7 +17,7 @@
 //!   the mesh's total, 4 pi r^2 for a sphere, so the shape emits `power`);
 //! - point: I *= power / (4 pi);
 //! - spot: I *= power / (2 pi (1 - (cos_start + cos_end) / 2)), pbrt-v4's k_e, with
-//!   cos_end = cos(coneangle), cos_start = cos(coneangle - conedelta).
+//!   cos_end = cos(coneangle), cos_start = cos(coneangle - conedeltaangle).
 //!
 //! Every `L`/`I` component and `scale` must be finite and >= 0 and `power` in (0, 1e30]; the
 //! value after `scale` and `power` at most [`MAX_LIGHT_VALUE`] (1e20) and a light's power,
@@ -284,7 +284,7 @@ fn direction(from: Vec3, to: Vec3, ctm: &Mat4, loc: &Loc) -> Result<Vec3, SceneE
 
 fn spot(params: &mut ParamSet, loc: &Loc, ctm: &Mat4) -> Result<Light, SceneError> {
     let cone = params.get_float("coneangle", 30.0)?;
-    let delta = params.get_float("conedelta", 5.0)?;
+    let delta = params.get_float("conedeltaangle", 5.0)?;
     let cos_end = cone.to_radians().cos();
     let cos_start = (cone - delta).to_radians().cos();
     let solid_angle = 2.0 * std::f64::consts::PI * (1.0 - 0.5 * (cos_start + cos_end)) as f64;
