@@ -2380,6 +2380,14 @@ fn active_transform() {
         "{:?}",
         s.notes
     );
+    // CoordSysTransform "camera" without ActiveTransform (killeroo-gold's distant light): not
+    // moving, whatever the rounding of the camera's inverse.
+    let s = ok("LookAt 200 250 70  0 33 -50  0 0 1\nCamera \"perspective\" \"float fov\" 38\nWorldBegin\nCoordSysTransform \"camera\"\nLightSource \"distant\" \"rgb L\" [ 0.2 0.2 0.2 ]\n");
+    assert!(
+        s.notes.iter().all(|n| !n.contains("motion")),
+        "{:?}",
+        s.notes
+    );
     assert_src_err(
         "WorldBegin\n\nActiveTransform Sometimes\n",
         3,

@@ -603,9 +603,15 @@ impl Builder {
             "Camera" => {
                 self.camera = camera(&ty, &mut params, &at, &self.gs.ctm)?;
                 self.note_motion(&at);
-                let end = self.gs.ctm_end.inverse();
-                self.named_coords
-                    .insert("camera".to_string(), (self.camera.world_from_camera, end));
+                // Equal CTMs give the same matrix, not a second inverse that may differ in the
+                // last bits (which would look like a moving camera).
+                let start = self.camera.world_from_camera;
+                let end = if self.gs.ctm_end == self.gs.ctm {
+                    start
+                } else {
+                    self.gs.ctm_end.inverse()
+                };
+                self.named_coords.insert("camera".to_string(), (start, end));
             }
             "Film" => self.film = film(&ty, &mut params, &at)?,
             "Sampler" => self.sampler = sampler(&ty, &mut params, &at)?,
