@@ -211,3 +211,45 @@ fn blackbody_light_renders_with_its_luminance() {
         );
     }
 }
+
+/// An infinite light `L` with a portal lights the floor exactly as a one-sided area light of
+/// radiance `L` filling the portal would (pbrt-v4's `PortalImageInfiniteLight::Le` is zero
+/// for rays that do not leave through the portal): the same analytic form factor as
+/// [`quad_light_irradiance`], here for the whole image's mean. With the corners in the
+/// opposite order the portal faces down (its outside is the floor side) and no light comes
+/// through.
+#[test]
+fn portal_light_lights_only_through_the_portal() {
+    let (h, half, c) = (1.0f32, 0.25f32, Vec2::new(0.2, -0.1));
+    let corners = "-0.05 1 -0.35  0.45 1 -0.35  0.45 1 0.15  -0.05 1 0.15";
+    let light =
+        format!("LightSource \"infinite\" \"rgb L\" [ 5 5 5 ] \"point3 portal\" [ {corners} ]");
+    let (_, px) = render(
+        &write_scene("portal", 0.5, 16, 1024, &light),
+        BackendKind::Embree,
+    );
+    let expected = |p: Vec3| {
+        let (x0, x1) = ((c.x - half - p.x) / h, (c.x + half - p.x) / h);
+        let (z0, z1) = ((c.y - half - p.z) / h, (c.y + half - p.z) / h);
+        let f = corner_factor(x1, z1) - corner_factor(x0, z1) - corner_factor(x1, z0)
+            + corner_factor(x0, z0);
+        rho() / PI * (PI * 5.0 * f)
+    };
+    let (mut sum_got, mut sum_want) = (Vec3::ZERO, Vec3::ZERO);
+    for &(got, p) in &px {
+        sum_got += got;
+        sum_want += expected(p);
+    }
+    let mean_err = ((sum_got - sum_want) / sum_want).abs().max_element();
+    println!("portal light: mean {sum_got} against {sum_want}, relative error {mean_err:.2e}");
+    assert!(mean_err < 0.02, "mean {mean_err}");
+
+    let reversed = "-0.05 1 0.15  0.45 1 0.15  0.45 1 -0.35  -0.05 1 -0.35";
+    let light =
+        format!("LightSource \"infinite\" \"rgb L\" [ 5 5 5 ] \"point3 portal\" [ {reversed} ]");
+    let (_, px) = render(
+        &write_scene("portal-down", 0.5, 8, 16, &light),
+        BackendKind::Embree,
+    );
+    assert!(px.iter().all(|(got, _)| *got == Vec3::ZERO));
+}

@@ -2562,3 +2562,23 @@ fn spot_conedelta_is_conedeltaangle() {
         &["unused parameter \"float conedelta\""],
     );
 }
+
+/// kroken's sky: `"blackbody L" 6500 "float scale" 7.5` with a portal. pbrt-v4's portal light
+/// converts `L` with `SpectrumToXYZ` and no one-nit normalisation, so its luminance is that of
+/// the peak-normalised Planck spectrum, 0.88589 at 6500 K (pbrt-v4's 1 nm CIE table summed in
+/// Python), times 7.5; without the portal it is 7.5.
+#[test]
+fn portal_blackbody_is_not_normalised() {
+    let lum = |portal: &str| {
+        let s = ok(&format!(
+            "WorldBegin\nLightSource \"infinite\" {portal} \"blackbody L\" 6500 \"float scale\" 7.5\n"
+        ));
+        let Light::Infinite { map } = &s.lights[0] else {
+            panic!()
+        };
+        luminance(map.le(Vec3::Y))
+    };
+    let with = lum("\"point3 portal\" [ 0 0 0  0 1 0  1 1 0  1 0 0 ]");
+    assert!(close(with, 7.5 * 0.885_888_6, 2e-3), "{with}");
+    assert!(close(lum(""), 7.5, 1e-3));
+}

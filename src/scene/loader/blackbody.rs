@@ -85,6 +85,25 @@ pub fn rgb(t: f64) -> Option<Vec3> {
     ))
 }
 
+/// Luminance of pbrt-v4's `BlackbodySpectrum(T)` itself (Planck's law divided by its value at
+/// the peak wavelength, Wien's 2.8977721e-3 m K / T): `SpectrumToXYZ(s).Y`, the integral of
+/// y-bar times it over the integral of y-bar (106.856895). pbrt-v4's portal infinite light
+/// converts its `L` to RGB this way, without the one-nit normalisation of other lights.
+/// `None` unless `t` is finite and > 0.
+pub fn peak_normalized_luminance(t: f64) -> Option<f64> {
+    if !(t.is_finite() && t > 0.0) {
+        return None;
+    }
+    const CIE_Y_INTEGRAL: f64 = 106.856895;
+    let peak = ln_planck(2.897_772_1e-3 / t * 1e9, t);
+    let sum: f64 = CIE_XYZ_5NM
+        .iter()
+        .enumerate()
+        .map(|(i, cmf)| cmf[1] * (ln_planck(LAMBDA_MIN + LAMBDA_STEP * i as f64, t) - peak).exp())
+        .sum();
+    Some(sum * LAMBDA_STEP / CIE_Y_INTEGRAL)
+}
+
 /// The CIE 1931 2-degree colour matching functions (x-bar, y-bar, z-bar) at 360, 365, ..., 830 nm.
 #[rustfmt::skip]
 pub const CIE_XYZ_5NM: [[f64; 3]; 95] = [
@@ -255,6 +274,34 @@ mod tests {
         }
         let (warm, cool) = (rgb(3000.0).unwrap(), rgb(10000.0).unwrap());
         assert!(warm.x > 1.5 && warm.z < 0.4 && cool.z > 1.3 && cool.x < 0.95);
+    }
+
+    /// The luminance of the peak-normalised spectrum, against a 1 nm integration of Planck's
+    /// law written out here with the analytic fit of y-bar (within the fit's ~1%): at 6500 K
+    /// the peak (446 nm) is inside the visible range, so Y is below 1; at 3000 K it is at
+    /// 966 nm, outside, and Y is small.
+    #[test]
+    fn peak_normalized_luminance_matches_planck() {
+        let g = |x: f64, mu: f64, s1: f64, s2: f64| {
+            let s = if x < mu { s1 } else { s2 };
+            (-0.5 * ((x - mu) / s).powi(2)).exp()
+        };
+        let planck = |l: f64, t: f64| 1.0 / (l.powi(5) * ((0.014387769 / (l * t)).exp() - 1.0));
+        for t in [3000.0, 6500.0] {
+            let peak = planck(2.8977721e-3 / t, t);
+            let y: f64 = (360..=830)
+                .map(|l| {
+                    let l = l as f64;
+                    let ybar = 0.821 * g(l, 568.8, 46.9, 40.5) + 0.286 * g(l, 530.9, 16.3, 31.1);
+                    ybar * planck(l * 1e-9, t) / peak
+                })
+                .sum::<f64>()
+                / 106.856895;
+            let got = peak_normalized_luminance(t).unwrap();
+            assert!((got - y).abs() < 0.01 * y, "{t} K: {got} against {y}");
+        }
+        assert!(peak_normalized_luminance(6500.0).unwrap() < 1.0);
+        assert_eq!(peak_normalized_luminance(0.0), None);
     }
 
     /// Extreme temperatures stay finite (computed in logs); invalid ones are refused.

@@ -57,14 +57,17 @@
 //!   as bright as a constant `L` with the same `illuminance`; photon follows the integral.
 //! - The CTM's linear part orients the map: a rotation, possibly with a uniform scale or a
 //!   mirror; anything else (it would not preserve solid angle) is an error.
-//! - `portal` is an error (not supported). It is not only a sampling hint: pbrt-v4's
-//!   `PortalImageInfiniteLight::Le` is zero for a ray whose line from its origin does not pass
-//!   through the portal quad, so ignoring the portal would light a scene through every
-//!   opening instead of the portal alone.
+//! - `portal`: 4 world-space points forming a rectangle (pbrt-v4's test). It is not only a
+//!   sampling hint: pbrt-v4's `PortalImageInfiniteLight::Le` is zero for a ray that does not
+//!   leave through the portal, so photon gives light only to such rays (camera, gather and
+//!   shadow rays by their origin and direction, photons by their line), but samples the whole
+//!   map as without a portal (directions outside it are wasted samples). With a constant `L`,
+//!   pbrt-v4 does not normalise it to one nit (see [`portal_l_factor`]); `illuminance` with a
+//!   portal is an error.
 
 use super::params::{ParamSet, ParamType};
 use super::shapes::xform_point;
-use crate::light::EnvMap;
+use crate::light::{EnvMap, Portal};
 use crate::math::{Mat3, Mat4, Vec3};
 use crate::scene::{Light, Loc, SceneError};
 use crate::texture::{Encoding, Image};
@@ -330,12 +333,7 @@ fn infinite(
     ctm: &Mat4,
     base_dir: &Path,
 ) -> Result<Light, SceneError> {
-    if let Some(p) = params.get_param("portal") {
-        return Err(p.err(
-            "portal infinite lights are not supported (pbrt-v4's portal light emits only \
-             through the portal quad, so it cannot be ignored)",
-        ));
-    }
+    let portal = portal(params)?;
     let scale = params.get_float("scale", 1.0)?;
     if !(scale.is_finite() && scale >= 0.0) {
         let p = params.peek("scale").expect("given");
@@ -352,6 +350,10 @@ fn infinite(
     }
     // pbrt-v4 ignores a non-positive illuminance.
     let illuminance = illuminance.filter(|&e| e > 0.0);
+    if let (Some(_), Some(_)) = (illuminance, portal) {
+        let p = params.peek("illuminance").expect("given");
+        return Err(p.err("\"illuminance\" with a \"portal\" is not supported"));
+    }
     let filename = params.get_string_opt("filename")?;
     if let (Some(_), Some(p)) = (&filename, params.peek("L")) {
         return Err(p.err("an infinite light takes \"L\" or \"filename\", not both"));
@@ -382,12 +384,56 @@ fn infinite(
             EnvMap::new(image, k, rotation)
         }
         None => {
+            let unnormalised = match portal {
+                Some(_) => portal_l_factor(params),
+                None => 1.0,
+            };
             let l = infinite_l(params)?;
-            let k = scale as f64 * illuminance.map_or(1.0, |e| e as f64 / std::f64::consts::PI);
+            let k = scale as f64
+                * unnormalised
+                * illuminance.map_or(1.0, |e| e as f64 / std::f64::consts::PI);
             EnvMap::constant(scaled(params, "scale", loc, l, k)?)
         }
     };
+    let map = match portal {
+        Some(p) => map.with_portal(p),
+        None => map,
+    };
     Ok(Light::Infinite { map: Arc::new(map) })
+}
+
+/// `"point3 portal"`: 4 world-space points (not moved by the CTM, as in pbrt-v4) forming a
+/// rectangle.
+fn portal(params: &mut ParamSet) -> Result<Option<Portal>, SceneError> {
+    let Some(points) = params.get_point3s("portal")? else {
+        return Ok(None);
+    };
+    let p = params.peek("portal").expect("just read");
+    let Ok(corners) = <[Vec3; 4]>::try_from(points.as_slice()) else {
+        return Err(p.err(format!("expected 4 points, got {}", points.len())));
+    };
+    Portal::new(corners).map(Some).map_err(|m| p.err(m))
+}
+
+/// pbrt-v4's portal light turns a constant `L` into RGB by `SpectrumToXYZ`, without the
+/// one-nit normalisation of its other lights: relative to photon's luminance-1 value, a
+/// blackbody's luminance is that of Planck's law normalised to its peak, a constant spectrum's
+/// its value; an `rgb` is unchanged.
+fn portal_l_factor(params: &ParamSet) -> f64 {
+    let Some(p) = params.peek("L") else {
+        return 1.0;
+    };
+    let first = p.floats().and_then(|v| v.first().copied());
+    match (p.ty, first) {
+        (ParamType::Blackbody, Some(t)) => {
+            super::blackbody::peak_normalized_luminance(t as f64).unwrap_or(1.0)
+        }
+        (ParamType::Spectrum, _) => p
+            .floats()
+            .and_then(|v| v.get(1).copied())
+            .map_or(1.0, |c| c as f64),
+        _ => 1.0,
+    }
 }
 
 /// An infinite light's constant `L`: `rgb` (each component in range), `blackbody`, a constant `spectrum`

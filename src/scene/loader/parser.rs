@@ -508,7 +508,15 @@ impl Builder {
                 self.world_only(t.text, &loc)?;
                 let (ty, at) = string_arg(tok, "a light type")?;
                 let mut params = read_params(tok)?;
+                let portal = params.loc("portal").cloned();
                 let light = light_source(&ty, &mut params, &at, &self.gs.ctm, &self.base_dir)?;
+                if let Some(p) = portal {
+                    self.notes.push(format!(
+                        "{p}: portal: light enters only through it, as in pbrt-v4, but photon \
+                         samples the whole environment (rays and photons outside the portal \
+                         are wasted: expect more noise than pbrt-v4)"
+                    ));
+                }
                 self.note_motion(&at);
                 self.lights.push(light);
             }
