@@ -24,6 +24,12 @@
 //! - photons (`SampleLe`): a direction from the same distribution and an origin uniform on a
 //!   disc of the scene's bounding-sphere radius `R` perpendicular to it, outside the scene:
 //!   flux `Le / (pdf_dir * 1 / (pi R^2))`; the light's power is `4 pi^2 R^2 mean(L)`.
+//!
+//! With a portal (`"point3 portal" [ 4 corners ]`, pbrt-v4's `PortalImageInfiniteLight`) the
+//! light reaches the scene only through that rectangle ([`Portal`]): `Le` is zero for a ray
+//! that does not leave through it, and a photon whose line does not enter through it is
+//! dropped (counted as emitted). Sampling stays over the whole map (pbrt-v4 samples within
+//! the portal: same expectation, less noise).
 use super::scalar_power;
 use crate::math::{luminance, Mat3, Vec2, Vec3};
 use crate::sampling::warp::{

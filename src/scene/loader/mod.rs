@@ -16,13 +16,17 @@
 //!
 //! Modules: [`tokenizer`] (tokens with line and column), [`params`] (parameter lists with
 //! used-tracking), [`parser`] (directives and graphics state), [`materials`], [`spectra`]
-//! (pbrt-v4's named spectra as RGB), [`textures`] (`Texture` directives, image files),
-//! [`lights`], [`shapes`] (meshes, spheres, disks, cylinders) and [`ply`] (PLY files).
+//! (pbrt-v4's named spectra as RGB), [`blackbody`] (blackbody emission as RGB), [`textures`]
+//! (`Texture` directives, image files), [`lights`], [`shapes`] (meshes, spheres, disks,
+//! cylinders) and [`ply`] (PLY files).
 //!
 //! Whatever the scene says that photon would not render as written is an error, one line,
 //! `file:line:column: what is wrong`: an unknown or unsupported directive or type, a parameter
 //! that is given but never read, a wrong type or count of values, a missing or malformed file.
 //! See the README for the supported subset.
+//!
+//! Scene and PLY files whose names end in `.gz` are decompressed ([`read_input`]), under the
+//! same size caps as plain files.
 //!
 //! [`load`] stops at the first error; [`load_collecting`] (for `photon check`) records each
 //! error, skips the directive it is in and reads on, so one pass lists every problem.

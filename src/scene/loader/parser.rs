@@ -28,6 +28,11 @@
 //! CTM at `ObjectInstance`; area lights inside a definition are ignored with a note, as pbrt-v4
 //! ignores them.
 //!
+//! `ActiveTransform StartTime|EndTime|All` picks which of the two CTMs (shutter open, close)
+//! later transforms change, as in pbrt-v4; photon renders the shutter-open one and notes once
+//! when something moves (no motion blur). `NamedMaterial` may name a material that a later
+//! `MakeNamedMaterial` defines (pbrt-v4 resolves names after parsing).
+//!
 //! Transforms post-multiply the CTM (`CTM = CTM * M`); `Transform`/`ConcatTransform` read 16
 //! numbers column-major as pbrt does (`glam::Mat4::from_cols_array`). The CTM at `Camera` is
 //! camera-from-world; its inverse becomes `world_from_camera` and the named system "camera".
