@@ -25,7 +25,7 @@ NamedMaterial "floor"
 Shape "plymesh" "string filename" "missing.ply"
 MakeNamedMedium "fog" "string type" "homogeneous" "rgb sigma_a" [ 1 1 1 ]
 Frobnicate "x" [ 1 2 3 ] "bool b" true
-LightSource "infinite" "point3 portal" [ 0 0 0  1 0 0  1 1 0  0 1 0 ]
+LightSource "infinite" "point3 portal" [ 0 0 0  1 0 0  1 1 0 ]
 Material "diffuse" "texture reflectance" "wood"
 {TRI}
 Shape "disk"
@@ -56,7 +56,7 @@ fn collect_mode_lists_every_problem_in_order() {
         (8, "missing.ply"),
         (9, "participating media are not supported"),
         (10, "unknown directive \"Frobnicate\""),
-        (11, "portal infinite lights are not supported"),
+        (11, "\"point3 portal\": expected 4 points, got 3"),
         // The texture failed to load on line 4, so the name is unknown here.
         (
             12,

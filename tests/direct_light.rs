@@ -105,7 +105,7 @@ fn point_light_irradiance() {
 #[test]
 fn spot_and_distant_light_irradiance() {
     // Spot pointing straight down from height 2: full intensity inside 20 degrees, none past 30.
-    let spot = "LightSource \"spot\" \"rgb I\" [ 5 5 5 ] \"point3 from\" [ 0 2 0 ] \"point3 to\" [ 0 0 0 ] \"float coneangle\" [ 30 ] \"float conedelta\" [ 10 ]";
+    let spot = "LightSource \"spot\" \"rgb I\" [ 5 5 5 ] \"point3 from\" [ 0 2 0 ] \"point3 to\" [ 0 0 0 ] \"float coneangle\" [ 30 ] \"float conedeltaangle\" [ 10 ]";
     let (_, px) = render(&write_scene("spot", 3.0, 48, 1, spot), BackendKind::Embree);
     let (mut inside, mut outside) = (0, 0);
     for &(got, p) in &px {
@@ -175,4 +175,81 @@ fn quad_light_irradiance() {
     );
     assert!(mean_err < 0.01, "mean {mean_err}");
     assert!(err < 0.05, "worst pixel {err}");
+}
+
+/// The chromaticity (x, y) of a linear sRGB value, by the IEC 61966-2-1 sRGB-to-XYZ matrix.
+fn chromaticity(c: Vec3) -> (f32, f32) {
+    let x = 0.4124 * c.x + 0.3576 * c.y + 0.1805 * c.z;
+    let y = 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+    let z = 0.0193 * c.x + 0.1192 * c.y + 0.9505 * c.z;
+    (x / (x + y + z), y / (x + y + z))
+}
+
+/// A blackbody distant light straight down, `"blackbody L" [ 2856 ] "float scale" 3`: in
+/// pbrt-v4 its luminance is `scale` (the spectrum is divided by its photometric integral), and
+/// 2856 K is CIE illuminant A, chromaticity (0.44757, 0.40745). The floor's radiance is
+/// rho / pi * L per channel, so L recovered from the image must have luminance 3 and A's
+/// chromaticity.
+#[test]
+fn blackbody_light_renders_with_its_luminance() {
+    let distant = "LightSource \"distant\" \"blackbody L\" [ 2856 ] \"float scale\" 3 \"point3 from\" [ 0 1 0 ] \"point3 to\" [ 0 0 0 ]";
+    let (_, px) = render(
+        &write_scene("blackbody", 3.0, 16, 1, distant),
+        BackendKind::Embree,
+    );
+    for &(got, p) in &px {
+        let l = got * PI / rho();
+        let lum = 0.2126 * l.x + 0.7152 * l.y + 0.0722 * l.z;
+        let (x, y) = chromaticity(l);
+        assert!(
+            (lum - 3.0).abs() < 3e-3 * 3.0,
+            "at {p}: L {l}, luminance {lum}"
+        );
+        assert!(
+            (x - 0.44757).abs() < 1e-3 && (y - 0.40745).abs() < 1e-3,
+            "at {p}: ({x}, {y})"
+        );
+    }
+}
+
+/// An infinite light `L` with a portal lights the floor exactly as a one-sided area light of
+/// radiance `L` filling the portal would (pbrt-v4's `PortalImageInfiniteLight::Le` is zero
+/// for rays that do not leave through the portal): the same analytic form factor as
+/// [`quad_light_irradiance`], here for the whole image's mean. With the corners in the
+/// opposite order the portal faces down (its outside is the floor side) and no light comes
+/// through.
+#[test]
+fn portal_light_lights_only_through_the_portal() {
+    let (h, half, c) = (1.0f32, 0.25f32, Vec2::new(0.2, -0.1));
+    let corners = "-0.05 1 -0.35  0.45 1 -0.35  0.45 1 0.15  -0.05 1 0.15";
+    let light =
+        format!("LightSource \"infinite\" \"rgb L\" [ 5 5 5 ] \"point3 portal\" [ {corners} ]");
+    let (_, px) = render(
+        &write_scene("portal", 0.5, 16, 1024, &light),
+        BackendKind::Embree,
+    );
+    let expected = |p: Vec3| {
+        let (x0, x1) = ((c.x - half - p.x) / h, (c.x + half - p.x) / h);
+        let (z0, z1) = ((c.y - half - p.z) / h, (c.y + half - p.z) / h);
+        let f = corner_factor(x1, z1) - corner_factor(x0, z1) - corner_factor(x1, z0)
+            + corner_factor(x0, z0);
+        rho() / PI * (PI * 5.0 * f)
+    };
+    let (mut sum_got, mut sum_want) = (Vec3::ZERO, Vec3::ZERO);
+    for &(got, p) in &px {
+        sum_got += got;
+        sum_want += expected(p);
+    }
+    let mean_err = ((sum_got - sum_want) / sum_want).abs().max_element();
+    println!("portal light: mean {sum_got} against {sum_want}, relative error {mean_err:.2e}");
+    assert!(mean_err < 0.02, "mean {mean_err}");
+
+    let reversed = "-0.05 1 0.15  0.45 1 0.15  0.45 1 -0.35  -0.05 1 -0.35";
+    let light =
+        format!("LightSource \"infinite\" \"rgb L\" [ 5 5 5 ] \"point3 portal\" [ {reversed} ]");
+    let (_, px) = render(
+        &write_scene("portal-down", 0.5, 8, 16, &light),
+        BackendKind::Embree,
+    );
+    assert!(px.iter().all(|(got, _)| *got == Vec3::ZERO));
 }

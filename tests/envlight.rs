@@ -570,7 +570,7 @@ fn bad_infinite_lights_are_located_errors() {
             texels: vec![Vec3::ZERO; 16],
         }),
     );
-    let cases: [(&str, &[&str]); 9] = [
+    let cases: [(&str, &[&str]); 11] = [
         (
             "LightSource \"infinite\" \"string filename\" \"black.pfm\" \"float illuminance\" 2",
             &["black above the horizon"],
@@ -580,8 +580,16 @@ fn bad_infinite_lights_are_located_errors() {
             &["4x2", "not square"],
         ),
         (
-            "LightSource \"infinite\" \"point3 portal\" [ 0 0 0 1 0 0 1 1 0 0 1 0 ]",
-            &["portal", "not supported"],
+            "LightSource \"infinite\" \"point3 portal\" [ 0 0 0 1 0 0 1 1 0 ]",
+            &["\"point3 portal\"", "expected 4 points, got 3"],
+        ),
+        (
+            "LightSource \"infinite\" \"point3 portal\" [ 0 0 0 1 0 0 1 1 0 0 2 0 ]",
+            &["\"point3 portal\"", "rectangle"],
+        ),
+        (
+            "LightSource \"infinite\" \"point3 portal\" [ 0 0 0 1 0 0 1 1 0 0 1 0 ] \"float illuminance\" 2",
+            &["\"illuminance\" with a \"portal\""],
         ),
         (
             "LightSource \"infinite\" \"float bogus\" 1",
@@ -709,4 +717,47 @@ fn aimed_caustic_photons_keep_the_power_through_each_target() {
         );
         assert!(rel < 0.01, "target {t}: {} vs {want}", through[t]);
     }
+}
+
+/// Photons of a constant environment with a portal: the flux of those that enter through it
+/// is the flux through the rectangle from a hemisphere of radiance L, pi L A; the others
+/// (emission returns nothing) still count as emitted.
+#[test]
+fn portal_photons_carry_the_flux_through_the_portal() {
+    let dir = TempDir::new("envlight-portal");
+    let scene = load(
+        &dir,
+        &format!("WorldBegin\n{}\nLightSource \"infinite\" \"rgb L\" [ 2 2 2 ] \"point3 portal\" [ -0.5 1 -0.25  0.5 1 -0.25  0.5 1 0.25  -0.5 1 0.25 ]\n", common::CUBE),
+    );
+    let lights = Lights::new(&scene);
+    let i = scene
+        .lights
+        .iter()
+        .position(|l| matches!(l, Light::Infinite { .. }))
+        .unwrap();
+    let n = 1000u64 * 1000;
+    let (mut sum, mut entered) = (Vec3::ZERO, 0);
+    for k in 0..n {
+        let (a, b) = ((k % 1000) as f32, (k / 1000) as f32);
+        let u_pos = Vec2::new(rnd(1, k), rnd(2, k));
+        let u_dir = Vec2::new((a + rnd(3, k)) / 1000.0, (b + rnd(4, k)) / 1000.0);
+        if let Some(e) = lights.emit(&scene, i, u_pos, u_dir) {
+            // Every admitted photon crosses the portal's plane y = 1 inside the rectangle.
+            let t = (1.0 - e.p.y) / e.dir.y;
+            let q = e.p + e.dir * t;
+            assert!(
+                e.dir.y < 0.0 && q.x.abs() <= 0.5001 && q.z.abs() <= 0.2501,
+                "{q}"
+            );
+            sum += e.flux;
+            entered += 1;
+        }
+    }
+    let got = sum / n as f32;
+    let want = PI as f32; // pi L A with L = 2, A = 1 x 0.5 (1.3% of the photons enter)
+    println!("portal photons: {entered} of {n} entered, flux {got} (pi L A = {want})");
+    assert!(
+        ((got - Vec3::splat(want)) / want).abs().max_element() < 0.03,
+        "{got}"
+    );
 }

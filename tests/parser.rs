@@ -697,7 +697,7 @@ LightSource "point" "point3 from" [ 1 2 3 ] "rgb I" [ 1 2 3 ] "float scale" 2
 LightSource "point" "float power" 100
 Identity
 Rotate 90 0 0 1
-LightSource "spot" "point3 from" [ 0 5 0 ] "point3 to" [ 0 0 0 ] "float coneangle" 30 "float conedelta" 10
+LightSource "spot" "point3 from" [ 0 5 0 ] "point3 to" [ 0 0 0 ] "float coneangle" 30 "float conedeltaangle" 10
 LightSource "spot" "float power" 10
 Identity
 LightSource "distant" "point3 from" [ 0 10 0 ] "point3 to" [ 0 0 0 ] "rgb L" [ 1 1 1 ] "float scale" 2
@@ -1099,9 +1099,9 @@ fn error_parameter_types_and_values() {
         &["\"texture reflectance\"", "unknown spectrum texture \"t\""],
     );
     assert_src_err(
-        "WorldBegin\nLightSource \"point\"\n \"blackbody I\" 5500\n",
+        "WorldBegin\nLightSource \"point\"\n \"blackbody I\" 0\n",
         3,
-        &["blackbody"],
+        &["blackbody", "temperature"],
     );
     assert_src_err(
         "WorldBegin\nMaterial \"diffuse\" \"rgb reflectance\" [ 1.5 0 0 ]\n",
@@ -2406,4 +2406,316 @@ WorldBegin
         2,
         &["EXR only"],
     );
+}
+// ---------------------------------------------------------------------------------------------
+// blackbody lights, ActiveTransform, forward named materials, gzip
+
+/// Luminance of a linear sRGB value (the Y row of IEC 61966-2-1's sRGB-to-XYZ matrix).
+fn luminance(c: Vec3) -> f32 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}
+
+/// Blackbody `L`/`I` on every light type: luminance `scale` (pbrt-v4 divides by the spectrum's
+/// photometric integral), then `power`/`illuminance` as for RGB; the colour of 2856 K is CIE
+/// illuminant A.
+#[test]
+fn blackbody_lights() {
+    let s = ok(r#"WorldBegin
+LightSource "point" "blackbody I" [ 2856 ] "float scale" 2
+LightSource "point" "blackbody I" 6504 "float power" 100
+LightSource "spot" "blackbody I" [ 3000 ]
+LightSource "distant" "blackbody L" [ 5000 ] "float scale" 0.5
+LightSource "infinite" "blackbody L" [ 8000 ] "float illuminance" 3.14159265
+AttributeBegin
+AreaLightSource "diffuse" "blackbody L" [ 4000 ] "float scale" 7
+Shape "trianglemesh" "point3 P" [ 0 0 0 1 0 0 0 1 0 ] "integer indices" [ 0 1 2 ]
+AttributeEnd
+"#);
+    let Light::Point { intensity, .. } = s.lights[0] else {
+        panic!()
+    };
+    assert!(close(luminance(intensity), 2.0, 1e-3), "{intensity}");
+    let xyz = Vec3::new(
+        0.4124 * intensity.x + 0.3576 * intensity.y + 0.1805 * intensity.z,
+        luminance(intensity),
+        0.0193 * intensity.x + 0.1192 * intensity.y + 0.9505 * intensity.z,
+    );
+    let (x, y) = (xyz.x / xyz.element_sum(), xyz.y / xyz.element_sum());
+    assert!(
+        (x - 0.44757).abs() < 1e-3 && (y - 0.40745).abs() < 1e-3,
+        "({x}, {y})"
+    );
+    let Light::Point { intensity, .. } = s.lights[1] else {
+        panic!()
+    };
+    assert!(close(luminance(intensity), 100.0 / (4.0 * PI), 1e-3));
+    assert!(
+        (intensity / luminance(intensity) - Vec3::ONE)
+            .abs()
+            .max_element()
+            < 0.05
+    );
+    let Light::Spot { intensity, .. } = s.lights[2] else {
+        panic!()
+    };
+    assert!(close(luminance(intensity), 1.0, 1e-3) && intensity.x > 1.5 * intensity.z);
+    let Light::Distant { l, .. } = s.lights[3] else {
+        panic!()
+    };
+    assert!(close(luminance(l), 0.5, 1e-3));
+    let Light::Infinite { map } = &s.lights[4] else {
+        panic!()
+    };
+    assert!(close(luminance(map.le(Vec3::Y)), 1.0, 1e-3)); // illuminance pi: L = 1
+    let Light::Area { l, .. } = s.lights[5] else {
+        panic!()
+    };
+    assert!(close(luminance(l), 7.0, 1e-3));
+
+    assert_src_err(
+        "WorldBegin\nLightSource \"point\"\n \"blackbody I\" [ -5 ]\n",
+        3,
+        &["\"blackbody I\"", "temperature must be finite and > 0"],
+    );
+    assert_src_err(
+        "WorldBegin\nLightSource \"point\"\n \"blackbody I\" [ 3000 1 ]\n",
+        3,
+        &["\"blackbody I\""],
+    );
+    assert_src_err(
+        "WorldBegin\nMaterial \"diffuse\" \"blackbody reflectance\" 3000\n",
+        2,
+        &["only supported for light emission"],
+    );
+}
+
+/// `ActiveTransform StartTime` / `EndTime` / `All`: transforms change the active CTMs only;
+/// photon renders the shutter-open (start) CTM and notes once that the scene moves.
+#[test]
+fn active_transform() {
+    let s = ok(&format!(
+        "WorldBegin\nAttributeBegin\nActiveTransform StartTime\nTranslate 1 0 0\nActiveTransform EndTime\nTranslate 0 5 0\nActiveTransform All\nTranslate 0 0 2\n{TRI}\nAttributeEnd\n{TRI}\n"
+    ));
+    // The first triangle moved by (1, 0, 2) (the EndTime translation is not in the start pose),
+    // the second not at all (AttributeEnd restored both CTMs).
+    assert_vec(s.meshes[0].positions[0], Vec3::new(2.0, 0.0, 2.0), 1e-6);
+    assert_vec(s.meshes[1].positions[0], Vec3::new(1.0, 0.0, 0.0), 1e-6);
+    let moving: Vec<_> = s
+        .notes
+        .iter()
+        .filter(|n| n.contains("motion blur"))
+        .collect();
+    assert_eq!(moving.len(), 1, "{:?}", s.notes);
+    assert!(moving[0].contains("scene.pbrt:9:"), "{}", moving[0]);
+    // Start and end changed alike: nothing moves, no note.
+    let s = ok(&format!(
+        "WorldBegin\nActiveTransform StartTime\nTranslate 1 0 0\nActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\n{TRI}\n"
+    ));
+    assert_vec(s.meshes[0].positions[0], Vec3::new(2.0, 0.0, 0.0), 1e-6);
+    assert!(
+        s.notes.iter().all(|n| !n.contains("motion")),
+        "{:?}",
+        s.notes
+    );
+    // CoordSysTransform "camera" without ActiveTransform (killeroo-gold's distant light): not
+    // moving, whatever the rounding of the camera's inverse.
+    let s = ok("LookAt 200 250 70  0 33 -50  0 0 1\nCamera \"perspective\" \"float fov\" 38\nWorldBegin\nCoordSysTransform \"camera\"\nLightSource \"distant\" \"rgb L\" [ 0.2 0.2 0.2 ]\n");
+    assert!(
+        s.notes.iter().all(|n| !n.contains("motion")),
+        "{:?}",
+        s.notes
+    );
+    assert_src_err(
+        "WorldBegin\n\nActiveTransform Sometimes\n",
+        3,
+        &[
+            "ActiveTransform takes All, StartTime or EndTime",
+            "Sometimes",
+        ],
+    );
+}
+
+/// The ActiveTransform of killeroo-moving (pbrt-v4-scenes) in collect mode: no error at all,
+/// in particular no "unknown directive StartTime" from skipping its argument.
+#[test]
+fn active_transform_collect_mode_reads_its_argument() {
+    let dir = TempDir::new("photon-parser");
+    let path = dir.write(
+        "scene.pbrt",
+        format!("WorldBegin\nActiveTransform StartTime\nTransformTimes 0 1\nActiveTransform All\n{TRI}\n"),
+    );
+    let got = photon::scene::loader::load_collecting(&path);
+    let msgs: Vec<String> = got.errors.iter().map(|e| e.to_string()).collect();
+    assert_eq!(msgs.len(), 1, "{msgs:?}");
+    assert!(
+        msgs[0].contains(":3:1: unsupported directive \"TransformTimes\""),
+        "{msgs:?}"
+    );
+    assert_eq!(got.scene.meshes.len(), 1);
+}
+
+/// `NamedMaterial` before its `MakeNamedMaterial` (the definition later, here in an Include):
+/// resolved after parsing as pbrt-v4 does; never defined: an error at the first use.
+#[test]
+fn named_material_forward_reference() {
+    let dir = TempDir::new("photon-parser");
+    dir.write(
+        "materials.pbrt",
+        "MakeNamedMaterial \"light\" \"string type\" \"diffuse\" \"rgb reflectance\" [ 0.1 0.2 0.3 ]\n",
+    );
+    let main = dir.write(
+        "scene.pbrt",
+        format!("WorldBegin\nNamedMaterial \"light\"\n{TRI}\nNamedMaterial \"light\"\n{TRI}\nInclude \"materials.pbrt\"\nNamedMaterial \"light\"\n{TRI}\n"),
+    );
+    let s = load(&main).unwrap();
+    let m = s.meshes[0].material;
+    assert!(s.meshes.iter().all(|x| x.material == m));
+    assert_eq!(s.materials[m as usize], diffuse(Vec3::new(0.1, 0.2, 0.3)));
+    assert_src_err(
+        &format!("WorldBegin\n{TRI}\nNamedMaterial \"ghost\"\n{TRI}\nNamedMaterial \"ghost\"\n"),
+        3,
+        &["unknown named material \"ghost\"", "no MakeNamedMaterial"],
+    );
+    assert_src_err(
+        "WorldBegin\nNamedMaterial \"a\"\nMakeNamedMaterial \"a\" \"string type\" \"diffuse\"\nMakeNamedMaterial \"a\" \"string type\" \"diffuse\"\n",
+        4,
+        &["named material \"a\" redefined"],
+    );
+}
+
+/// Writes `bytes` gzipped (flate2, default level) as `name` in `dir`.
+fn write_gz(dir: &TempDir, name: &str, bytes: &[u8]) -> PathBuf {
+    use std::io::Write;
+    let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    enc.write_all(bytes).unwrap();
+    dir.write(name, enc.finish().unwrap())
+}
+
+/// `Include "x.pbrt.gz"` and `plymesh` `"x.ply.gz"` load exactly as the plain files.
+#[test]
+fn gzip_include_and_ply() {
+    let dir = TempDir::new("photon-parser");
+    let part = format!("Material \"diffuse\" \"rgb reflectance\" [ 0.2 0.3 0.4 ]\n{TRI}\n");
+    dir.write("part.pbrt", &part);
+    write_gz(&dir, "part.pbrt.gz", part.as_bytes());
+    let verts = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [1.0, 1.0, 0.5],
+    ];
+    let ply = binary_ply(false, &verts, &[vec![0, 1, 2], vec![1, 3, 2]]);
+    dir.write("m.ply", &ply);
+    write_gz(&dir, "m.ply.gz", &ply);
+    let load_with = |ext: &str| {
+        let src = format!(
+            "WorldBegin\nInclude \"part.pbrt{ext}\"\nShape \"plymesh\" \"string filename\" \"m.ply{ext}\"\n"
+        );
+        load(&dir.write(&format!("scene{ext}.pbrt"), src)).unwrap()
+    };
+    let (plain, gz) = (load_with(""), load_with(".gz"));
+    assert_eq!(gz.meshes.len(), 2);
+    for (a, b) in plain.meshes.iter().zip(&gz.meshes) {
+        assert_eq!((&a.positions, &a.indices), (&b.positions, &b.indices));
+    }
+    assert_eq!(plain.materials, gz.materials);
+    assert_eq!(gz.meshes[1].positions[3], Vec3::new(1.0, 1.0, 0.5));
+
+    // A corrupt .gz: a one-line error naming the file, at the Include / Shape.
+    let mut bad = std::fs::read(dir.0.join("part.pbrt.gz")).unwrap();
+    let n = bad.len();
+    bad[n / 2] ^= 0xff;
+    bad.truncate(n - 4);
+    dir.write("bad.pbrt.gz", &bad);
+    dir.write("bad.ply.gz", b"not gzip at all");
+    assert_src_err_in(
+        &dir,
+        "WorldBegin\n\nInclude \"bad.pbrt.gz\"\n",
+        3,
+        &["bad.pbrt.gz", "gzip"],
+    );
+    assert_src_err_in(
+        &dir,
+        "WorldBegin\nShape \"plymesh\" \"string filename\" \"bad.ply.gz\"\n",
+        2,
+        &["bad.ply.gz", "gzip"],
+    );
+}
+
+/// Checks an error of `src` written as `scene.pbrt` in `dir` (so it can name files there).
+#[track_caller]
+fn assert_src_err_in(dir: &TempDir, src: &str, line: u32, needles: &[&str]) {
+    assert_err(
+        load(&dir.write("scene.pbrt", src)),
+        "scene.pbrt",
+        line,
+        needles,
+    );
+}
+
+/// A gzip bomb (10 MB of zeros in ~10 KB) against a 1 MiB cap: a clean error, and the
+/// decompressed size is bounded by the cap, not by what the data claims.
+#[test]
+fn gzip_bomb_is_capped() {
+    use photon::scene::loader::gunzip_capped;
+    use std::io::Write;
+    let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
+    enc.write_all(&vec![0u8; 10 << 20]).unwrap();
+    let bomb = enc.finish().unwrap();
+    assert!(bomb.len() < 64 << 10, "{}", bomb.len());
+    let e = gunzip_capped(&bomb, 1 << 20).unwrap_err().to_string();
+    assert!(
+        e.contains("decompresses to more than the limit of 1.0 MB"),
+        "{e}"
+    );
+    assert_eq!(gunzip_capped(&bomb, 10 << 20).unwrap().len(), 10 << 20);
+}
+
+/// A sphere whose `Shape` fails after it was read (alpha on an emitter, as kroken's
+/// `lights.pbrt` has) is skipped in collect mode without a panic at the end (the sphere was
+/// queued for tessellation without its mesh before).
+#[test]
+fn failed_emitting_sphere_is_skipped_in_collect_mode() {
+    let dir = TempDir::new("photon-parser");
+    let path = dir.write(
+        "scene.pbrt",
+        "WorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\" \"blackbody L\" 6500\nShape \"sphere\" \"float radius\" 90 \"float alpha\" 0\nAttributeEnd\nShape \"sphere\"\n",
+    );
+    let got = photon::scene::loader::load_collecting(&path);
+    let msgs: Vec<String> = got.errors.iter().map(|e| e.to_string()).collect();
+    assert_eq!(msgs.len(), 1, "{msgs:?}");
+    assert!(msgs[0].contains(":4:") && msgs[0].contains("alpha on an emitting shape"));
+    assert_eq!(got.scene.meshes.len(), 1);
+    assert!(!got.scene.meshes[0].indices.is_empty());
+}
+
+/// pbrt-v4's spot light reads `conedeltaangle` (lights.cpp, `SpotLight::Create`), so a
+/// `conedelta` is an unused parameter there and here.
+#[test]
+fn spot_conedelta_is_conedeltaangle() {
+    assert_src_err(
+        "WorldBegin\nLightSource \"spot\"\n \"float conedelta\" 5\n",
+        3,
+        &["unused parameter \"float conedelta\""],
+    );
+}
+
+/// kroken's sky: `"blackbody L" 6500 "float scale" 7.5` with a portal. pbrt-v4's portal light
+/// converts `L` with `SpectrumToXYZ` and no one-nit normalisation, so its luminance is that of
+/// the peak-normalised Planck spectrum, 0.88589 at 6500 K (pbrt-v4's 1 nm CIE table summed in
+/// Python), times 7.5; without the portal it is 7.5.
+#[test]
+fn portal_blackbody_is_not_normalised() {
+    let lum = |portal: &str| {
+        let s = ok(&format!(
+            "WorldBegin\nLightSource \"infinite\" {portal} \"blackbody L\" 6500 \"float scale\" 7.5\n"
+        ));
+        let Light::Infinite { map } = &s.lights[0] else {
+            panic!()
+        };
+        luminance(map.le(Vec3::Y))
+    };
+    let with = lum("\"point3 portal\" [ 0 0 0  0 1 0  1 1 0  1 0 0 ]");
+    assert!(close(with, 7.5 * 0.885_888_6, 2e-3), "{with}");
+    assert!(close(lum(""), 7.5, 1e-3));
 }

@@ -543,7 +543,7 @@ pub fn gather_radiance(
         |light_pdf: f32| super::power_heuristic(n_g * g.pdf, g.light_samples as f32 * light_pdf);
     let mut direct = Vec3::ZERO;
     if hit.is_none() {
-        direct = ctx.lights.escaped(g.ray.d, mis);
+        direct = ctx.lights.escaped(g.ray.o, g.ray.d, mis);
     }
     if let Some(h) = hit {
         let mesh = &ctx.scene.meshes[h.mesh as usize];

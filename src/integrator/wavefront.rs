@@ -286,7 +286,7 @@ pub fn escaped(ctx: &RenderContext, path: &PathState) -> Vec3 {
         return Vec3::ZERO; // an L S+ G path: the glossy surface's caustic photons have it
     }
     let d = path.ray.d.normalize_or_zero();
-    let le = ctx.lights.escaped(d, |light_pdf| {
+    let le = ctx.lights.escaped(path.ray.o, d, |light_pdf| {
         if path.prev_pdf > 0.0 {
             super::power_heuristic(path.prev_pdf, light_pdf)
         } else {

@@ -24,6 +24,12 @@
 //! - photons (`SampleLe`): a direction from the same distribution and an origin uniform on a
 //!   disc of the scene's bounding-sphere radius `R` perpendicular to it, outside the scene:
 //!   flux `Le / (pdf_dir * 1 / (pi R^2))`; the light's power is `4 pi^2 R^2 mean(L)`.
+//!
+//! With a portal (`"point3 portal" [ 4 corners ]`, pbrt-v4's `PortalImageInfiniteLight`) the
+//! light reaches the scene only through that rectangle ([`Portal`]): `Le` is zero for a ray
+//! that does not leave through it, and a photon whose line does not enter through it is
+//! dropped (counted as emitted). Sampling stays over the whole map (pbrt-v4 samples within
+//! the portal: same expectation, less noise).
 use super::scalar_power;
 use crate::math::{luminance, Mat3, Vec2, Vec3};
 use crate::sampling::warp::{
@@ -45,6 +51,73 @@ pub struct EnvMap {
     mean: Vec3,
     /// A hash of the texels (so that scenes with different maps hash differently).
     hash: u64,
+    /// pbrt-v4's portal: the light reaches the scene only through this rectangle.
+    portal: Option<Portal>,
+}
+
+/// The rectangle of a portal infinite light (pbrt-v4's `PortalImageInfiniteLight`), in world
+/// space: pbrt-v4's `Le` is zero for a ray whose line from its origin does not pass through
+/// it towards the portal's outside (+z of its frame, z = (p3 - p0) x (p1 - p0)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Portal {
+    p0: Vec3,
+    /// `p1 - p0` and `p3 - p0`.
+    e1: Vec3,
+    e3: Vec3,
+    /// Unit normal towards the outside.
+    n: Vec3,
+}
+
+impl Portal {
+    /// The portal of corners `p` in order; as in pbrt-v4 they must form a rectangle: opposite
+    /// edges parallel and adjacent ones perpendicular, within 0.001 in cosines.
+    pub fn new(p: [Vec3; 4]) -> Result<Portal, String> {
+        let unit = |a: Vec3, b: Vec3| (b - a).normalize_or_zero();
+        let (p01, p12, p32, p03) = (
+            unit(p[0], p[1]),
+            unit(p[1], p[2]),
+            unit(p[3], p[2]),
+            unit(p[0], p[3]),
+        );
+        let parallel = (p01.dot(p32) - 1.0).abs() <= 1e-3 && (p12.dot(p03) - 1.0).abs() <= 1e-3;
+        let square = [(p01, p12), (p12, p32), (p32, p03), (p03, p01)]
+            .iter()
+            .all(|(a, b)| a.dot(*b).abs() <= 1e-3);
+        let n = (p[3] - p[0]).cross(p[1] - p[0]).normalize_or_zero();
+        if !(parallel && square) || n == Vec3::ZERO {
+            return Err("the 4 portal points must form a rectangle (pbrt-v4's test)".to_string());
+        }
+        Ok(Portal {
+            p0: p[0],
+            e1: p[1] - p[0],
+            e3: p[3] - p[0],
+            n,
+        })
+    }
+
+    /// Where the ray `o + t d` meets the rectangle, if it does (`t` of either sign).
+    fn hit(&self, o: Vec3, d: Vec3) -> Option<f32> {
+        let dn = d.dot(self.n);
+        if dn == 0.0 {
+            return None;
+        }
+        let t = (self.p0 - o).dot(self.n) / dn;
+        let q = o + d * t - self.p0;
+        let a = q.dot(self.e1) / self.e1.length_squared();
+        let b = q.dot(self.e3) / self.e3.length_squared();
+        ((0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b)).then_some(t)
+    }
+
+    /// Whether light from direction `w` (towards the environment) reaches point `o`: the ray
+    /// from `o` along `w` leaves through the portal, outwards.
+    pub fn admits(&self, o: Vec3, w: Vec3) -> bool {
+        w.dot(self.n) > 0.0 && self.hit(o, w).is_some_and(|t| t > 0.0)
+    }
+
+    /// Whether a photon leaving `p` (outside the scene) along `dir` enters through the portal.
+    pub fn admits_photon(&self, p: Vec3, dir: Vec3) -> bool {
+        dir.dot(self.n) < 0.0 && self.hit(p, dir).is_some_and(|t| t > 0.0)
+    }
 }
 
 impl fmt::Debug for EnvMap {
@@ -62,6 +135,7 @@ impl PartialEq for EnvMap {
         self.res == other.res
             && self.hash == other.hash
             && self.world_from_light == other.world_from_light
+            && self.portal == other.portal
     }
 }
 
@@ -101,7 +175,24 @@ impl EnvMap {
             world_from_light,
             light_from_world: world_from_light.transpose(),
             hash,
+            portal: None,
         }
+    }
+
+    /// The map restricted to light through `portal`.
+    pub fn with_portal(mut self, portal: Portal) -> EnvMap {
+        self.portal = Some(portal);
+        self
+    }
+
+    /// Whether light from direction `w` reaches `o` (always, without a portal).
+    pub fn admits(&self, o: Vec3, w: Vec3) -> bool {
+        self.portal.is_none_or(|p| p.admits(o, w))
+    }
+
+    /// Whether a photon from `p` along `dir` enters the scene (always, without a portal).
+    pub fn admits_photon(&self, p: Vec3, dir: Vec3) -> bool {
+        self.portal.is_none_or(|p_| p_.admits_photon(p, dir))
     }
 
     /// A constant radiance `l` (a 1x1 map).

@@ -8,7 +8,7 @@
 //! AttributeEnd
 //! LightSource "point" "rgb I" [ 10 10 10 ] "point3 from" [ 0 2 0 ]
 //! LightSource "spot" "rgb I" [ 10 10 10 ] "point3 from" [ 0 2 0 ] "point3 to" [ 0 0 0 ]
-//!     "float coneangle" [ 30 ] "float conedelta" [ 5 ]
+//!     "float coneangle" [ 30 ] "float conedeltaangle" [ 5 ]
 //! LightSource "distant" "rgb L" [ 3 3 3 ] "point3 from" [ 0 1 0 ] "point3 to" [ 0 0 0 ]
 //! LightSource "infinite" "string filename" "sky.exr"
 //! ```
@@ -24,7 +24,7 @@ mod point;
 mod spot;
 
 pub use area::AreaLight;
-pub use infinite::EnvMap;
+pub use infinite::{EnvMap, Portal};
 
 use crate::math::{luminance, Frame, Vec2, Vec3};
 use crate::sampling::alias::AliasTable;
@@ -135,12 +135,16 @@ impl Lights {
         !self.envs.is_empty()
     }
 
-    /// Radiance arriving along a ray that leaves the scene in unit direction `d`: the sum over
-    /// the infinite lights of `Le(-d)`, each times `weight(pdf)` where `pdf` is the density
-    /// with which [`Self::sample`] would have produced that direction from that light
-    /// (selection included), for MIS; `weight` returns 1 where there is no MIS.
-    pub fn escaped(&self, d: Vec3, weight: impl Fn(f32) -> f32) -> Vec3 {
+    /// Radiance arriving along a ray from `o` that leaves the scene in unit direction `d`: the
+    /// sum over the infinite lights of `Le(-d)` (zero from a portal light unless the ray
+    /// leaves through its portal), each times `weight(pdf)` where `pdf` is the density with
+    /// which [`Self::sample`] would have produced that direction from that light (selection
+    /// included), for MIS; `weight` returns 1 where there is no MIS.
+    pub fn escaped(&self, o: Vec3, d: Vec3, weight: impl Fn(f32) -> f32) -> Vec3 {
         self.envs.iter().fold(Vec3::ZERO, |acc, (i, map)| {
+            if !map.admits(o, d) {
+                return acc;
+            }
             let le = map.le(d);
             if le.max_element() <= 0.0 {
                 return acc;
@@ -172,6 +176,9 @@ impl Lights {
             Light::Distant { dir, l } => distant::sample(*dir, *l, p, self.center, self.radius),
             Light::Infinite { map } => {
                 let (wi, li, pdf) = map.sample(u)?;
+                if !map.admits(p, wi) {
+                    return None; // a portal light: this direction is dark from p
+                }
                 let far = (p - self.center).length() + 2.0 * self.radius;
                 LightSample {
                     li,
@@ -278,6 +285,9 @@ impl Lights {
         let d = square_to_disk_concentric(u_pos) * self.radius;
         let frame = Frame::from_normal(dir);
         let p = self.center - dir * (2.0 * self.radius) + frame.s * d.x + frame.t * d.y;
+        if !map.admits_photon(p, dir) {
+            return None; // counted as emitted: a portal light's photons enter only through it
+        }
         Some(Emission {
             p,
             n: Vec3::ZERO,
@@ -323,6 +333,9 @@ impl Lights {
             .count()
             .max(1);
         let total = areas.iter().map(|&a| a as f64).sum::<f64>() * PI as f64;
+        if !map.admits_photon(p, dir) {
+            return None;
+        }
         Some(Emission {
             p,
             n: Vec3::ZERO,

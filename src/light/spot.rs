@@ -1,5 +1,5 @@
 //! Spot light: `LightSource "spot"`; pbrt-v4's smoothstep falloff between the cone angle
-//! (`cos_falloff_end`, zero) and `coneangle - conedelta` (`cos_falloff_start`, full).
+//! (`cos_falloff_end`, zero) and `coneangle - conedeltaangle` (`cos_falloff_start`, full).
 use super::{scalar_power, Emission, LightSample};
 use crate::math::{Frame, Vec2, Vec3};
 use crate::sampling::warp::square_to_uniform_cone;

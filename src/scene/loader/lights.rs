@@ -4,7 +4,7 @@
 //! ```text
 //! AreaLightSource "diffuse" "rgb L" [ 17 12 4 ] "bool twosided" false "float scale" 1
 //! LightSource "point" "rgb I" [ 10 10 10 ] "point3 from" [ 0 2 0 ] "float power" 100
-//! LightSource "spot" "point3 from" [0 5 0] "point3 to" [0 0 0] "float coneangle" 30 "float conedelta" 5
+//! LightSource "spot" "point3 from" [0 5 0] "point3 to" [0 0 0] "float coneangle" 30 "float conedeltaangle" 5
 //! LightSource "distant" "rgb L" [ 3 3 3 ] "point3 from" [0 1 0] "point3 to" [0 0 0]
 //! ```
 //!
@@ -17,7 +17,7 @@
 //!   the mesh's total, 4 pi r^2 for a sphere, so the shape emits `power`);
 //! - point: I *= power / (4 pi);
 //! - spot: I *= power / (2 pi (1 - (cos_start + cos_end) / 2)), pbrt-v4's k_e, with
-//!   cos_end = cos(coneangle), cos_start = cos(coneangle - conedelta).
+//!   cos_end = cos(coneangle), cos_start = cos(coneangle - conedeltaangle).
 //!
 //! Every `L`/`I` component and `scale` must be finite and >= 0 and `power` in (0, 1e30]; the
 //! value after `scale` and `power` at most [`MAX_LIGHT_VALUE`] (1e20) and a light's power,
@@ -26,8 +26,13 @@
 //! Point and spot lights must lie within the supported coordinates (see `extent`).
 //!
 //! `from`/`to` go through the CTM; a distant light's `dir` is the direction light travels
-//! (`to - from`, transformed as a vector). Distant `illuminance`, spectra and blackbodies, and
-//! other light types are unsupported.
+//! (`to - from`, transformed as a vector).
+//!
+//! `L` and `I` may be a blackbody, `"blackbody L" [ 3000 ]` (kelvin), on every light here: as in
+//! pbrt-v4 its luminance is 1 before `scale`, `power` and `illuminance`, which then act as
+//! for an RGB value; the colour is pbrt-v4's `cie1931` film's sRGB of it (see
+//! [`super::blackbody`]). Distant `illuminance`, sampled spectra and other light types are
+//! unsupported.
 //!
 //! `LightSource "infinite"` (see [`crate::light::EnvMap`]):
 //!
@@ -36,7 +41,8 @@
 //! Rotate -90 1 0 0
 //! LightSource "infinite" "string filename" "sky.exr" "float scale" 1.5
 //! ```
-//! - `L` (`rgb`, or a constant `spectrum`) or `filename`, not both; neither: `L` = (1, 1, 1).
+//! - `L` (`rgb`, `blackbody`, or a constant `spectrum`) or `filename`, not both; neither:
+//!   `L` = (1, 1, 1).
 //!   pbrt-v4 scales a light's spectrum to one nit, so a constant spectrum is an equal-energy
 //!   white of luminance 1 whatever its value: in sRGB (1.2048, 0.9483, 0.9088).
 //! - `filename`: a square image (EXR, PFM; PNG and others decode as sRGB) in pbrt-v4's
@@ -51,11 +57,17 @@
 //!   as bright as a constant `L` with the same `illuminance`; photon follows the integral.
 //! - The CTM's linear part orients the map: a rotation, possibly with a uniform scale or a
 //!   mirror; anything else (it would not preserve solid angle) is an error.
-//! - `portal` is an error (not supported).
+//! - `portal`: 4 world-space points forming a rectangle (pbrt-v4's test). It is not only a
+//!   sampling hint: pbrt-v4's `PortalImageInfiniteLight::Le` is zero for a ray that does not
+//!   leave through the portal, so photon gives light only to such rays (camera, gather and
+//!   shadow rays by their origin and direction, photons by their line), but samples the whole
+//!   map as without a portal (directions outside it are wasted samples). With a constant `L`,
+//!   pbrt-v4 does not normalise it to one nit (see [`portal_l_factor`]); `illuminance` with a
+//!   portal is an error.
 
 use super::params::{ParamSet, ParamType};
 use super::shapes::xform_point;
-use crate::light::EnvMap;
+use crate::light::{EnvMap, Portal};
 use crate::math::{Mat3, Mat4, Vec3};
 use crate::scene::{Light, Loc, SceneError};
 use crate::texture::{Encoding, Image};
@@ -110,10 +122,14 @@ pub const MAX_LIGHT_VALUE: f32 = 1e20;
 /// must stay finite in f32.
 pub const MAX_LIGHT_POWER: f64 = 1e30;
 
-/// An RGB light value (`L`, `I`): every component finite, >= 0 and at most
+/// A light value (`L`, `I`) as RGB: an `rgb` as given, or a `blackbody` temperature as pbrt-v4's
+/// blackbody of luminance 1 ([`super::blackbody`]); every component finite, >= 0 and at most
 /// [`MAX_LIGHT_VALUE`]; errors at the parameter.
 fn light_rgb(params: &mut ParamSet, name: &str) -> Result<Vec3, SceneError> {
-    let v = params.get_rgb(name, Vec3::ONE)?;
+    let v = match params.peek(name) {
+        Some(p) if p.ty == ParamType::Blackbody => blackbody(params, name)?,
+        _ => params.get_rgb(name, Vec3::ONE)?,
+    };
     if v.cmpge(Vec3::ZERO).all() && v.max_element() <= MAX_LIGHT_VALUE {
         return Ok(v);
     }
@@ -122,6 +138,17 @@ fn light_rgb(params: &mut ParamSet, name: &str) -> Result<Vec3, SceneError> {
         "each component must be in [0, {MAX_LIGHT_VALUE:e}], got [{} {} {}]",
         v.x, v.y, v.z
     )))
+}
+
+/// The RGB of `"blackbody name" [ T ]`: T must be finite and > 0 (kelvin).
+fn blackbody(params: &mut ParamSet, name: &str) -> Result<Vec3, SceneError> {
+    let t = params.get_blackbody(name)?.expect("peeked");
+    super::blackbody::rgb(t as f64).ok_or_else(|| {
+        let p = params.peek(name).expect("peeked");
+        p.err(format!(
+            "the temperature must be finite and > 0 (kelvin), got {t}"
+        ))
+    })
 }
 
 /// The product `value * k` (from `scale` or `power`), checked against [`MAX_LIGHT_VALUE`];
@@ -260,7 +287,7 @@ fn direction(from: Vec3, to: Vec3, ctm: &Mat4, loc: &Loc) -> Result<Vec3, SceneE
 
 fn spot(params: &mut ParamSet, loc: &Loc, ctm: &Mat4) -> Result<Light, SceneError> {
     let cone = params.get_float("coneangle", 30.0)?;
-    let delta = params.get_float("conedelta", 5.0)?;
+    let delta = params.get_float("conedeltaangle", 5.0)?;
     let cos_end = cone.to_radians().cos();
     let cos_start = (cone - delta).to_radians().cos();
     let solid_angle = 2.0 * std::f64::consts::PI * (1.0 - 0.5 * (cos_start + cos_end)) as f64;
@@ -306,9 +333,7 @@ fn infinite(
     ctm: &Mat4,
     base_dir: &Path,
 ) -> Result<Light, SceneError> {
-    if let Some(p) = params.get_param("portal") {
-        return Err(p.err("portal infinite lights are not supported"));
-    }
+    let portal = portal(params)?;
     let scale = params.get_float("scale", 1.0)?;
     if !(scale.is_finite() && scale >= 0.0) {
         let p = params.peek("scale").expect("given");
@@ -325,6 +350,10 @@ fn infinite(
     }
     // pbrt-v4 ignores a non-positive illuminance.
     let illuminance = illuminance.filter(|&e| e > 0.0);
+    if let (Some(_), Some(_)) = (illuminance, portal) {
+        let p = params.peek("illuminance").expect("given");
+        return Err(p.err("\"illuminance\" with a \"portal\" is not supported"));
+    }
     let filename = params.get_string_opt("filename")?;
     if let (Some(_), Some(p)) = (&filename, params.peek("L")) {
         return Err(p.err("an infinite light takes \"L\" or \"filename\", not both"));
@@ -355,15 +384,59 @@ fn infinite(
             EnvMap::new(image, k, rotation)
         }
         None => {
+            let unnormalised = match portal {
+                Some(_) => portal_l_factor(params),
+                None => 1.0,
+            };
             let l = infinite_l(params)?;
-            let k = scale as f64 * illuminance.map_or(1.0, |e| e as f64 / std::f64::consts::PI);
+            let k = scale as f64
+                * unnormalised
+                * illuminance.map_or(1.0, |e| e as f64 / std::f64::consts::PI);
             EnvMap::constant(scaled(params, "scale", loc, l, k)?)
         }
+    };
+    let map = match portal {
+        Some(p) => map.with_portal(p),
+        None => map,
     };
     Ok(Light::Infinite { map: Arc::new(map) })
 }
 
-/// An infinite light's constant `L`: `rgb` (each component in range), a constant `spectrum`
+/// `"point3 portal"`: 4 world-space points (not moved by the CTM, as in pbrt-v4) forming a
+/// rectangle.
+fn portal(params: &mut ParamSet) -> Result<Option<Portal>, SceneError> {
+    let Some(points) = params.get_point3s("portal")? else {
+        return Ok(None);
+    };
+    let p = params.peek("portal").expect("just read");
+    let Ok(corners) = <[Vec3; 4]>::try_from(points.as_slice()) else {
+        return Err(p.err(format!("expected 4 points, got {}", points.len())));
+    };
+    Portal::new(corners).map(Some).map_err(|m| p.err(m))
+}
+
+/// pbrt-v4's portal light turns a constant `L` into RGB by `SpectrumToXYZ`, without the
+/// one-nit normalisation of its other lights: relative to photon's luminance-1 value, a
+/// blackbody's luminance is that of Planck's law normalised to its peak, a constant spectrum's
+/// its value; an `rgb` is unchanged.
+fn portal_l_factor(params: &ParamSet) -> f64 {
+    let Some(p) = params.peek("L") else {
+        return 1.0;
+    };
+    let first = p.floats().and_then(|v| v.first().copied());
+    match (p.ty, first) {
+        (ParamType::Blackbody, Some(t)) => {
+            super::blackbody::peak_normalized_luminance(t as f64).unwrap_or(1.0)
+        }
+        (ParamType::Spectrum, _) => p
+            .floats()
+            .and_then(|v| v.get(1).copied())
+            .map_or(1.0, |c| c as f64),
+        _ => 1.0,
+    }
+}
+
+/// An infinite light's constant `L`: `rgb` (each component in range), `blackbody`, a constant `spectrum`
 /// (pbrt-v4's one-nit equal-energy white), or (1, 1, 1).
 fn infinite_l(params: &mut ParamSet) -> Result<Vec3, SceneError> {
     let Some(p) = params.peek("L") else {

@@ -16,16 +16,21 @@
 //!
 //! Modules: [`tokenizer`] (tokens with line and column), [`params`] (parameter lists with
 //! used-tracking), [`parser`] (directives and graphics state), [`materials`], [`spectra`]
-//! (pbrt-v4's named spectra as RGB), [`textures`] (`Texture` directives, image files),
-//! [`lights`], [`shapes`] (meshes, spheres, disks, cylinders) and [`ply`] (PLY files).
+//! (pbrt-v4's named spectra as RGB), [`blackbody`] (blackbody emission as RGB), [`textures`]
+//! (`Texture` directives, image files), [`lights`], [`shapes`] (meshes, spheres, disks,
+//! cylinders) and [`ply`] (PLY files).
 //!
 //! Whatever the scene says that photon would not render as written is an error, one line,
 //! `file:line:column: what is wrong`: an unknown or unsupported directive or type, a parameter
 //! that is given but never read, a wrong type or count of values, a missing or malformed file.
 //! See the README for the supported subset.
 //!
+//! Scene and PLY files whose names end in `.gz` are decompressed ([`read_input`]), under the
+//! same size caps as plain files.
+//!
 //! [`load`] stops at the first error; [`load_collecting`] (for `photon check`) records each
 //! error, skips the directive it is in and reads on, so one pass lists every problem.
+pub mod blackbody;
 pub mod extent;
 pub mod lights;
 pub mod materials;
@@ -74,6 +79,37 @@ pub fn read_capped(path: &Path, cap: u64) -> std::io::Result<Vec<u8>> {
         return Err(too_big(cap));
     }
     Ok(bytes)
+}
+
+/// Reads a scene or PLY file as [`read_capped`] does, and when its name ends in `.gz` (as
+/// pbrt-v4 decides) decompresses it, at most `cap` bytes of output too: a gzip bomb is an error
+/// ("decompresses to more than the limit"), not an allocation failure.
+pub fn read_input(path: &Path, cap: u64) -> std::io::Result<Vec<u8>> {
+    let bytes = read_capped(path, cap)?;
+    if path.extension().is_some_and(|e| e == "gz") {
+        return gunzip_capped(&bytes, cap);
+    }
+    Ok(bytes)
+}
+
+/// Decompresses gzip data (every member, as zlib's `gzread` does) into at most `cap` bytes.
+pub fn gunzip_capped(gz: &[u8], cap: u64) -> std::io::Result<Vec<u8>> {
+    use std::io::{Error, ErrorKind, Read};
+    let mut out = Vec::new();
+    flate2::read::MultiGzDecoder::new(gz)
+        .take(cap + 1)
+        .read_to_end(&mut out)
+        .map_err(|e| Error::new(ErrorKind::InvalidData, format!("not valid gzip data: {e}")))?;
+    if out.len() as u64 > cap {
+        return Err(Error::new(
+            ErrorKind::InvalidData,
+            format!(
+                "decompresses to more than the limit of {}",
+                crate::resources::human(cap)
+            ),
+        ));
+    }
+    Ok(out)
 }
 
 /// Loads a pbrt-v4 scene file (and everything it includes) into a [`Scene`].

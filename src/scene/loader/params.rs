@@ -255,7 +255,9 @@ impl ParamSet {
         let want: Vec<&str> = types.iter().map(|t| t.name()).collect();
         let why = match p.ty {
             ParamType::Texture => TEXTURE_NOT_HERE.to_string(),
-            ParamType::Blackbody => "blackbody spectra are not supported".to_string(),
+            ParamType::Blackbody => {
+                "blackbody spectra are only supported for light emission (\"L\", \"I\")".to_string()
+            }
             ParamType::Spectrum if types.contains(&ParamType::Rgb) => {
                 "spectrum values are not supported here (give an rgb)".to_string()
             }
@@ -314,6 +316,13 @@ impl ParamSet {
     /// `"float name" value`, or `None` when absent.
     pub fn get_float_opt(&mut self, name: &str) -> Result<Option<f32>, SceneError> {
         Ok(self.exactly(name, &[ParamType::Float], 1)?.map(|v| v[0]))
+    }
+
+    /// `"blackbody name" [ T ]`: the temperature, or `None` when absent.
+    pub fn get_blackbody(&mut self, name: &str) -> Result<Option<f32>, SceneError> {
+        Ok(self
+            .exactly(name, &[ParamType::Blackbody], 1)?
+            .map(|v| v[0]))
     }
 
     /// `"integer name" value`, or `default` when absent.

@@ -28,6 +28,11 @@
 //! CTM at `ObjectInstance`; area lights inside a definition are ignored with a note, as pbrt-v4
 //! ignores them.
 //!
+//! `ActiveTransform StartTime|EndTime|All` picks which of the two CTMs (shutter open, close)
+//! later transforms change, as in pbrt-v4; photon renders the shutter-open one and notes once
+//! when something moves (no motion blur). `NamedMaterial` may name a material that a later
+//! `MakeNamedMaterial` defines (pbrt-v4 resolves names after parsing).
+//!
 //! Transforms post-multiply the CTM (`CTM = CTM * M`); `Transform`/`ConcatTransform` read 16
 //! numbers column-major as pbrt does (`glam::Mat4::from_cols_array`). The CTM at `Camera` is
 //! camera-from-world; its inverse becomes `world_from_camera` and the named system "camera".
@@ -57,10 +62,27 @@ enum MatRef {
     Index(u32),
 }
 
+/// Which of the two CTMs the transform directives change (`ActiveTransform`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Active {
+    start: bool,
+    end: bool,
+}
+
+/// Both: pbrt-v4's default and the state after `WorldBegin`.
+const ACTIVE_ALL: Active = Active {
+    start: true,
+    end: true,
+};
+
 /// What `AttributeBegin` saves.
 #[derive(Clone, Debug)]
 struct GraphicsState {
+    /// The CTM at shutter open: the one photon renders with.
     ctm: Mat4,
+    /// The CTM at shutter close (differs from `ctm` only after `ActiveTransform`).
+    ctm_end: Mat4,
+    active: Active,
     material: MatRef,
     area: Option<AreaSpec>,
     reverse: bool,
@@ -69,7 +91,8 @@ struct GraphicsState {
 /// A pushed block: what it saved and where it began.
 enum Saved {
     Attribute(GraphicsState),
-    Transform(Mat4),
+    /// The two CTMs and the active ones.
+    Transform(Mat4, Mat4, Active),
 }
 
 /// The scene under construction.
@@ -78,8 +101,14 @@ pub struct Builder {
     base_dir: PathBuf,
     gs: GraphicsState,
     stack: Vec<(Saved, Loc)>,
-    named_coords: HashMap<String, Mat4>,
+    /// Named coordinate systems: the CTMs at shutter open and close.
+    named_coords: HashMap<String, (Mat4, Mat4)>,
     named_materials: HashMap<String, u32>,
+    /// `NamedMaterial`s used before their `MakeNamedMaterial`: the index kept for the material
+    /// (a placeholder until it is defined) and the first use.
+    pending_materials: HashMap<String, (u32, Loc)>,
+    /// Whether the note that the scene moves (no motion blur) was given.
+    motion_noted: bool,
     default_material: Option<u32>,
     world_begun: bool,
     meshes: Vec<Mesh>,
@@ -120,6 +149,8 @@ impl Builder {
             base_dir,
             gs: GraphicsState {
                 ctm: Mat4::IDENTITY,
+                ctm_end: Mat4::IDENTITY,
+                active: ACTIVE_ALL,
                 material: MatRef::Default,
                 area: None,
                 reverse: false,
@@ -127,6 +158,8 @@ impl Builder {
             stack: Vec::new(),
             named_coords: HashMap::new(),
             named_materials: HashMap::new(),
+            pending_materials: HashMap::new(),
+            motion_noted: false,
             default_material: None,
             world_begun: false,
             meshes: Vec::new(),
@@ -170,6 +203,7 @@ impl Builder {
     pub fn run(mut self) -> Result<Scene, SceneError> {
         let main = self.main_path.clone();
         let end = self.parse_file(&main, 0, None)?;
+        self.check_named_materials()?;
         self.check_end(&end)?;
         Ok(self.into_scene())
     }
@@ -178,6 +212,7 @@ impl Builder {
     pub fn run_collecting(mut self) -> super::Collected {
         let main = self.main_path.clone();
         let end = self.parse_file(&main, 0, None);
+        let _ = self.check_named_materials(); // collect mode: records, never fails
         if let Err(e) = end.and_then(|end| self.check_end(&end)) {
             self.errors.push(e);
         }
@@ -199,7 +234,7 @@ impl Builder {
         if let Some((saved, loc)) = self.stack.last() {
             let what = match saved {
                 Saved::Attribute(_) => "AttributeBegin without a matching AttributeEnd",
-                Saved::Transform(_) => "TransformBegin without a matching TransformEnd",
+                Saved::Transform(..) => "TransformBegin without a matching TransformEnd",
             };
             return Err(SceneError::at(loc, what));
         }
@@ -247,7 +282,7 @@ impl Builder {
             Some(loc) => SceneError::at(loc, msg),
             None => SceneError::new(msg),
         };
-        let bytes = super::read_capped(path, crate::resources::MAX_SCENE_FILE)
+        let bytes = super::read_input(path, crate::resources::MAX_SCENE_FILE)
             .map_err(|e| fail(format!("cannot read \"{}\": {e}", path.display())))?;
         let file = Arc::new(path.to_path_buf());
         let text = String::from_utf8(bytes).map_err(|e| not_utf8(&file, e))?;
@@ -316,33 +351,45 @@ impl Builder {
     fn directive(&mut self, t: &Token, tok: &mut Tokenizer, depth: u32) -> Result<(), SceneError> {
         let loc = tok.loc(t);
         match t.text {
-            "Identity" => self.gs.ctm = Mat4::IDENTITY,
+            "Identity" => self.transform(|_| Mat4::IDENTITY),
             "Translate" => {
                 let v = numbers(tok, 3)?;
-                self.gs.ctm *= Mat4::from_translation(Vec3::new(v[0], v[1], v[2]));
+                let m = Mat4::from_translation(Vec3::new(v[0], v[1], v[2]));
+                self.transform(|c| c * m);
             }
             "Scale" => {
                 let v = numbers(tok, 3)?;
-                self.gs.ctm *= Mat4::from_scale(Vec3::new(v[0], v[1], v[2]));
+                let m = Mat4::from_scale(Vec3::new(v[0], v[1], v[2]));
+                self.transform(|c| c * m);
             }
             "Rotate" => {
                 let v = numbers(tok, 4)?;
-                self.gs.ctm *= rotate(v[0], Vec3::new(v[1], v[2], v[3]), &loc)?;
+                let m = rotate(v[0], Vec3::new(v[1], v[2], v[3]), &loc)?;
+                self.transform(|c| c * m);
             }
             "LookAt" => {
                 let v = numbers(tok, 9)?;
-                self.gs.ctm *= look_at(&v, &loc)?;
+                let m = look_at(&v, &loc)?;
+                self.transform(|c| c * m);
             }
-            "Transform" => self.gs.ctm = Mat4::from_cols_array(&bracketed16(tok)?),
-            "ConcatTransform" => self.gs.ctm *= Mat4::from_cols_array(&bracketed16(tok)?),
+            "Transform" => {
+                let m = Mat4::from_cols_array(&bracketed16(tok)?);
+                self.transform(|_| m);
+            }
+            "ConcatTransform" => {
+                let m = Mat4::from_cols_array(&bracketed16(tok)?);
+                self.transform(|c| c * m);
+            }
+            "ActiveTransform" => self.gs.active = active_transform(tok, &loc)?,
             "CoordinateSystem" => {
                 let (name, _) = string_arg(tok, "a coordinate system name")?;
-                self.named_coords.insert(name, self.gs.ctm);
+                self.named_coords
+                    .insert(name, (self.gs.ctm, self.gs.ctm_end));
             }
             "CoordSysTransform" => {
                 let (name, at) = string_arg(tok, "a coordinate system name")?;
                 match self.named_coords.get(&name) {
-                    Some(m) => self.gs.ctm = *m,
+                    Some(&(m, e)) => (self.gs.ctm, self.gs.ctm_end) = (m, e),
                     None => {
                         return Err(SceneError::at(
                             &at,
@@ -351,8 +398,14 @@ impl Builder {
                     }
                 }
             }
-            "TransformBegin" => self.stack.push((Saved::Transform(self.gs.ctm), loc)),
-            "TransformEnd" => self.pop(Saved::Transform(Mat4::IDENTITY), t.text, &loc)?,
+            "TransformBegin" => {
+                let saved = Saved::Transform(self.gs.ctm, self.gs.ctm_end, self.gs.active);
+                self.stack.push((saved, loc));
+            }
+            "TransformEnd" => {
+                let want = Saved::Transform(Mat4::IDENTITY, Mat4::IDENTITY, ACTIVE_ALL);
+                self.pop(want, t.text, &loc)?
+            }
             "AttributeBegin" => {
                 self.world_only(t.text, &loc)?;
                 self.stack.push((Saved::Attribute(self.gs.clone()), loc));
@@ -401,9 +454,10 @@ impl Builder {
                     return Err(SceneError::at(&loc, "WorldBegin given twice"));
                 }
                 self.world_begun = true;
-                self.gs.ctm = Mat4::IDENTITY;
+                (self.gs.ctm, self.gs.ctm_end) = (Mat4::IDENTITY, Mat4::IDENTITY);
+                self.gs.active = ACTIVE_ALL;
                 self.named_coords
-                    .insert("world".to_string(), Mat4::IDENTITY);
+                    .insert("world".to_string(), (Mat4::IDENTITY, Mat4::IDENTITY));
             }
             "Camera" | "Film" | "Sampler" | "Integrator" | "PixelFilter" | "Accelerator" => {
                 self.option(t.text, tok, &loc)?
@@ -452,7 +506,16 @@ impl Builder {
                 self.world_only(t.text, &loc)?;
                 let (ty, at) = string_arg(tok, "a light type")?;
                 let mut params = read_params(tok)?;
+                let portal = params.loc("portal").cloned();
                 let light = light_source(&ty, &mut params, &at, &self.gs.ctm, &self.base_dir)?;
+                if let Some(p) = portal {
+                    self.notes.push(format!(
+                        "{p}: portal: light enters only through it, as in pbrt-v4, but photon \
+                         samples the whole environment (rays and photons outside the portal \
+                         are wasted: expect more noise than pbrt-v4)"
+                    ));
+                }
+                self.note_motion(&at);
                 self.lights.push(light);
             }
             "Include" | "Import" => {
@@ -474,6 +537,30 @@ impl Builder {
         Ok(())
     }
 
+    /// Applies `f` to the active CTMs (pbrt-v4's `ForActiveTransforms`).
+    fn transform(&mut self, f: impl Fn(Mat4) -> Mat4) {
+        if self.gs.active.start {
+            self.gs.ctm = f(self.gs.ctm);
+        }
+        if self.gs.active.end {
+            self.gs.ctm_end = f(self.gs.ctm_end);
+        }
+    }
+
+    /// The note, once per scene, that something placed at `at` moves during the shutter
+    /// interval: photon has no motion blur and renders the shutter-open pose.
+    fn note_motion(&mut self, at: &Loc) {
+        if self.motion_noted || self.gs.ctm == self.gs.ctm_end {
+            return;
+        }
+        self.motion_noted = true;
+        self.notes.push(format!(
+            "{at}: the transform at shutter close differs from the one at shutter open \
+             (ActiveTransform): photon has no motion blur and renders the shutter-open pose \
+             (noted once, here at the first moving object)"
+        ));
+    }
+
     /// Errors unless inside the world block.
     fn world_only(&self, what: &str, loc: &Loc) -> Result<(), SceneError> {
         if self.world_begun {
@@ -491,7 +578,9 @@ impl Builder {
         let begin = what.replace("End", "Begin");
         match (self.stack.pop(), want) {
             (Some((Saved::Attribute(gs), _)), Saved::Attribute(_)) => self.gs = gs,
-            (Some((Saved::Transform(m), _)), Saved::Transform(_)) => self.gs.ctm = m,
+            (Some((Saved::Transform(m, e, a), _)), Saved::Transform(..)) => {
+                (self.gs.ctm, self.gs.ctm_end, self.gs.active) = (m, e, a)
+            }
             (Some((_, open)), _) => {
                 return Err(SceneError::at(
                     loc,
@@ -520,12 +609,19 @@ impl Builder {
             "Camera" => {
                 // Defined before the camera is checked (as pbrt-v4 does), so that a rejected
                 // Camera does not make every later `CoordSysTransform "camera"` an error too.
-                let world_from_camera = inverse(&self.gs.ctm);
-                if world_from_camera.is_finite() {
-                    self.named_coords
-                        .insert("camera".to_string(), world_from_camera);
+                // Equal CTMs give the same matrix, not a second inverse that may differ in the
+                // last bits (which would look like a moving camera).
+                let start = inverse(&self.gs.ctm);
+                let end = if self.gs.ctm_end == self.gs.ctm {
+                    start
+                } else {
+                    inverse(&self.gs.ctm_end)
+                };
+                if start.is_finite() && end.is_finite() {
+                    self.named_coords.insert("camera".to_string(), (start, end));
                 }
-                self.camera = camera(&ty, &mut params, &at, world_from_camera)?;
+                self.note_motion(&at);
+                self.camera = camera(&ty, &mut params, &at, start)?;
             }
             "Film" => {
                 let (film, note) = film(&ty, &mut params, &at)?;
@@ -579,19 +675,58 @@ impl Builder {
                 }
                 let m = named_material(&mut params, &at, &self.material_context());
                 let m = self.or_default(m)?;
-                self.materials.push(m);
-                self.named_materials
-                    .insert(name, self.materials.len() as u32 - 1);
+                let i = match self.pending_materials.remove(&name) {
+                    Some((i, _)) => {
+                        self.materials[i as usize] = m;
+                        i
+                    }
+                    None => {
+                        self.materials.push(m);
+                        self.materials.len() as u32 - 1
+                    }
+                };
+                self.named_materials.insert(name, i);
             }
-            _ => match self.named_materials.get(&name) {
-                Some(&i) => self.gs.material = MatRef::Index(i),
-                None => {
-                    return Err(SceneError::at(
-                        &at,
-                        format!("unknown named material \"{name}\""),
-                    ))
-                }
-            },
+            _ => {
+                let i = match self.named_materials.get(&name) {
+                    Some(&i) => i,
+                    None => self.forward_material(name, at),
+                };
+                self.gs.material = MatRef::Index(i);
+            }
+        }
+        Ok(())
+    }
+
+    /// The index of a named material used before its `MakeNamedMaterial` (pbrt-v4 resolves
+    /// names after reading the whole scene): a placeholder that the definition replaces.
+    fn forward_material(&mut self, name: String, at: Loc) -> u32 {
+        if let Some((i, _)) = self.pending_materials.get(&name) {
+            return *i;
+        }
+        self.materials.push(Material::from(MaterialKind::Diffuse {
+            reflectance: Vec3::splat(0.5).into(),
+        }));
+        let i = self.materials.len() as u32 - 1;
+        self.pending_materials.insert(name, (i, at));
+        i
+    }
+
+    /// After the last file: a named material used but never defined is an error at its first
+    /// use (each one in collect mode, in file order).
+    fn check_named_materials(&mut self) -> Result<(), SceneError> {
+        let mut missing: Vec<(String, Loc)> = self
+            .pending_materials
+            .drain()
+            .map(|(name, (_, at))| (name, at))
+            .collect();
+        missing.sort_by(|a, b| (&a.1.file, a.1.line, a.1.col).cmp(&(&b.1.file, b.1.line, b.1.col)));
+        for (name, at) in missing {
+            let e = SceneError::at(
+                &at,
+                format!("unknown named material \"{name}\" (no MakeNamedMaterial defines it)"),
+            );
+            self.recover(e)?;
         }
         Ok(())
     }
@@ -682,6 +817,9 @@ impl Builder {
         let alpha_at = params.loc("alpha").cloned();
         let alpha = shapes::alpha(&mut params, &self.textures)?;
         let gs = &self.gs;
+        // A sphere to tessellate once the scene is read, registered only with its mesh (the
+        // shape can still fail below).
+        let mut sphere = None;
         let mut mesh = match ty.as_str() {
             "trianglemesh" => {
                 let obj = shapes::triangle_mesh(&mut params, &at)?;
@@ -702,7 +840,7 @@ impl Builder {
                     // An object's sphere may be instanced anywhere: the full tessellation.
                     shapes::tessellate(&spec, shapes::SPHERE_RINGS, &mut m);
                 } else {
-                    self.spheres.push((self.meshes.len(), spec));
+                    sphere = Some(spec);
                 }
                 m
             }
@@ -729,6 +867,7 @@ impl Builder {
             }
         };
         super::extent::check_shape(&mesh, &at)?;
+        self.note_motion(&at);
         mesh.material = self.material_index();
         if let (Some(_), Some(_), Some(loc), None) =
             (&alpha, &self.gs.area, &alpha_at, &self.object)
@@ -764,6 +903,9 @@ impl Builder {
                 two_sided: spec.two_sided,
             });
         }
+        if let Some(spec) = sphere {
+            self.spheres.push((self.meshes.len(), spec));
+        }
         self.meshes.push(mesh);
         self.mesh_locs.push(at);
         Ok(())
@@ -778,11 +920,14 @@ impl Builder {
                 format!("ObjectInstance inside the definition of \"{open}\""),
             ));
         }
-        let Some(meshes) = self.objects.get(name) else {
+        if !self.objects.contains_key(name) {
             return Err(SceneError::at(at, format!("unknown object \"{name}\"")));
-        };
+        }
+        let at_open = self.gs.ctm;
+        self.note_motion(at);
+        let meshes = &self.objects[name];
         for m in meshes {
-            let moved = shapes::transform_mesh(m, &self.gs.ctm)
+            let moved = shapes::transform_mesh(m, &at_open)
                 .map_err(|e| SceneError::at(at, format!("object \"{name}\": {e}")))?;
             self.meshes.push(moved);
             self.mesh_locs.push(at.clone());
@@ -805,7 +950,7 @@ impl Builder {
 }
 
 /// The directives this parser reads.
-const DIRECTIVES: [&str; 37] = [
+const DIRECTIVES: [&str; 38] = [
     "Identity",
     "Translate",
     "Scale",
@@ -813,6 +958,7 @@ const DIRECTIVES: [&str; 37] = [
     "LookAt",
     "Transform",
     "ConcatTransform",
+    "ActiveTransform",
     "CoordinateSystem",
     "CoordSysTransform",
     "TransformBegin",
@@ -846,7 +992,7 @@ const DIRECTIVES: [&str; 37] = [
 ];
 
 /// pbrt-v4 directives photon knows but does not render.
-const PBRT_V4_UNSUPPORTED: [&str; 3] = ["Attribute", "ActiveTransform", "TransformTimes"];
+const PBRT_V4_UNSUPPORTED: [&str; 2] = ["Attribute", "TransformTimes"];
 
 /// Whether `name` is a pbrt directive (read or not): how a scene file starts.
 fn is_directive(name: &str) -> bool {
@@ -894,6 +1040,24 @@ fn named_material(
     };
     let ty_loc = params.loc("type").cloned().unwrap_or_else(|| at.clone());
     make_material(&ty, params, &ty_loc, cx)
+}
+
+/// `ActiveTransform All | StartTime | EndTime` (a bare word): which CTMs later transforms change.
+fn active_transform(tok: &mut Tokenizer, loc: &Loc) -> Result<Active, SceneError> {
+    let t = tok.next()?;
+    let (start, end) = match t.as_ref().map(|t| (t.kind, t.text)) {
+        Some((TokKind::Word, "All")) => (true, true),
+        Some((TokKind::Word, "StartTime")) => (true, false),
+        Some((TokKind::Word, "EndTime")) => (false, true),
+        _ => {
+            let what = t.map_or("the end of the file".to_string(), |t| t.describe());
+            return Err(SceneError::at(
+                loc,
+                format!("ActiveTransform takes All, StartTime or EndTime, found {what}"),
+            ));
+        }
+    };
+    Ok(Active { start, end })
 }
 
 /// Skips what is left of a directive that failed: everything up to the next directive word.

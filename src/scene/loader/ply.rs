@@ -132,9 +132,10 @@ fn one_line(s: &str) -> String {
     }
 }
 
-/// Reads the PLY file at `path` (at most [`crate::resources::MAX_PLY_FILE`] bytes).
+/// Reads the PLY file at `path` (at most [`crate::resources::MAX_PLY_FILE`] bytes, also after
+/// decompressing a `.ply.gz`).
 pub fn read_ply(path: &Path) -> Result<ObjMesh, String> {
-    let bytes = super::read_capped(path, crate::resources::MAX_PLY_FILE)
+    let bytes = super::read_input(path, crate::resources::MAX_PLY_FILE)
         .map_err(|e| format!("cannot open: {e}"))?;
     let mut cursor = Cursor::new(&bytes[..]);
     let mesh = parse(&mut cursor)?;
