@@ -459,6 +459,17 @@ fn case_15_radii_and_exposure_must_be_finite_and_positive() {
         let r = render_text(&d, &text, &[], GIB);
         assert_error(&r, &["scene.pbrt:4:", "(0, 4]"]);
     }
+    for (p, msg) in [
+        ("\"float glossyalpha\" -0.5", "\"glossyalpha\" must be >= 0"),
+        ("\"float glossyalpha\" NaN", "expected a number"),
+    ] {
+        let text = small_scene("").replace(
+            "WorldBegin",
+            &format!("Integrator \"photonmap\" {p}\nWorldBegin"),
+        );
+        let r = render_text(&d, &text, &[], GIB);
+        assert_error(&r, &["scene.pbrt:4:", msg]);
+    }
 }
 
 #[test]
