@@ -495,7 +495,7 @@ fn bad_alpha_is_an_error_at_its_location() {
         ),
         (
             r#""float alpha" 0.5"#,
-            "alpha on an emitting shape (AreaLightSource) is not supported",
+            "alpha other than 0 on an emitting shape (AreaLightSource) is not supported",
             "AreaLightSource \"diffuse\" \"rgb L\" [ 1 1 1 ]\n",
         ),
     ];

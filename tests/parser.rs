@@ -2679,14 +2679,40 @@ fn failed_emitting_sphere_is_skipped_in_collect_mode() {
     let dir = TempDir::new("photon-parser");
     let path = dir.write(
         "scene.pbrt",
-        "WorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\" \"blackbody L\" 6500\nShape \"sphere\" \"float radius\" 90 \"float alpha\" 0\nAttributeEnd\nShape \"sphere\"\n",
+        "WorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\" \"blackbody L\" 6500\nShape \"sphere\" \"float radius\" 90 \"float alpha\" 0.5\nAttributeEnd\nShape \"sphere\"\n",
     );
     let got = photon::scene::loader::load_collecting(&path);
     let msgs: Vec<String> = got.errors.iter().map(|e| e.to_string()).collect();
     assert_eq!(msgs.len(), 1, "{msgs:?}");
-    assert!(msgs[0].contains(":4:") && msgs[0].contains("alpha on an emitting shape"));
+    assert!(msgs[0].contains(":4:") && msgs[0].contains("alpha other than 0 on an emitting shape"));
     assert_eq!(got.scene.meshes.len(), 1);
     assert!(!got.scene.meshes[0].indices.is_empty());
+}
+
+/// pbrt-v4's area light emits nothing where its shape's alpha masks it, and rays pass there:
+/// an emitting sphere of constant alpha 0 (kroken's sun) is left out, with a note, and the
+/// scene keeps its other shapes and lights.
+#[test]
+fn emitting_shape_with_alpha_zero_is_left_out() {
+    let dir = TempDir::new("photon-parser");
+    let path = dir.write(
+        "scene.pbrt",
+        "WorldBegin\nLightSource \"point\" \"rgb I\" [ 1 1 1 ]\nAttributeBegin\nAreaLightSource \"diffuse\" \"blackbody L\" 6500\nShape \"sphere\" \"float radius\" 90 \"float alpha\" 0\nAttributeEnd\nShape \"sphere\"\n",
+    );
+    let got = photon::scene::loader::load_collecting(&path);
+    assert!(got.errors.is_empty(), "{:?}", got.errors);
+    let scene = got.scene;
+    assert_eq!(scene.meshes.len(), 1, "only the plain sphere");
+    assert!(scene.meshes[0].area_light.is_none());
+    assert_eq!(scene.lights.len(), 1, "only the point light");
+    assert!(
+        scene
+            .notes
+            .iter()
+            .any(|n| n.contains(":5:") && n.contains("alpha 0")),
+        "{:?}",
+        scene.notes
+    );
 }
 
 /// pbrt-v4's spot light reads `conedeltaangle` (lights.cpp, `SpotLight::Create`), so a

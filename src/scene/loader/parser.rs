@@ -869,12 +869,21 @@ impl Builder {
         super::extent::check_shape(&mesh, &at)?;
         self.note_motion(&at);
         mesh.material = self.material_index();
-        if let (Some(_), Some(_), Some(loc), None) =
+        if let (Some(a), Some(_), Some(loc), None) =
             (&alpha, &self.gs.area, &alpha_at, &self.object)
         {
+            // pbrt-v4's area light returns no light where its shape's alpha masks it, and
+            // rays pass there: with a constant alpha of 0 the shape neither shows nor emits.
+            if matches!(**a, crate::texture::Texture::Constant(v) if v.max_element() <= 0.0) {
+                self.notes.push(format!(
+                    "{loc}: an emitting shape with alpha 0 neither shows nor emits (as in \
+                     pbrt-v4): left out"
+                ));
+                return Ok(());
+            }
             return Err(SceneError::at(
                 loc,
-                "alpha on an emitting shape (AreaLightSource) is not supported",
+                "alpha other than 0 on an emitting shape (AreaLightSource) is not supported",
             ));
         }
         mesh.alpha = alpha;
