@@ -80,6 +80,19 @@ fn image_does_not_depend_on_thread_count() {
     assert_eq!(one, two);
 }
 
+/// The photon mapper too, with photons on a rough-metal floor and through near-smooth glass.
+#[test]
+fn photon_map_image_does_not_depend_on_thread_count() {
+    for file in ["scenes/glass-on-metal.pbrt", "scenes/rough-glass.pbrt"] {
+        let scene = loader::load(Path::new(file)).unwrap();
+        let kind = IntegratorKind::Photonmap;
+        let one = render_with(&scene, kind, BackendKind::Embree, (48, 40, 4), 1, 0).image;
+        let two = render_with(&scene, kind, BackendKind::Embree, (48, 40, 4), 2, 0).image;
+        assert!(one.pixels.iter().any(|p| p[0] > 0.0), "{file}");
+        assert!(one == two, "{file}: 1 and 2 threads differ");
+    }
+}
+
 /// The materials of issue 9 in one small room (coated diffuse floor, rough coated conductor
 /// wall, rough glass, thin glass and a translucent sheet): every integrator renders them with
 /// finite pixels, and the photon mapper's and the path tracer's images agree in mean.
