@@ -49,14 +49,10 @@ fn blocks(img: &RgbImage, n: usize) -> Vec<f64> {
 
 #[test]
 fn enclosed_lamp_matches_mitsuba() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let dir = TempDir::new("photon-lamp");
     let out = common::render_repo_scene("scenes/lamp-enclosed.pbrt", "64x64", 16, &dir, "lamp.exr");
     let img = read_exr(&out).unwrap();
-    let reference = read_exr(&root.join("scenes/mitsuba/lamp-enclosed-reference-128.exr"))
-        .unwrap()
-        .downsample_box(2)
-        .unwrap();
+    let reference = reference_64("lamp-enclosed-reference-128.exr");
     let (ours, theirs) = (blocks(&img, 4), blocks(&reference, 4));
     let mean = theirs.iter().sum::<f64>() / theirs.len() as f64;
     let mut checked = 0;
@@ -72,6 +68,30 @@ fn enclosed_lamp_matches_mitsuba() {
         );
     }
     assert!(checked >= 14, "{checked} blocks checked");
+}
+
+/// A 128x128 reference of scenes/mitsuba/, box-filtered to 64x64.
+fn reference_64(name: &str) -> RgbImage {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    read_exr(&root.join("scenes/mitsuba").join(name))
+        .unwrap()
+        .downsample_box(2)
+        .unwrap()
+}
+
+/// The caustic of the two ball scenes: pixels of the lower half (the floor in front of the
+/// ball) whose RGB mean in `reference` exceeds `threshold`; and how many there are.
+fn floor_above(reference: &RgbImage, threshold: f32) -> (Vec<bool>, usize) {
+    let mask: Vec<bool> = reference
+        .pixels
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            i / reference.width >= reference.height / 2 && (p[0] + p[1] + p[2]) / 3.0 > threshold
+        })
+        .collect();
+    let n = mask.iter().filter(|&&k| k).count();
+    (mask, n)
 }
 
 /// Mean of the RGB mean over the pixels where `keep` holds.
@@ -125,18 +145,8 @@ fn caustic_on_rough_metal_matches_mitsuba() {
         "off.exr",
     ))
     .unwrap();
-    let reference = read_exr(&root.join("scenes/mitsuba/glass-on-metal-reference-128.exr"))
-        .unwrap()
-        .downsample_box(2)
-        .unwrap();
-    // The caustic: floor pixels (lower half) where the reference exceeds 3.
-    let caustic: Vec<bool> = reference
-        .pixels
-        .iter()
-        .enumerate()
-        .map(|(i, p)| i / reference.width >= 32 && (p[0] + p[1] + p[2]) / 3.0 > 3.0)
-        .collect();
-    let n = caustic.iter().filter(|&&k| k).count();
+    let reference = reference_64("glass-on-metal-reference-128.exr");
+    let (caustic, n) = floor_above(&reference, 3.0);
     assert!(n >= 100, "{n} caustic pixels");
     let ratio = masked_mean(&img, &caustic) / masked_mean(&reference, &caustic);
     let (on, off) = (
@@ -160,21 +170,11 @@ fn caustic_on_rough_metal_matches_mitsuba() {
 
 #[test]
 fn near_smooth_glass_caustic_matches_mitsuba() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let dir = TempDir::new("photon-rough-glass");
     let out = common::render_repo_scene("scenes/rough-glass.pbrt", "64x64", 64, &dir, "rg.exr");
     let img = read_exr(&out).unwrap();
-    let reference = read_exr(&root.join("scenes/mitsuba/rough-glass-reference-128.exr"))
-        .unwrap()
-        .downsample_box(2)
-        .unwrap();
-    let caustic: Vec<bool> = reference
-        .pixels
-        .iter()
-        .enumerate()
-        .map(|(i, p)| i / reference.width >= 32 && (p[0] + p[1] + p[2]) / 3.0 > 1.0)
-        .collect();
-    let n = caustic.iter().filter(|&&k| k).count();
+    let reference = reference_64("rough-glass-reference-128.exr");
+    let (caustic, n) = floor_above(&reference, 1.0);
     assert!(n >= 40, "{n} caustic pixels");
     let e = masked_relmse(&img, &reference, &caustic);
     let all = vec![true; caustic.len()];
