@@ -128,6 +128,79 @@ fn image_texture_reflectance_is_albedo_times_e_over_pi() {
     assert!(worst < 1e-3, "worst relative error {worst} over {n} pixels");
 }
 
+/// pbrt-v4's decoding rules for 8-bit images (`Image::Read`): a PNG follows `encoding` (sRGB
+/// by default), TGA and JPEG are sRGB whatever `encoding` says, and a float imagemap of an RGB
+/// image reads its red channel. The floor's radiance is albedo E / pi, with the albedo computed
+/// here from the bytes (`srgb`): a uniform (128, 128, 128) TGA gives 0.2159, not 0.502.
+#[test]
+fn eight_bit_images_decode_as_pbrt_v4_does() {
+    let dir = TempDir::new("photon-tex-encodings");
+    let grey = image::RgbImage::from_pixel(4, 4, image::Rgb([128, 128, 128]));
+    let red = image::RgbImage::from_pixel(4, 4, image::Rgb([200, 20, 60]));
+    grey.save(dir.0.join("grey.tga")).unwrap();
+    grey.save(dir.0.join("grey.jpg")).unwrap();
+    grey.save(dir.0.join("grey.png")).unwrap();
+    red.save(dir.0.join("red.tga")).unwrap();
+    // (texture lines, expected albedo, whether a note is expected)
+    let cases = [
+        (r#""grey.tga""#, Vec3::splat(srgb(128)), false),
+        (
+            r#""grey.tga" "string encoding" "linear""#,
+            Vec3::splat(srgb(128)),
+            true,
+        ),
+        (r#""grey.jpg""#, Vec3::splat(srgb(128)), false),
+        (r#""grey.png""#, Vec3::splat(srgb(128)), false),
+        (
+            r#""grey.png" "string encoding" "linear""#,
+            Vec3::splat(128.0 / 255.0),
+            false,
+        ),
+    ];
+    for (file, albedo, note) in cases {
+        let scene = floor_scene(
+            6.0,
+            8,
+            1,
+            &format!(r#"Texture "t" "spectrum" "imagemap" "string filename" {file}"#),
+            r#"Material "diffuse" "texture reflectance" "t""#,
+        );
+        let (scene, px) = render(&dir.write("s.pbrt", scene));
+        assert_eq!(
+            scene.notes.len(),
+            note as usize,
+            "{file}: {:?}",
+            scene.notes
+        );
+        if note {
+            assert!(scene.notes[0].contains("s.pbrt:") && scene.notes[0].contains("sRGB"));
+        }
+        let want = albedo * E / PI;
+        for (got, _) in px {
+            // JPEG may round a level: 1/255 of 128 is 0.8%.
+            let err = ((got - want) / want).abs().max_element();
+            assert!(err < 0.01, "{file}: {got} against {want}");
+        }
+    }
+    // A float texture of an RGB image reads R: reflectance = srgb(200) everywhere.
+    let scene = floor_scene(
+        6.0,
+        8,
+        1,
+        r#"Texture "f" "float" "imagemap" "string filename" "red.tga"
+Texture "t" "spectrum" "scale" "rgb tex" [ 1 1 1 ] "texture scale" "f""#,
+        r#"Material "diffuse" "texture reflectance" "t""#,
+    );
+    let (_, px) = render(&dir.write("s.pbrt", scene));
+    let want = srgb(200) * E / PI;
+    for (got, _) in px {
+        assert!(
+            ((got - Vec3::splat(want)) / want).abs().max_element() < 1e-3,
+            "{got} against {want}"
+        );
+    }
+}
+
 #[test]
 fn checkerboard_and_scale_textures() {
     let dir = TempDir::new("photon-tex-checks");

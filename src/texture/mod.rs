@@ -28,11 +28,11 @@
 //!   clamped edges): the filter width is `w = 2 max(|ds/dx|, |ds/dy|, |dt/dx|, |dt/dy|)` (pbrt-v4)
 //!   and the level `L = n - 1 + log2 w` for n levels; the lookup interpolates bilinear lookups
 //!   in levels floor(L) and floor(L) + 1 (level 0 below 0, the coarsest above n - 1).
-//! - `encoding` decodes 8- and 16-bit images: `sRGB` (the IEC 61966-2-1 curve; the default for
-//!   PNG files), `linear` (the default for other files), `gamma G` (v^G). Float images (EXR,
-//!   PFM) are linear.
+//! - `encoding` decodes a PNG's 8- and 16-bit values: `sRGB` (the IEC 61966-2-1 curve, the
+//!   default), `linear`, `gamma G` (v^G). As in pbrt-v4's `Image::Read`, the other 8-bit formats
+//!   (TGA, JPEG) are always sRGB and float images (EXR, PFM) linear, whatever `encoding` says.
 //! - `imagemap`: scale times the lookup, then `invert` gives max(0, 1 - v); a float imagemap
-//!   reads the mean of the three channels.
+//!   reads the first (red) channel of an RGB image, as pbrt-v4 does.
 //! - `checkerboard` (2D): `tex1` where floor(s) + floor(t) is even, else `tex2`, box-filtered
 //!   over the lookup's footprint (pbrt-v4 filters it too): with half-widths
 //!   `ds = 1.5 max(|ds/dx|, |ds/dy|)` (and `dt` alike), the fraction of odd cells in s is
@@ -332,7 +332,8 @@ pub struct ImageMap {
     pub filter: Filter,
     pub scale: f32,
     pub invert: bool,
-    /// A `float` texture: the mean of the channels.
+    /// A `float` texture: the first channel (R), as pbrt-v4's `MIPMap::Texel<Float>` reads
+    /// an RGB image.
     pub float: bool,
     /// The MIP levels, present for the `trilinear` filter.
     pub pyramid: Option<Arc<Pyramid>>,
@@ -352,11 +353,7 @@ impl ImageMap {
             (_, Filter::Point) => self.image.lookup(st, self.wrap, Filter::Point),
             _ => self.image.lookup(st, self.wrap, Filter::Bilinear),
         };
-        let v = if self.float {
-            Vec3::splat(v.element_sum() / 3.0)
-        } else {
-            v
-        } * self.scale;
+        let v = if self.float { Vec3::splat(v.x) } else { v } * self.scale;
         if self.invert {
             (Vec3::ONE - v).max(Vec3::ZERO)
         } else {
@@ -639,10 +636,14 @@ mod tests {
             map(UvMapping::default(), 0.5, true, false).eval(Vec2::new(0.25, 0.75)),
             Vec3::new(0.5, 1.0, 1.0),
         );
-        // A float imagemap reads the channel mean.
+        // A float imagemap reads the red channel (pbrt-v4's MIPMap::Texel<Float>).
         near(
             map(UvMapping::default(), 1.0, false, true).eval(Vec2::new(0.25, 0.75)),
-            Vec3::splat(1.0 / 3.0),
+            Vec3::splat(1.0),
+        );
+        near(
+            map(UvMapping::default(), 1.0, false, true).eval(Vec2::new(0.75, 0.75)),
+            Vec3::splat(0.0),
         );
     }
 

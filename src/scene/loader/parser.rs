@@ -741,6 +741,7 @@ impl Builder {
             textures: &self.textures,
             images: &mut self.images,
             base_dir: &self.base_dir,
+            notes: &mut self.notes,
         };
         let tex = super::textures::make_texture(&kind, &class, &mut params, &class_at, &mut cx)?;
         params.check_unused()?;

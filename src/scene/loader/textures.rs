@@ -37,6 +37,8 @@ pub struct TextureContext<'a> {
     pub textures: &'a Textures,
     pub images: &'a mut ImageCache,
     pub base_dir: &'a Path,
+    /// Notes on what was accepted but read otherwise than written (`file:line:col: ...`).
+    pub notes: &'a mut Vec<String>,
 }
 
 /// Builds texture `class` of kind `kind` (`spectrum` or `float`) from `params` (which the
@@ -199,10 +201,7 @@ fn image_map(
         return Err(SceneError::at(at, "imagemap needs \"string filename\""));
     };
     let path = cx.base_dir.join(&name);
-    let png = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
-    let encoding_name = params.get_string("encoding", if png { "sRGB" } else { "linear" })?;
+    let encoding_name = image_encoding(params, &path, cx.notes)?;
     let Some(encoding) = Encoding::from_name(&encoding_name) else {
         let p = params
             .peek("encoding")
@@ -257,6 +256,37 @@ fn image_map(
         float,
         pyramid: pyramid.filter(|_| filter == Filter::Trilinear),
     })
+}
+
+/// The encoding an `imagemap` decodes its file with, by pbrt-v4's rules (`Image::Read`): a PNG
+/// uses `"string encoding"` (default `sRGB`); the 8-bit formats pbrt-v4 reads through stb
+/// (TGA, JPEG, BMP, ...) are always sRGB, whatever `encoding` says (a note says so when it
+/// says otherwise); float images (EXR, PFM) are linear and the parameter is read but moot.
+fn image_encoding(
+    params: &mut ParamSet,
+    path: &Path,
+    notes: &mut Vec<String>,
+) -> Result<String, SceneError> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    match ext.as_str() {
+        "png" => params.get_string("encoding", "sRGB"),
+        "exr" | "pfm" => params.get_string("encoding", "linear"),
+        _ => {
+            let given = params.get_string("encoding", "sRGB")?;
+            if given != "sRGB" {
+                let at = params.loc("encoding").expect("given when not the default");
+                notes.push(format!(
+                    "{at}: \"encoding\" \"{}\" ignored: pbrt-v4 decodes 8-bit {} images as sRGB",
+                    crate::scene::clip_for_message(&given, 40),
+                    ext.to_ascii_uppercase()
+                ));
+            }
+            Ok("sRGB".to_string())
+        }
+    }
 }
 
 /// Reads an image file into linear RGB: EXR through [`crate::imageio`], PFM here, others
