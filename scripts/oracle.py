@@ -9,7 +9,7 @@ resolve, named `_oracle-<res>.pbrt`; nothing is written into this repository):
   variant SCENE --res 128            the file with a 0.5-px box filter and the long side 128
   pbrt    SCENE --res 128 --spp N [--integrator path|bdpt|sppm|...] -o OUT.exr [--pbrt BIN]
           renders the variant with pbrt-v4 (2 threads) and prints the wall time
-  photon  SCENE --res 128 --time 30s -o OUT.exr [--photon BIN] [-- extra photon flags]
+  photon  SCENE --res 128 --time 30s -o OUT.exr [--photon BIN] [--flags '...']
   refs    DIR SCENE... --res 128 --chunk-minutes 5 --rounds N [--integrator X]
           converged references by rounds: each round renders every scene once more with a new
           seed for about --chunk-minutes (spp from a first 16-spp timing), and DIR/<scene>/ref.exr
@@ -28,9 +28,12 @@ Example:
   scripts/oracle.py photon ~/bitterli/ph/classroom/pbrt/scene-v4.pbrt --time 30s -o ours.exr
   scripts/oracle.py compare ours.exr ref.exr --side side.png
 """
-import argparse, json, os, re, subprocess, sys, time
+import argparse, json, os, re, shlex, subprocess, sys, time
 
 import numpy as np
+import signal
+
+signal.signal(signal.SIGPIPE, signal.SIG_DFL)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -110,7 +113,7 @@ def cmd_pbrt(a):
 def cmd_photon(a):
     v = variant(a.scene, a.res)
     cmd = [a.photon, "render", v, "--time", a.time, "--threads", str(a.threads), "-o",
-           os.path.abspath(a.o), "--no-png"] + a.extra
+           os.path.abspath(a.o), "--no-png"] + shlex.split(a.flags)
     dt, r = run_timed(cmd)
     print(json.dumps({"renderer": "photon", "time": a.time, "seconds": round(dt, 2),
                       "out": a.o}))
@@ -162,6 +165,10 @@ def cmd_refs(a):
                                "--seed", str(k), "--outfile", out, src])
             meta["chunks"].append({"file": os.path.basename(out), "seconds": round(dt, 1),
                                    "spp": meta["spp_per_chunk"]})
+            # The next chunk's size from this one's time (the machine's load varies).
+            want = meta["spp_per_chunk"] * a.chunk_minutes * 60 / max(dt, 0.1)
+            want = min(max(want, meta["spp_per_chunk"] / 4), meta["spp_per_chunk"] * 4)
+            meta["spp_per_chunk"] = max(16, int(want) // 16 * 16)
             ims = np.stack([read_exr(os.path.join(d, c["file"])) for c in meta["chunks"]])
             mean = ims.mean(axis=0)
             n = len(ims)
@@ -267,7 +274,7 @@ def main():
     p = sub.add_parser("photon"); p.add_argument("scene"); p.add_argument("--res", type=int, default=128)
     p.add_argument("--time", default="30s"); p.add_argument("--threads", type=int, default=2)
     p.add_argument("-o", required=True); p.add_argument("--photon", default=DEFAULT_PHOTON)
-    p.add_argument("extra", nargs="*")
+    p.add_argument("--flags", default="", help="more photon render flags, one string")
     p = sub.add_parser("refs"); p.add_argument("dir"); p.add_argument("scenes", nargs="+")
     p.add_argument("--res", type=int, default=128); p.add_argument("--chunk-minutes", type=float, default=5)
     p.add_argument("--rounds", type=int, default=1); p.add_argument("--integrator")

@@ -101,6 +101,7 @@ impl Conductor {
                 transmission: false,
                 eta: 1.0,
                 pdf_is_proportional: false,
+                lobe_alpha: 0.0,
             });
         }
         if wo.z == 0.0 {
@@ -127,6 +128,7 @@ impl Conductor {
             transmission: false,
             eta: 1.0,
             pdf_is_proportional: false,
+            lobe_alpha: d.alpha_x().min(d.alpha_y()),
         })
     }
 

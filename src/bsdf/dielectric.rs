@@ -149,7 +149,8 @@ impl Dielectric {
             }
             let pdf = d.pdf(wo, wm) / (4.0 * wo.dot(wm).abs()) * pr;
             let f = d.d(wm) * d.g(wo, wi) * r / (4.0 * wi.z * wo.z).abs();
-            return Some(BsdfSample::new(wi, Vec3::splat(f), pdf, false, false, 1.0));
+            let a = d.alpha_x().min(d.alpha_y());
+            return Some(BsdfSample::new(wi, Vec3::splat(f), pdf, false, false, 1.0).with_alpha(a));
         }
         let (wi, etap) = refract(wo, wm, self.eta)?;
         if same_hemisphere(wo, wi) || wi.z == 0.0 {
@@ -162,7 +163,8 @@ impl Dielectric {
         };
         let pdf = self.pdf_given(wo, wi, &half, pr, pt);
         let f = self.f_given(wo, wi, &half, mode);
-        Some(BsdfSample::new(wi, Vec3::splat(f), pdf, false, true, etap))
+        let a = self.distrib.alpha_x().min(self.distrib.alpha_y());
+        Some(BsdfSample::new(wi, Vec3::splat(f), pdf, false, true, etap).with_alpha(a))
     }
 
     /// The generalized half vector of `(wo, wi)`, or `None` for a grazing direction, a

@@ -57,6 +57,7 @@ impl Diffuse {
             transmission: false,
             eta: 1.0,
             pdf_is_proportional: false,
+            lobe_alpha: f32::INFINITY,
         })
     }
 }

@@ -307,6 +307,60 @@ impl<B: Layer + Copy> Layered<B> {
         f / n as f32
     }
 
+    /// The coat's own reflection, the first term of [`Self::f`] (exact, deterministic):
+    /// what the photon mapper traces. `f = f_coat + f_body`.
+    pub fn f_coat(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+        let (wo, wi) = if wo.z < 0.0 { (-wo, -wi) } else { (wo, wi) };
+        if wi.z <= 0.0 {
+            return Vec3::ZERO;
+        }
+        self.top.f(wo, wi, mode)
+    }
+
+    /// Everything that went through the coat (the random walks of [`Self::f`], with the same
+    /// random numbers): what the photon mapper estimates from photons and gathers.
+    pub fn f_body(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+        let (wo, wi) = if wo.z < 0.0 { (-wo, -wi) } else { (wo, wi) };
+        if wi.z <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let n = self.n_samples;
+        let mut rng = WalkRng::new(wo, wi, 0.0, 0x4C41_5945_5246);
+        let mut f = Vec3::ZERO;
+        for _ in 0..n {
+            f += self.f_walk(wo, wi, mode, &mut rng);
+        }
+        f / n as f32
+    }
+
+    /// A sample of the coat's reflection alone (its density is that of the reflection-only
+    /// choice; a smooth coat gives the mirror direction with pdf 1 and `f cos / pdf` its Fresnel
+    /// reflectance).
+    pub fn sample_coat(
+        &self,
+        wo: Vec3,
+        uc: f32,
+        u: Vec2,
+        mode: TransportMode,
+    ) -> Option<BsdfSample> {
+        let flip = wo.z < 0.0;
+        let wo = if flip { -wo } else { wo };
+        let bs = self.top.sample_valid(wo, uc, u, mode, Lobes::Reflection)?;
+        Some(BsdfSample {
+            wi: if flip { -bs.wi } else { bs.wi },
+            ..bs
+        })
+    }
+
+    /// The density of [`Self::sample_coat`] (0 for a smooth coat).
+    pub fn pdf_coat(&self, wo: Vec3, wi: Vec3) -> f32 {
+        let (wo, wi) = if wo.z < 0.0 { (-wo, -wi) } else { (wo, wi) };
+        if wi.z <= 0.0 {
+            return 0.0;
+        }
+        self.top.pdf(wo, wi, Lobes::Reflection)
+    }
+
     /// One random walk of `f`: enter through the coat along `wo`, leave along `wi`, with
     /// next-event estimation towards the direction `wis` presampled from `wi`.
     fn f_walk(&self, wo: Vec3, wi: Vec3, mode: TransportMode, rng: &mut WalkRng) -> Vec3 {

@@ -114,6 +114,10 @@ pub struct BsdfSample {
     /// density of one random-walk path; `f / pdf` is still the right throughput weight, and
     /// [`Bsdf::pdf`] gives the density for multiple importance sampling).
     pub pdf_is_proportional: bool,
+    /// The GGX alpha (the smaller of the two) of the lobe that produced the sample: 0 for a
+    /// delta lobe, infinity for a diffuse lobe or a walk through a coat's layer. The photon
+    /// tracer calls a bounce sharp below `glossyalpha` and glossy while finite.
+    pub lobe_alpha: f32,
 }
 
 impl BsdfSample {
@@ -136,6 +140,15 @@ impl BsdfSample {
             transmission,
             eta,
             pdf_is_proportional: false,
+            lobe_alpha: if specular { 0.0 } else { f32::INFINITY },
+        }
+    }
+
+    /// The same sample, produced by a microfacet lobe of GGX alpha `a` (when not a delta one).
+    pub(crate) fn with_alpha(self, a: f32) -> BsdfSample {
+        BsdfSample {
+            lobe_alpha: if self.specular { 0.0 } else { a },
+            ..self
         }
     }
 
@@ -514,6 +527,67 @@ impl Bsdf {
             _ => return None,
         };
         Some(d.alpha_x().min(d.alpha_y()))
+    }
+
+    /// Whether the photon mapper splits this BSDF into a traced coat and a body estimated from
+    /// photons ([`Self::f_coat`] + [`Self::f_body`]): a coated surface with a diffuse part (a
+    /// `coateddiffuse`, or a `coatedconductor` whose slab scatters). Other BSDFs are one part.
+    pub fn has_coat(&self) -> bool {
+        match self {
+            Bsdf::CoatedDiffuse(_) => true,
+            Bsdf::CoatedConductor(b) => b.flags().has_diffuse(),
+            _ => false,
+        }
+    }
+
+    /// The coat's reflection (exact): 0 without a coat ([`Self::has_coat`]).
+    pub fn f_coat(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+        match self {
+            Bsdf::CoatedDiffuse(b) => b.f_coat(wo, wi, mode),
+            Bsdf::CoatedConductor(b) if self.has_coat() => b.f_coat(wo, wi, mode),
+            _ => Vec3::ZERO,
+        }
+    }
+
+    /// What is below the coat (a stochastic estimate, the rest of [`Self::f`]); the whole
+    /// BSDF without a coat.
+    pub fn f_body(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+        if wo.z == 0.0 {
+            return Vec3::ZERO;
+        }
+        match self {
+            Bsdf::CoatedDiffuse(b) => b.f_body(wo, wi, mode),
+            Bsdf::CoatedConductor(b) if self.has_coat() => b.f_body(wo, wi, mode),
+            _ => self.f(wo, wi, mode),
+        }
+    }
+
+    /// A sample of the coat's reflection alone; `None` without a coat.
+    pub fn sample_coat(
+        &self,
+        wo: Vec3,
+        uc: f32,
+        u: Vec2,
+        mode: TransportMode,
+    ) -> Option<BsdfSample> {
+        if wo.z == 0.0 || !wo.is_finite() {
+            return None;
+        }
+        match self {
+            Bsdf::CoatedDiffuse(b) => b.sample_coat(wo, uc, u, mode),
+            Bsdf::CoatedConductor(b) if self.has_coat() => b.sample_coat(wo, uc, u, mode),
+            _ => None,
+        }
+        .filter(BsdfSample::is_valid)
+    }
+
+    /// The density of [`Self::sample_coat`] (0 for a smooth coat or without one).
+    pub fn pdf_coat(&self, wo: Vec3, wi: Vec3) -> f32 {
+        match self {
+            Bsdf::CoatedDiffuse(b) => b.pdf_coat(wo, wi),
+            Bsdf::CoatedConductor(b) if self.has_coat() => b.pdf_coat(wo, wi),
+            _ => 0.0,
+        }
     }
 
     /// A rough albedo for Russian roulette: the diffuse reflectance, 1 for (thin) dielectrics,

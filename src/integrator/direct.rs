@@ -106,6 +106,7 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<Ga
 
     let bsdf = si.bsdf(scene);
     let flags = bsdf.flags();
+    let coated = bsdf.has_coat();
     let wo = si.wo;
     let ls = ctx.settings.light_samples.max(1);
     path.sampler
@@ -148,8 +149,20 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<Ga
                 continue;
             };
             let wi = si.frame.to_local(s.wi);
-            let f = bsdf.f(wo, wi, TransportMode::Radiance) * wi.z.abs();
-            if f.max_element() <= 0.0 {
+            // A coated surface: its coat (MIS against the coat's continuation ray) and its body
+            // (as a diffuse surface) apart.
+            let (f, f_coat) = if coated {
+                (
+                    bsdf.f_body(wo, wi, TransportMode::Radiance) * wi.z.abs(),
+                    bsdf.f_coat(wo, wi, TransportMode::Radiance) * wi.z.abs(),
+                )
+            } else {
+                (
+                    bsdf.f(wo, wi, TransportMode::Radiance) * wi.z.abs(),
+                    Vec3::ZERO,
+                )
+            };
+            if f.max_element() <= 0.0 && f_coat.max_element() <= 0.0 {
                 continue;
             }
             // MIS against BSDF sampling: one continuation ray on glossy surfaces, the final
@@ -164,7 +177,12 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<Ga
             } else {
                 1.0
             };
-            let contrib = path.beta * f * s.li * (w / (s.pdf * ls as f32));
+            let w_coat = if s.delta {
+                1.0
+            } else {
+                power_heuristic(s.pdf, bsdf.pdf_coat(wo, wi))
+            };
+            let contrib = path.beta * (f * w + f_coat * w_coat) * s.li / (s.pdf * ls as f32);
             wave.shadows.push(Shadow {
                 pixel: path.pixel,
                 ray: si.shadow_ray(&s),
@@ -233,19 +251,25 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<Ga
         }
     }
 
-    // Continue through specular and glossy surfaces.
-    if !(flags.has_specular() || flags.has_glossy()) {
+    // Continue through specular and glossy surfaces and coats.
+    if !(flags.has_specular() || flags.has_glossy() || coated) {
         return;
     }
     let uc = path.sampler.next_1d();
     let u = path.sampler.next_2d();
-    let Some(bs) = bsdf.sample(wo, uc, u, TransportMode::Radiance) else {
+    // A coated surface continues along its coat's reflection only: shadow rays and the photon
+    // estimates above cover its body.
+    let bs = if coated {
+        bsdf.sample_coat(wo, uc, u, TransportMode::Radiance)
+    } else {
+        bsdf.sample(wo, uc, u, TransportMode::Radiance)
+    };
+    let Some(bs) = bs else {
         return;
     };
-    // Where the BSDF has a diffuse lobe too (a smoothly coated diffuse surface), shadow rays
-    // and the photon estimates above already cover every non-delta part: only a delta sample
-    // (the coat's mirror reflection) continues, else it would be counted twice.
-    if bs.pdf <= 0.0 || (flags.has_diffuse() && !bs.specular) {
+    // Where the BSDF has a diffuse lobe too, shadow rays and the photon estimates above
+    // already cover every non-delta part: only a delta sample continues.
+    if bs.pdf <= 0.0 || (!coated && flags.has_diffuse() && !bs.specular) {
         return;
     }
     let beta = path.beta * bs.f * (bs.wi.z.abs() / bs.pdf);
@@ -256,12 +280,20 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<Ga
         ray: si.spawn_ray(si.frame.to_world(bs.wi)),
         beta,
         depth: path.depth + 1,
-        prev_pdf: bsdf.mis_pdf(wo, &bs),
+        prev_pdf: if coated {
+            if bs.specular {
+                0.0
+            } else {
+                bs.pdf
+            }
+        } else {
+            bsdf.mis_pdf(wo, &bs)
+        },
         prev_p: si.p,
         prev_delta: path.prev_delta && bs.specular,
         covered: path.covered.after(
             receiver,
-            sharp_alpha.is_some_and(|a| trace::is_sharp_bounce(&bsdf, bs.specular, a)),
+            sharp_alpha.is_some_and(|a| trace::is_sharp_bounce(&bsdf, bs.lobe_alpha, a)),
         ),
         ..path
     });

@@ -34,7 +34,7 @@ use crate::bsdf::{Bsdf, TransportMode};
 use crate::interaction::SurfaceInteraction;
 use crate::light::Lights;
 use crate::math::{Frame, Ray, Vec2, Vec3};
-use crate::photon::estimate::{irradiance_with, radiance_with, EstimateParams};
+use crate::photon::estimate::{irradiance_with, radiance_sampled, radiance_with, EstimateParams};
 use crate::photon::guide::{cosine_hemisphere_to_square, GatherGuide, GuideSlot};
 use crate::photon::trace::{self, PhotonMaps, TraceSettings};
 use crate::photon::{Kernel, KnnResult, Photon, PhotonMap};
@@ -376,6 +376,9 @@ pub struct DiffusePhotons {
     pub indirect: Vec3,
 }
 
+/// Photons whose direction the body of a coated surface is evaluated at, per estimate.
+const BODY_SAMPLES: usize = 4;
+
 /// Dimensions of the sampler used per gather ray.
 pub const GATHER_DIMS: u32 = 2;
 
@@ -413,12 +416,12 @@ pub fn gather_pdf(si: &SurfaceInteraction, guide: Option<&GatherGuide>, wi: Vec3
     q * local.z / std::f32::consts::PI
 }
 
-/// Photon-map radiance at the diffuse point `si` (BSDF `bsdf`, whose value towards the normal
-/// `f_d` stands for the whole of it in the photon estimates), and its gather rays pushed to
-/// `gathers` with throughput `beta`, drawn by `guide` when there is one. A gather ray's weight
-/// is `f cos / pdf` with the BSDF's own value where it is not Lambertian (a coated diffuse
-/// surface: the coat's glossy lobe then reflects what the gather rays find, environment light
-/// and emitters included, as the shadow rays' MIS partner must).
+/// Photon-map radiance at the diffuse point `si` (BSDF `bsdf`), and its gather rays pushed to
+/// `gathers` with throughput `beta`, drawn by `guide` when there is one. For a Lambertian (or
+/// diffuse-transmission) surface the photon estimates are `f_d E` with `f_d` its value towards
+/// the normal; a coated surface's body weighs photons by its own BSDF
+/// ([`Bsdf::f_body`], through [`radiance_sampled`]), its coat being traced by the caller. A
+/// gather ray's weight is `f cos / pdf` with the body's own value where it is not Lambertian.
 #[allow(clippy::too_many_arguments)]
 pub fn at_diffuse(
     pass: &PhotonPass,
@@ -440,33 +443,39 @@ pub fn at_diffuse(
         caustic: Vec3::ZERO,
         indirect: Vec3::ZERO,
     };
-    if let Some(caustic) = &pass.maps.caustic {
+    // A coated surface's body is no Lambertian: its photon estimates weigh photons by its own
+    // (stochastic) BSDF, evaluated at a few photons drawn by power (`radiance_sampled`).
+    let coated = bsdf.has_coat();
+    let u_photon = if coated { sampler.next_1d() } else { 0.0 };
+    let estimate = |map: &PhotonMap, params: &EstimateParams, buf: &mut KnnResult| {
         let t = Instant::now();
-        let (e, _, _) = irradiance_with(caustic, p, n, &pass.caustic_params, buf);
+        let l = if coated {
+            let f = |wi: Vec3| bsdf.f_body(si.wo, si.frame.to_local(wi), TransportMode::Radiance);
+            radiance_sampled(map, p, n, params, buf, (BODY_SAMPLES, u_photon), f).0
+        } else {
+            f_d * irradiance_with(map, p, n, params, buf).0
+        };
         charge(counters, t);
-        out.caustic = beta * f_d * e;
+        beta * l
+    };
+    if let Some(caustic) = &pass.maps.caustic {
+        out.caustic = estimate(caustic, &pass.caustic_params, buf);
     }
     if let Some(glossy) = &pass.glossy_map {
         // Glossy caustics: spread wide, so estimated with the global map's radius.
-        let t = Instant::now();
-        let (e, _, _) = irradiance_with(glossy, p, n, &pass.global_params, buf);
-        charge(counters, t);
-        out.caustic += beta * f_d * e;
+        out.caustic += estimate(glossy, &pass.global_params, buf);
     }
     let Some(global) = &pass.maps.global else {
         return out;
     };
     if !pass.settings.final_gather {
-        let t = Instant::now();
         // The direct look at the global map: only photons that took a diffuse bounce (shadow
         // rays and the caustic map have the rest).
         let params = EstimateParams {
             exclude_flags: Photon::DIRECT | Photon::CAUSTIC,
             ..pass.global_params
         };
-        let (e, _, _) = irradiance_with(global, p, n, &params, buf);
-        charge(counters, t);
-        out.indirect = beta * f_d * e;
+        out.indirect = estimate(global, &params, buf);
         return out;
     }
     // Final gathering: stratified directions, cosine-weighted and (when guided) moved towards
@@ -491,7 +500,7 @@ pub fn at_diffuse(
             weight / q
         } else {
             let wi = si.frame.to_local(d);
-            let f = bsdf.f(si.wo, wi, TransportMode::Radiance);
+            let f = bsdf.f_body(si.wo, wi, TransportMode::Radiance);
             beta * f * (wi.z.abs() / (pdf * g as f32))
         };
         let gs = Sampler::new(
@@ -612,6 +621,35 @@ fn reflected(
         let mut si = SurfaceInteraction::new(scene, &h, &ray);
         let bsdf = si.bsdf(scene);
         let wo = si.wo;
+        if bsdf.has_coat() {
+            // A coated surface: its coat's reflection (followed, like a specular bounce) or its
+            // body (the cached irradiance weighed by the body's value towards a cosine-sampled
+            // direction: its albedo for light from all around), chosen by the coat's Fresnel
+            // reflectance towards wo (at least 0.1 each).
+            let p_coat = coat_choice(&bsdf, wo);
+            if g.sampler.next_1d() >= p_coat {
+                let wi = crate::sampling::warp::square_to_cosine_hemisphere(g.sampler.next_2d());
+                let wi = if wo.z < 0.0 { -wi } else { wi };
+                let f_b = bsdf.f_body(wo, wi, TransportMode::Radiance);
+                let e = cached_irradiance(pass, global, si.p, si.facing_normal(), buf);
+                return throughput * f_b * e / (1.0 - p_coat);
+            }
+            let Some(bs) = bsdf.sample_coat(
+                wo,
+                g.sampler.next_1d(),
+                g.sampler.next_2d(),
+                TransportMode::Radiance,
+            ) else {
+                return Vec3::ZERO;
+            };
+            throughput *= bs.f * (bs.wi.z.abs() / (bs.pdf * p_coat));
+            ray = si.spawn_ray(si.frame.to_world(bs.wi));
+            hit = ctx.accel.intersect(RayKind::Gather, &ray);
+            ctx.counters
+                .secondary_rays
+                .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            continue;
+        }
         if bsdf.flags().has_diffuse() {
             let f_d = bsdf.f(
                 wo,
@@ -638,6 +676,17 @@ fn reflected(
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     }
     Vec3::ZERO
+}
+
+/// The probability with which a gather ray that reaches a coated surface follows its coat:
+/// the coat's Fresnel reflectance towards `wo`, within [0.1, 0.9].
+fn coat_choice(bsdf: &Bsdf, wo: Vec3) -> f32 {
+    let eta = match bsdf {
+        Bsdf::CoatedDiffuse(b) => b.top.eta,
+        Bsdf::CoatedConductor(b) => b.top.eta,
+        _ => return 0.0,
+    };
+    crate::bsdf::fresnel::fr_dielectric(wo.z.abs(), eta).clamp(0.1, 0.9)
 }
 
 /// Irradiance at `p` (normal `n`): the nearest cached value whose normal agrees, else a

@@ -146,6 +146,70 @@ pub fn radiance_with(
 
 /// The guarded k-nearest search and the kernel-weighted sum of `value(photon)` behind both
 /// estimates; `side`: only photons arriving against `n` take part.
+/// The radiance estimate `L = sum_i w_i f(wo, wi_i) Phi_i` of [`irradiance_with`]'s photons
+/// (same guards), with `f` evaluated at `m` photons only: photons are drawn with
+/// probability `w_i c_i / S` (`c_i` the mean of `Phi_i`'s channels, `S = sum w_i c_i`) by
+/// `m` strata offset by `u` in [0, 1) (`draws = (m, u)`), and `L ~ S / m sum_j f(wo, wi_j) Phi_j / c_j`, unbiased
+/// over the draw. For a BSDF whose value is a costly random walk and varies slowly with `wi`
+/// (the body of a coated surface): `f_dir(wi)` gets the photon's incoming direction `-dir`.
+/// Returns (radiance, photons used, squared radius).
+pub fn radiance_sampled(
+    map: &PhotonMap,
+    p: Vec3,
+    n: Vec3,
+    params: &EstimateParams,
+    buf: &mut KnnResult,
+    draws: (usize, f32),
+    mut f_dir: impl FnMut(Vec3) -> Vec3,
+) -> (Vec3, usize, f32) {
+    let (m, u) = draws;
+    let (e, used, r2) = estimate_by(map, p, n, params, buf, true, |ph| ph.power());
+    if used == 0 || e.max_element() <= 0.0 {
+        return (Vec3::ZERO, used, r2);
+    }
+    // The photons estimate_by summed, with their weights w_i c_i (the same filter).
+    let skip = usize::from(buf.is_full());
+    let r2k = r2; // the shrunken radius when progressive, as estimate_by used
+    let weight = |nb: &super::kdtree::Neighbor| {
+        if nb.d2 > r2k {
+            return 0.0;
+        }
+        let c = map.photon(nb.idx).power().element_sum() / 3.0;
+        params.kernel.weight(nb.d2, r2k) * c.max(0.0)
+    };
+    let neighbors = &buf.neighbors()[skip..];
+    let total: f32 = neighbors.iter().map(weight).sum();
+    if !(total > 0.0 && total.is_finite()) {
+        return (Vec3::ZERO, used, r2);
+    }
+    let m = m.max(1);
+    let mut out = Vec3::ZERO;
+    let (mut acc, mut j) = (0.0f32, 0usize);
+    let mut last = None;
+    for nb in neighbors {
+        let w = weight(nb);
+        if w <= 0.0 {
+            continue;
+        }
+        acc += w;
+        last = Some(nb.idx);
+        while j < m && (j as f32 + u) / m as f32 * total < acc {
+            let ph = map.photon(nb.idx);
+            out += f_dir(-ph.dir()) * ph.power() / (ph.power().element_sum() / 3.0);
+            j += 1;
+        }
+    }
+    // Rounding can leave the last strata unassigned: they belong to the last photon.
+    if let Some(idx) = last {
+        while j < m {
+            let ph = map.photon(idx);
+            out += f_dir(-ph.dir()) * ph.power() / (ph.power().element_sum() / 3.0);
+            j += 1;
+        }
+    }
+    (out * (total / m as f32), used, r2)
+}
+
 fn estimate_by(
     map: &PhotonMap,
     p: Vec3,

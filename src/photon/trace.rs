@@ -140,13 +140,24 @@ pub fn is_receiver(bsdf: &Bsdf, min_alpha: f32) -> bool {
     !bsdf.flags().has_diffuse() && bsdf.glossy_alpha().is_some_and(|a| a >= min_alpha)
 }
 
-/// Whether a photon that left a surface with this BSDF by a sample that was `specular` took
-/// a *sharp* bounce: a delta lobe, or the single microfacet lobe of a rough conductor or
-/// dielectric narrower than `min_alpha` (near-smooth glass and metal focus light almost as
-/// sharply as smooth ones). Caustic paths are chains of sharp bounces (L (S|G)+ D with the G
-/// near-smooth); wider glossy lobes end them, at a receiver ([`is_receiver`]).
-pub fn is_sharp_bounce(bsdf: &Bsdf, specular: bool, min_alpha: f32) -> bool {
-    specular || bsdf.glossy_alpha().is_some_and(|a| a < min_alpha)
+/// Whether a photon that left a surface with BSDF `bsdf` by a sample of lobe alpha
+/// `sample_alpha` ([`crate::bsdf::BsdfSample::lobe_alpha`]) took a *sharp* bounce: a delta
+/// lobe, or a microfacet lobe narrower than `min_alpha` (near-smooth glass and metal focus
+/// light almost as sharply as smooth ones). Caustic paths are chains of sharp bounces
+/// (L (S|G)+ D with the G near-smooth); wider glossy lobes end them, at a receiver
+/// ([`is_receiver`]). A coat over a diffuse body ([`Bsdf::has_coat`]) is never sharp, however
+/// smooth: its reflection is a few percent of the light, mostly off flat or gently curved
+/// surfaces (floors, plastic), so it spreads wide and is estimated with the global radius as a
+/// glossy caustic ([`is_caustic_bounce`]) instead of from a handful of caustic photons.
+pub fn is_sharp_bounce(bsdf: &Bsdf, sample_alpha: f32, min_alpha: f32) -> bool {
+    !bsdf.has_coat() && (sample_alpha <= 0.0 || sample_alpha < min_alpha)
+}
+
+/// Whether a bounce of lobe alpha `sample_alpha` continues a glossy-caustic chain (light that
+/// left specular or glossy lobes only, such as a lamp's metal shade or a coat's reflection):
+/// any microfacet or delta lobe, not a diffuse one or a walk through a coat's layer.
+pub fn is_caustic_bounce(sample_alpha: f32) -> bool {
+    sample_alpha.is_finite()
 }
 
 /// Whether caustic photons go on through a surface with this BSDF: it has a delta lobe or a
@@ -464,12 +475,12 @@ fn trace_one(
         let Some(sc) = scatter(&si, &bsdf, sampler) else {
             break;
         };
-        let sharp = is_sharp_bounce(&bsdf, sc.specular, s.receiver_alpha);
+        let sharp = is_sharp_bounce(&bsdf, sc.lobe_alpha, s.receiver_alpha);
         if kind == MapKind::Caustic && !sharp {
             break; // the sampled lobe was a wide glossy or a diffuse one
         }
         power *= sc.power_scale;
-        caustic_chain &= caustic_surface;
+        caustic_chain &= caustic_surface || (bsdf.has_coat() && is_caustic_bounce(sc.lobe_alpha));
         sharp_chain &= sharp;
         ray = sc.ray;
     }
@@ -483,6 +494,8 @@ pub struct Scattered {
     pub power_scale: Vec3,
     /// Whether the sampled lobe was a delta (specular) one.
     pub specular: bool,
+    /// The sampled lobe's GGX alpha ([`crate::bsdf::BsdfSample::lobe_alpha`]).
+    pub lobe_alpha: f32,
 }
 
 /// Scatters a photon arriving at `si`: samples the BSDF in importance mode, then Russian +
@@ -503,6 +516,7 @@ pub fn scatter(si: &SurfaceInteraction, bsdf: &Bsdf, sampler: &mut Sampler) -> O
         ray: si.spawn_ray(si.frame.to_world(bs.wi)),
         power_scale: w / q,
         specular: bs.specular,
+        lobe_alpha: bs.lobe_alpha,
     })
 }
 
