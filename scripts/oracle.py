@@ -136,8 +136,21 @@ def file_integrator(text):
 
 def cmd_refs(a):
     os.makedirs(a.dir, exist_ok=True)
+    failed = set()
     for rnd in range(a.rounds):
         for scene in a.scenes:
+            if scene in failed:
+                continue
+            try:
+                ref_round(a, scene)
+            except SystemExit as e:
+                print(f"{scene}: {e}; left out", flush=True)
+                failed.add(scene)
+
+
+def ref_round(a, scene):
+    if True:
+        if True:
             name = os.path.basename(os.path.dirname(os.path.dirname(os.path.abspath(scene))))
             d = os.path.join(a.dir, name)
             os.makedirs(d, exist_ok=True)

@@ -295,8 +295,15 @@ pub fn prepare(
     // lookup blurs over the cache's spacing, a bias that does not shrink with the radii (on
     // cornell-glass at 64x64, 32 -> 128 passes: 0.0013 -> 0.00083 with it, 0.00115 -> 0.00047
     // without, at the same speed).
+    // Gather hits take the surfaceless lights' direct light by a shadow ray ([`direct_at_gather`]):
+    // their photon estimates, the cache's included, leave those photons out.
+    let gather_params = EstimateParams {
+        exclude_flags: Photon::SURFACELESS,
+        min_photons: 1,
+        ..global_params
+    };
     let cache = if s.irradiance_cache && s.final_gather && !s.progressive {
-        build_cache(&maps, &global_params)
+        build_cache(&maps, &gather_params)
     } else {
         None
     };
@@ -503,13 +510,9 @@ pub fn at_diffuse(
             let f = bsdf.f_body(si.wo, wi, TransportMode::Radiance);
             beta * f * (wi.z.abs() / (pdf * g as f32))
         };
-        let gs = Sampler::new(
-            Pattern::Independent,
-            sampler_key(sampler),
-            pixel as u64,
-            k,
-            g,
-        );
+        // Keyed by the pixel's own stream (not the tile-local `pixel`, which a crop window
+        // or another tiling changes).
+        let gs = Sampler::new(Pattern::Independent, sampler_key(sampler), 0, k, g);
         gathers.push(Gather {
             pixel,
             ray: Ray::new(o, d),
@@ -632,7 +635,10 @@ fn reflected(
                 let wi = if wo.z < 0.0 { -wi } else { wi };
                 let f_b = bsdf.f_body(wo, wi, TransportMode::Radiance);
                 let e = cached_irradiance(pass, global, si.p, si.facing_normal(), buf);
-                return throughput * f_b * e / (1.0 - p_coat);
+                let direct = direct_at_gather(ctx, &si, &mut g.sampler, |wi| {
+                    bsdf.f_body(wo, wi, TransportMode::Radiance)
+                });
+                return throughput * (f_b * e + direct) / (1.0 - p_coat);
             }
             let Some(bs) = bsdf.sample_coat(
                 wo,
@@ -657,7 +663,10 @@ fn reflected(
                 TransportMode::Radiance,
             );
             let e = cached_irradiance(pass, global, si.p, si.facing_normal(), buf);
-            return throughput * f_d * e;
+            let direct = direct_at_gather(ctx, &si, &mut g.sampler, |wi| {
+                bsdf.f(wo, wi, TransportMode::Radiance)
+            });
+            return throughput * (f_d * e + direct);
         }
         // Specular or glossy: follow one sampled direction.
         let Some(bs) = bsdf.sample(
@@ -676,6 +685,41 @@ fn reflected(
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     }
     Vec3::ZERO
+}
+
+/// Direct light of the lights without a surface (point, spot, distant, infinite) at a gather
+/// ray's diffuse hit `si`: one shadow ray to one of them picked by power, weighted by `f(wi)`
+/// (the BSDF's diffuse part, local `wi`) `|cos| / pdf`; the photon estimates there leave out
+/// the photons stored straight from them (`SURFACELESS`). Such lights reach a room through its
+/// windows: a few of their photons enter, in sharp patches that blur and leak at any photon
+/// count a render can afford, while a shadow ray is exact (noise-free for the sun). Area
+/// lights keep their direct photons, which are dense around them and cost no ray.
+fn direct_at_gather(
+    ctx: &RenderContext,
+    si: &SurfaceInteraction,
+    sampler: &mut Sampler,
+    f: impl Fn(Vec3) -> Vec3,
+) -> Vec3 {
+    if !ctx.lights.has_surfaceless() {
+        return Vec3::ZERO;
+    }
+    let u_sel = sampler.next_1d();
+    let u = sampler.next_2d();
+    let Some(s) = ctx.lights.sample_surfaceless(ctx.scene, si.p, u_sel, u) else {
+        return Vec3::ZERO;
+    };
+    let wi = si.frame.to_local(s.wi);
+    let value = f(wi) * (wi.z.abs() / s.pdf);
+    if value.max_element() <= 0.0 || !value.is_finite() {
+        return Vec3::ZERO;
+    }
+    ctx.counters
+        .shadow_rays
+        .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    if ctx.accel.occluded(RayKind::Shadow, &si.shadow_ray(&s)) {
+        return Vec3::ZERO;
+    }
+    value * s.li
 }
 
 /// The probability with which a gather ray that reaches a coated surface follows its coat:
@@ -706,7 +750,12 @@ fn cached_irradiance(
             return cache.photon(nb.idx).power();
         }
     }
-    irradiance_with(global, p, n, &pass.global_params, buf).0
+    let params = EstimateParams {
+        exclude_flags: Photon::SURFACELESS,
+        min_photons: 1,
+        ..pass.global_params
+    };
+    irradiance_with(global, p, n, &params, buf).0
 }
 
 /// The pass-1 statistics as printed lines.

@@ -59,6 +59,9 @@ pub struct Lights {
     /// The infinite lights: (index in the scene's lights, map).
     envs: Vec<(usize, Arc<EnvMap>)>,
     select: AliasTable,
+    /// The lights without a surface (point, spot, distant, infinite) alone, by power: what
+    /// final-gather hits take direct light from by shadow rays ([`Self::sample_surfaceless`]).
+    surfaceless: AliasTable,
     /// Centre and radius of the scene's bounding sphere (distant lights start outside it).
     center: Vec3,
     radius: f32,
@@ -98,11 +101,40 @@ impl Lights {
             areas,
             envs,
             select: AliasTable::default(),
+            surfaceless: AliasTable::default(),
             center,
             radius,
         };
-        lights.select = AliasTable::new(&lights.powers(scene));
+        let powers = lights.powers(scene);
+        let surfaceless: Vec<f32> = powers
+            .iter()
+            .zip(&scene.lights)
+            .map(|(&w, l)| if l.is_surfaceless() { w } else { 0.0 })
+            .collect();
+        lights.select = AliasTable::new(&powers);
+        if surfaceless.iter().any(|&w| w > 0.0) {
+            lights.surfaceless = AliasTable::new(&surfaceless);
+        }
         lights
+    }
+
+    /// Whether the scene has an emitting light without a surface (point, spot, distant,
+    /// infinite).
+    pub fn has_surfaceless(&self) -> bool {
+        !self.surfaceless.is_empty()
+    }
+
+    /// [`Self::sample`] restricted to the lights without a surface, picked by power among them
+    /// (the sample's `pdf` includes that selection probability); `None` when there are none.
+    pub fn sample_surfaceless(
+        &self,
+        scene: &Scene,
+        p: Vec3,
+        u_sel: f32,
+        u: Vec2,
+    ) -> Option<LightSample> {
+        let (i, pmf) = self.surfaceless.sample(u_sel)?;
+        self.sample_light(scene, i, pmf, p, u)
     }
 
     /// Emitted power (luminance of the RGB power, watts-like units).
@@ -156,6 +188,18 @@ impl Lights {
     /// Picks a light in proportion to power (`u_sel`) and a point on it (`u`) as seen from `p`.
     pub fn sample(&self, scene: &Scene, p: Vec3, u_sel: f32, u: Vec2) -> Option<LightSample> {
         let (i, pmf) = self.select.sample(u_sel)?;
+        self.sample_light(scene, i, pmf, p, u)
+    }
+
+    /// A point `u` on light `i`, chosen with probability `pmf`, as seen from `p`.
+    fn sample_light(
+        &self,
+        scene: &Scene,
+        i: usize,
+        pmf: f32,
+        p: Vec3,
+        u: Vec2,
+    ) -> Option<LightSample> {
         let mut s = match &scene.lights[i] {
             Light::Area { .. } => self.areas[i].as_ref()?.sample(&scene.meshes, p, u)?,
             Light::Point { pos, intensity } => point::sample(*pos, *intensity, p)?,

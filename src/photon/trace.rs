@@ -457,6 +457,9 @@ fn trace_one(
             };
             if store && power.max_element() > 0.0 {
                 let flags = match (bounce, sharp_chain, caustic_chain) {
+                    (0, _, _) if scene.lights[light].is_surfaceless() => {
+                        Photon::DIRECT | Photon::SURFACELESS
+                    }
                     (0, _, _) => Photon::DIRECT,
                     (_, true, _) => Photon::CAUSTIC,
                     (_, false, true) => Photon::GLOSSY,

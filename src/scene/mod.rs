@@ -437,6 +437,14 @@ pub enum Light {
     Infinite { map: Arc<crate::light::EnvMap> },
 }
 
+impl Light {
+    /// A light with no surface in the scene (point, spot, distant, infinite): what final-gather
+    /// hits take direct light from by shadow rays (`integrator::photonmap`).
+    pub fn is_surfaceless(&self) -> bool {
+        !matches!(self, Light::Area { .. })
+    }
+}
+
 /// `Camera "perspective"`: `fov` (degrees) spans the shorter image axis of the screen window
 /// (pbrt-v4); a thin lens when `lens_radius > 0`.
 #[derive(Clone, Debug, PartialEq)]
