@@ -14,7 +14,7 @@ resolve, named `_oracle-<res>.pbrt`; nothing is written into this repository):
           converged references by rounds: each round renders every scene once more with a new
           seed for about --chunk-minutes (spp from a first 16-spp timing), and DIR/<scene>/ref.exr
           is the mean of its chunks so far; ref.json holds spp, seconds and the reference's own
-          relMSE (chunk variance / chunks). The file's integrator, unbiased: sppm -> bdpt.
+          relMSE (chunk variance / chunks). The file's integrator (its own line for sppm; others -> bdpt).
   compare IMAGE.exr REFERENCE.exr [--blocks 8] [--diff DIFF.png] [--side SIDE.png] [--json]
           relMSE = mean((x - r)^2 / (r^2 + 0.01)) over pixels and channels; the same with the
           worst 0.1% of pixels left out ("trimmed"); relMSE of the 3x3-median-filtered image
@@ -77,7 +77,31 @@ def variant(scene, res):
     out = os.path.join(os.path.dirname(os.path.abspath(scene)), f"_oracle-{res}.pbrt")
     mv = os.path.join(os.path.dirname(ROOT), "shared", "peers", "pbrt-v4", "make_variant.py")
     subprocess.run([sys.executable, mv, scene, out, "--res", f"{w}x{h}"], check=True)
+    drop_empty_meshes(out)
     return out
+
+
+def drop_empty_meshes(path):
+    """Comments out `plymesh` shapes whose file holds no vertex: the stand-ins that
+    ../shared/tools/repair_bitterli.py writes for absent meshes load in photon (an empty
+    mesh) but pbrt-v4 refuses them, so both renderers get the variant without them."""
+    text = open(path).read()
+    base = os.path.dirname(path)
+    pat = re.compile(r'Shape\s+"plymesh"\s*\n?\s*"string filename"\s*\[?\s*"([^"]+)"\s*\]?')
+
+    def empty(name):
+        f = os.path.join(base, name)
+        try:
+            head = open(f, "rb").read(4096)
+        except OSError:
+            return False
+        m = re.search(rb"element vertex (\d+)", head)
+        return m is not None and int(m.group(1)) == 0
+
+    out = pat.sub(lambda m: "# (empty stand-in dropped) " + m.group(0).replace("\n", " ")
+                  if empty(m.group(1)) else m.group(0), text)
+    if out != text:
+        open(path, "w").write(out)
 
 
 def run_timed(cmd):
@@ -131,7 +155,9 @@ def write_exr(path, im):
 def file_integrator(text):
     m = re.search(r'^Integrator\s+"(\w+)"', text, re.M)
     name = m.group(1) if m else "path"
-    return "bdpt" if name in ("sppm", "photonmap", "lightpath", "mlt") else name
+    # sppm stays (consistent, and bdpt's caustic fireflies leave its chunk means unstable: two
+    # 3-minute chunks of water-caustic differed by 14%); the file's own line keeps its radius.
+    return "bdpt" if name in ("photonmap", "lightpath", "mlt") else name
 
 
 def cmd_refs(a):
@@ -160,12 +186,15 @@ def ref_round(a, scene):
             integ = a.integrator or file_integrator(text)
             v = variant(scene, a.res)
             src = v.replace(".pbrt", f"-{integ}.pbrt")
+            if integ == "sppm":
+                src = v
             m = re.search(r'"integer maxdepth"\s*\[\s*(\d+)\s*\]', text[: text.index("WorldBegin")])
             depth = m.group(1) if m else "5"
             mv = os.path.join(os.path.dirname(ROOT), "shared", "peers", "pbrt-v4", "make_variant.py")
             w, h = film_resolution(open(v).read().split("WorldBegin")[0])
-            subprocess.run([sys.executable, mv, v, src, "--res", f"{w}x{h}", "--integrator",
-                            f'Integrator "{integ}" "integer maxdepth" [ {depth} ]'], check=True)
+            if src != v:
+                subprocess.run([sys.executable, mv, v, src, "--res", f"{w}x{h}", "--integrator",
+                                f'Integrator "{integ}" "integer maxdepth" [ {depth} ]'], check=True)
             if "spp_per_chunk" not in meta:
                 out = os.path.join(d, "timing.exr")
                 dt, _ = run_timed([a.pbrt, "--nthreads", "2", "--spp", "16", "--seed", "999",

@@ -418,12 +418,14 @@ pub fn render_for_time(
     let mut total: Option<RenderOutput> = None;
     let mut spp_done = 0u32;
     let mut pass = 0u64;
-    let mut per_spp = f64::INFINITY;
+    let mut per_spp;
     loop {
         let t = Instant::now();
         s.seed = settings.seed.wrapping_add(pass);
         let out = render_prepared(scene, accel, &s, kind, photons.as_ref(), &|_, _| {});
-        per_spp = per_spp.min(t.elapsed().as_secs_f64() / s.spp as f64);
+        // The latest pass's rate: the smallest one seen undercounts when the machine gets
+        // busier (a 30 s budget took 60 s on a loaded machine).
+        per_spp = t.elapsed().as_secs_f64() / s.spp as f64;
         total = Some(match total {
             None => out,
             Some(acc) => merge(acc, spp_done, out, s.spp),
@@ -435,7 +437,7 @@ pub fn render_for_time(
             break;
         }
         // Fill most of the remaining time, growing at most 4x per pass.
-        s.spp = ((left * 0.95 / per_spp) as u32).clamp(1, 4 * spp_done);
+        s.spp = ((left * 0.9 / per_spp) as u32).clamp(1, 4 * spp_done);
     }
     let mut out = total.expect("at least one pass");
     out.seconds = start.elapsed().as_secs_f64();
