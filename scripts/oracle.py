@@ -15,6 +15,12 @@ resolve, named `_oracle-<res>.pbrt`; nothing is written into this repository):
           seed for about --chunk-minutes (spp from a first 16-spp timing), and DIR/<scene>/ref.exr
           is the mean of its chunks so far; ref.json holds spp, seconds and the reference's own
           relMSE (chunk variance / chunks). The file's integrator (its own line for sppm; others -> bdpt).
+  table   REFDIR SCENE... --res 128 --seconds 30 [--seeds 2] [--out DIR] [--integrators path,bdpt,sppm]
+          for each scene with a reference REFDIR/<scene>/ref.exr: photon `render --time`, and each
+          pbrt-v4 integrator at the spp that fills the same wall time (from 4- and 32-spp
+          timings, process wall time both), all against the reference; prints a Markdown row
+          per scene (relMSE means over seeds, mean ratio, wall seconds) and appends JSON lines
+          to DIR/table.jsonl
   compare IMAGE.exr REFERENCE.exr [--blocks 8] [--diff DIFF.png] [--side SIDE.png] [--json]
           relMSE = mean((x - r)^2 / (r^2 + 0.01)) over pixels and channels; the same with the
           worst 0.1% of pixels left out ("trimmed"); relMSE of the 3x3-median-filtered image
@@ -225,6 +231,82 @@ def ref_round(a, scene):
                   f"{meta.get('own_relmse', float('nan')):.3g}", flush=True)
 
 
+def pbrt_variant(scene, res, integ):
+    """The scene's variant with `integ` as its integrator (the file's own line for sppm when
+    the file names it)."""
+    v = variant(scene, res)
+    text = open(scene).read()
+    if integ == "sppm" and re.search(r'^Integrator\s+"sppm"', text, re.M):
+        return v
+    src = v.replace(".pbrt", f"-{integ}.pbrt")
+    m = re.search(r'"integer maxdepth"\s*\[\s*(\d+)\s*\]', text[: text.index("WorldBegin")])
+    depth = m.group(1) if m else "5"
+    mv = os.path.join(os.path.dirname(ROOT), "shared", "peers", "pbrt-v4", "make_variant.py")
+    w, h = film_resolution(open(v).read().split("WorldBegin")[0])
+    subprocess.run([sys.executable, mv, v, src, "--res", f"{w}x{h}", "--integrator",
+                    f'Integrator "{integ}" "integer maxdepth" [ {depth} ]'], check=True)
+    drop_empty_meshes(src)
+    return src
+
+
+def cmd_table(a):
+    os.makedirs(a.out, exist_ok=True)
+    log = open(os.path.join(a.out, "table.jsonl"), "a")
+    integs = a.integrators.split(",")
+    print("| scene | photon relMSE | photon mean ratio | photon s | " +
+          " | ".join(f"pbrt {i} relMSE (spp, s)" for i in integs) + " | best pbrt / photon |")
+    print("|---|---|---|---|" + "---|" * len(integs) + "---|")
+    for scene in a.scenes:
+        name = os.path.basename(os.path.dirname(os.path.dirname(os.path.abspath(scene))))
+        ref_path = os.path.join(a.refs, name, "ref.exr")
+        if not os.path.exists(ref_path):
+            print(f"| {name} | no reference |")
+            continue
+        ref = read_exr(ref_path)
+        row = {"scene": name, "seconds": a.seconds}
+        v = variant(scene, a.res)
+        errs, means, secs = [], [], []
+        for seed in range(a.seeds):
+            out = os.path.join(a.out, f"{name}-photon-{seed}.exr")
+            dt, _ = run_timed([a.photon, "render", v, "--time", f"{a.seconds}s", "--seed", str(seed),
+                               "--threads", "2", "-o", out, "--no-png"] + shlex.split(a.flags))
+            c = compare(read_exr(out), ref, 8)
+            errs.append(c["relmse"]); means.append(c["mean_ratio"]); secs.append(dt)
+            row.setdefault("photon_median3", []).append(c["relmse_median3"])
+        row.update(photon_relmse=float(np.mean(errs)), photon_mean=float(np.mean(means)),
+                   photon_s=float(np.mean(secs)))
+        cells = []
+        for integ in integs:
+            try:
+                src = pbrt_variant(scene, a.res, integ)
+                t = []
+                for spp in (4, 32):
+                    dt, _ = run_timed([a.pbrt, "--nthreads", "2", "--spp", str(spp), "--outfile",
+                                       os.path.join(a.out, "timing.exr"), src])
+                    t.append(dt)
+                b = max((t[1] - t[0]) / 28, 1e-6)
+                spp = max(1, int((a.seconds - (t[0] - 4 * b)) / b))
+                errs, secs = [], []
+                for seed in range(a.seeds):
+                    out = os.path.join(a.out, f"{name}-pbrt-{integ}-{seed}.exr")
+                    dt, _ = run_timed([a.pbrt, "--nthreads", "2", "--spp", str(spp), "--seed",
+                                       str(1000 + seed), "--outfile", out, src])
+                    errs.append(compare(read_exr(out), ref, 8)["relmse"]); secs.append(dt)
+                row[f"pbrt_{integ}"] = {"relmse": float(np.mean(errs)), "spp": spp,
+                                        "s": float(np.mean(secs))}
+                cells.append(f"{np.mean(errs):.4g} ({spp}, {np.mean(secs):.0f})")
+            except SystemExit as e:
+                row[f"pbrt_{integ}"] = {"error": str(e)}
+                cells.append("fails")
+        best = min((row[f"pbrt_{i}"]["relmse"] for i in integs if "relmse" in row[f"pbrt_{i}"]),
+                   default=float("nan"))
+        print(f"| {name} | {row['photon_relmse']:.4g} | {row['photon_mean']:.3f} | "
+              f"{row['photon_s']:.0f} | " + " | ".join(cells) +
+              f" | {best / row['photon_relmse']:.2f} |", flush=True)
+        log.write(json.dumps(row) + "\n")
+        log.flush()
+
+
 def relmse_map(x, r):
     return ((x - r) ** 2 / (r ** 2 + 0.01)).mean(axis=2)
 
@@ -321,6 +403,11 @@ def main():
     p.add_argument("--res", type=int, default=128); p.add_argument("--chunk-minutes", type=float, default=5)
     p.add_argument("--rounds", type=int, default=1); p.add_argument("--integrator")
     p.add_argument("--pbrt", default=DEFAULT_PBRT)
+    p = sub.add_parser("table"); p.add_argument("refs"); p.add_argument("scenes", nargs="+")
+    p.add_argument("--res", type=int, default=128); p.add_argument("--seconds", type=float, default=30)
+    p.add_argument("--seeds", type=int, default=2); p.add_argument("--out", default="oracle-table")
+    p.add_argument("--integrators", default="path,bdpt,sppm"); p.add_argument("--flags", default="")
+    p.add_argument("--pbrt", default=DEFAULT_PBRT); p.add_argument("--photon", default=DEFAULT_PHOTON)
     p = sub.add_parser("compare"); p.add_argument("image"); p.add_argument("reference")
     p.add_argument("--blocks", type=int, default=8); p.add_argument("--diff"); p.add_argument("--side")
     p.add_argument("--scale", type=float); p.add_argument("--json", action="store_true")
@@ -328,7 +415,8 @@ def main():
     if a.cmd == "variant":
         print(variant(a.scene, a.res))
     else:
-        {"pbrt": cmd_pbrt, "photon": cmd_photon, "compare": cmd_compare, "refs": cmd_refs}[a.cmd](a)
+        {"pbrt": cmd_pbrt, "photon": cmd_photon, "compare": cmd_compare, "refs": cmd_refs,
+         "table": cmd_table}[a.cmd](a)
 
 
 if __name__ == "__main__":
