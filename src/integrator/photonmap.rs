@@ -34,13 +34,13 @@ use crate::bsdf::{Bsdf, TransportMode};
 use crate::interaction::SurfaceInteraction;
 use crate::light::Lights;
 use crate::math::{Frame, Ray, Vec2, Vec3};
+use crate::photon::cache::IrradianceCache;
 use crate::photon::estimate::{irradiance_with, radiance_sampled, radiance_with, EstimateParams};
 use crate::photon::guide::{cosine_hemisphere_to_square, GatherGuide, GuideSlot};
 use crate::photon::trace::{self, PhotonMaps, TraceSettings};
 use crate::photon::{Kernel, KnnResult, Photon, PhotonMap};
 use crate::sampling::{strata, Pattern, Sampler};
 use crate::scene::{ParamSet, Scene, SceneError};
-use rayon::prelude::*;
 use std::sync::atomic::AtomicU64;
 use std::time::Instant;
 
@@ -207,9 +207,8 @@ pub fn parse_kernel(name: &str) -> Option<Kernel> {
 /// Pass 1's products, as pass 2 reads them.
 pub struct PhotonPass {
     pub maps: PhotonMaps,
-    /// Precomputed irradiance at a subset of the global photons: `power` holds the
-    /// irradiance, `dir` the surface normal.
-    pub cache: Option<PhotonMap>,
+    /// Precomputed irradiance at a subset of the global photons.
+    pub cache: Option<IrradianceCache>,
     /// The global photons that took a diffuse bounce, for guiding the final gather.
     pub guide_map: Option<PhotonMap>,
     /// The global photons flagged `GLOSSY` (glossy caustics), looked up at visible diffuse
@@ -303,7 +302,8 @@ pub fn prepare(
         ..global_params
     };
     let cache = if s.irradiance_cache && s.final_gather && !s.progressive {
-        build_cache(&maps, &gather_params)
+        let global = maps.global.as_ref();
+        global.and_then(|g| IrradianceCache::build(g, &gather_params).ok())
     } else {
         None
     };
@@ -330,26 +330,6 @@ pub fn prepare(
         cache_seconds: t.elapsed().as_secs_f64(),
         skipped,
     }
-}
-
-/// Every `CACHE_SPACING`-th global photon gets a precomputed irradiance.
-const CACHE_SPACING: usize = 4;
-
-/// Christensen's precomputation: irradiance (all photons) at a subset of photon positions.
-fn build_cache(maps: &PhotonMaps, params: &EstimateParams) -> Option<PhotonMap> {
-    let global = maps.global.as_ref()?;
-    let photons = global.photons();
-    let points: Vec<Photon> = (0..photons.len())
-        .into_par_iter()
-        .step_by(CACHE_SPACING)
-        .map_init(KnnResult::new, |buf, i| {
-            let p = photons[i].pos();
-            let n = maps.global_normals[i];
-            let (e, _, _) = irradiance_with(global, p, n, params, buf);
-            Photon::new(p, e, n, 0)
-        })
-        .collect();
-    PhotonMap::new(&points).ok()
 }
 
 /// Gather rays per diffuse point (0 when not gathering): they also serve as the BSDF-sampling
@@ -733,8 +713,8 @@ fn coat_choice(bsdf: &Bsdf, wo: Vec3) -> f32 {
     crate::bsdf::fresnel::fr_dielectric(wo.z.abs(), eta).clamp(0.1, 0.9)
 }
 
-/// Irradiance at `p` (normal `n`): the nearest cached value whose normal agrees, else a
-/// full global-map estimate.
+/// Irradiance at `p` (normal `n`): the cached value that covers `p` (see
+/// [`IrradianceCache::lookup`]), else a full global-map estimate.
 fn cached_irradiance(
     pass: &PhotonPass,
     global: &PhotonMap,
@@ -742,13 +722,9 @@ fn cached_irradiance(
     n: Vec3,
     buf: &mut KnnResult,
 ) -> Vec3 {
-    if let Some(cache) = &pass.cache {
-        cache.knn_by(p, 1, pass.global_params.max_r2, buf, |ph, _, d2| {
-            (ph.dir().dot(n) > 0.9).then_some(d2)
-        });
-        if let Some(nb) = buf.neighbors().first() {
-            return cache.photon(nb.idx).power();
-        }
+    let cached = pass.cache.as_ref();
+    if let Some(e) = cached.and_then(|c| c.lookup(p, n, pass.global_params.max_r2, buf)) {
+        return e;
     }
     let params = EstimateParams {
         exclude_flags: Photon::SURFACELESS,

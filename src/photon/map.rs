@@ -10,6 +10,9 @@ pub struct PhotonMap {
     photons: Vec<Photon>,
     /// For each tree-order slot, the index of the photon in the input slice.
     order: Vec<u32>,
+    /// Surface normal at each photon (facing the side it arrived from), in tree order; empty
+    /// when the map was built without them.
+    normals: Vec<Vec3>,
 }
 
 impl PhotonMap {
@@ -22,7 +25,24 @@ impl PhotonMap {
             tree,
             photons,
             order,
+            normals: Vec::new(),
         })
+    }
+
+    /// Builds the map with the surface normal at each photon (`normal(i)` for `photons[i]`,
+    /// facing the side the photon arrived from), for the irradiance cache's points.
+    pub fn with_normals(
+        photons: &[Photon],
+        normal: impl Fn(usize) -> Vec3,
+    ) -> Result<Self, TooManyPoints> {
+        let mut map = PhotonMap::new(photons)?;
+        map.normals = map.order.iter().map(|&i| normal(i as usize)).collect();
+        Ok(map)
+    }
+
+    /// The surface normals in tree order (empty without normals).
+    pub fn normals(&self) -> &[Vec3] {
+        &self.normals
     }
 
     /// For each tree-order slot, the index of its photon in the slice given to [`Self::new`]
@@ -40,7 +60,8 @@ impl PhotonMap {
         self.photons.is_empty()
     }
 
-    /// A map of the photons for which `keep` holds; `None` when there are none.
+    /// A map (without normals) of the photons for which `keep` holds; `None` when there are
+    /// none.
     pub fn subset(&self, keep: impl Fn(&Photon) -> bool) -> Option<PhotonMap> {
         let photons: Vec<Photon> = self.photons.iter().filter(|p| keep(p)).copied().collect();
         if photons.is_empty() {

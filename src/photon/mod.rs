@@ -7,7 +7,8 @@
 //!   into a reusable [`KnnResult`];
 //! - [`map`]: [`PhotonMap`], the photons in tree order beside their tree;
 //! - [`estimate`]: [`Kernel`] and [`estimate::irradiance`] with leak guards (side, disc,
-//!   minimum count).
+//!   minimum count);
+//! - [`cache`]: [`IrradianceCache`], Christensen's precomputed irradiance for final gathering.
 //!
 //! ```
 //! use photon::math::Vec3;
@@ -25,6 +26,7 @@
 //! assert_eq!(used, 49);
 //! assert!(e.x > 0.0 && r2 < 0.04);
 //! ```
+pub mod cache;
 pub mod estimate;
 pub mod guide;
 pub mod kdtree;
@@ -33,6 +35,7 @@ pub mod projection;
 pub mod record;
 pub mod trace;
 
+pub use cache::IrradianceCache;
 pub use estimate::{EstimateParams, Kernel};
 pub use kdtree::{KdTree, KnnResult, Neighbor};
 pub use map::PhotonMap;

@@ -107,9 +107,6 @@ pub struct TraceStats {
 /// The maps of pass 1 (absent when the scene does not need them or no photon was stored).
 pub struct PhotonMaps {
     pub global: Option<PhotonMap>,
-    /// Surface normals (facing the side the photon arrived from) of the global map's photons,
-    /// in `global`'s tree order; used to precompute irradiance.
-    pub global_normals: Vec<Vec3>,
     pub caustic: Option<PhotonMap>,
     /// The caustic photons that landed on rough glossy surfaces ([`is_receiver`]), estimated
     /// with the BSDF of the point that reads them.
@@ -279,37 +276,30 @@ pub fn trace(scene: &Scene, accel: &Accel, lights: &Lights, s: &TraceSettings) -
         }
     }
     stats.caustic_glossy_stored = split;
-    let (global_map, global_normals) = build_map(&global);
+    let global_map = build_map(&global, true);
     drop(global);
-    let (glossy_map, _) = build_map(&caustic[..split]);
-    let (caustic_map, _) = build_map(&caustic[split..]);
+    let glossy_map = build_map(&caustic[..split], false);
+    let caustic_map = build_map(&caustic[split..], false);
     stats.build_seconds = t.elapsed().as_secs_f64();
     PhotonMaps {
         global: global_map,
-        global_normals,
         caustic: caustic_map,
         caustic_glossy: glossy_map,
         stats,
     }
 }
 
-/// Builds a map (and the normals in its order) from landed photons; `None` when empty.
-fn build_map(landings: &[Landing]) -> (Option<PhotonMap>, Vec<Vec3>) {
+/// Builds a map from landed photons, with their surface normals when `normals` (the global
+/// map's, for the irradiance cache); `None` when empty.
+fn build_map(landings: &[Landing], normals: bool) -> Option<PhotonMap> {
     if landings.is_empty() {
-        return (None, Vec::new());
+        return None;
     }
     let photons: Vec<Photon> = landings.iter().map(|l| l.photon).collect();
-    match PhotonMap::new(&photons) {
-        Ok(map) => {
-            let normals = map
-                .order()
-                .iter()
-                .map(|&i| landings[i as usize].normal)
-                .collect();
-            (Some(map), normals)
-        }
-        Err(_) => (None, Vec::new()),
+    if !normals {
+        return PhotonMap::new(&photons).ok();
     }
+    PhotonMap::with_normals(&photons, |i| landings[i].normal).ok()
 }
 
 /// Traces `counts[i]` photons from each light `i` in parallel chunks, concatenated in a fixed

@@ -1,0 +1,152 @@
+//! Christensen's precomputed irradiance (1999): the irradiance at every
+//! [`CACHE_SPACING`]-th global photon, computed once after pass 1, so that a final-gather hit
+//! reads one nearby value instead of running a k-nearest estimate of its own.
+//!
+//! Each cache point keeps the squared radius of the estimate that made it. A lookup at `p`
+//! (normal `n`) takes the nearest point whose normal agrees (`dot > 0.9`) and whose own
+//! estimate covered `p`: `t^2 + (h / f)^2 <= r_i^2`, with `t` the distance along the point's
+//! tangent plane, `h` the height above it and `f` the estimate's disc fraction (the flattened
+//! search of [`super::estimate`]). Without that bound the nearest agreeing point could lie
+//! anywhere within the global radius: on the inside of a thin lamp can, whose far wall faces
+//! the same way as its outside, a point lit by the bulb served the outside and the wall
+//! beside it glowed. Where no point covers `p`, the caller runs the full estimate.
+use super::estimate::{irradiance_with, EstimateParams};
+use super::kdtree::{KnnResult, TooManyPoints};
+use super::map::PhotonMap;
+use super::record::Photon;
+use crate::math::Vec3;
+use rayon::prelude::*;
+
+/// Every `CACHE_SPACING`-th global photon gets a precomputed irradiance.
+pub const CACHE_SPACING: usize = 4;
+
+/// Smallest cosine between a cache point's normal and the query's.
+const MIN_NORMAL_COS: f32 = 0.9;
+
+/// Precomputed irradiance at a subset of the photon positions.
+pub struct IrradianceCache {
+    /// `power` holds the irradiance, `dir` the surface normal.
+    points: PhotonMap,
+    /// Squared radius of each point's estimate, in the map's tree order.
+    r2: Vec<f32>,
+    /// The estimates' ellipsoid stretch `1 / f^2 - 1` (see [`super::estimate`]).
+    stretch: f32,
+}
+
+impl IrradianceCache {
+    /// The irradiance at every [`CACHE_SPACING`]-th photon of `global` (a map with normals:
+    /// none without), estimated with `params`.
+    pub fn build(
+        global: &PhotonMap,
+        params: &EstimateParams,
+    ) -> Result<IrradianceCache, TooManyPoints> {
+        let (photons, normals) = (global.photons(), global.normals());
+        if normals.len() != photons.len() {
+            return PhotonMap::new(&[]).map(|points| IrradianceCache {
+                points,
+                r2: Vec::new(),
+                stretch: 0.0,
+            });
+        }
+        let (points, radii): (Vec<Photon>, Vec<f32>) = (0..photons.len())
+            .into_par_iter()
+            .step_by(CACHE_SPACING)
+            .map_init(KnnResult::new, |buf, i| {
+                let p = photons[i].pos();
+                let n = normals[i];
+                let (e, _, r2) = irradiance_with(global, p, n, params, buf);
+                (Photon::new(p, e, n, 0), r2)
+            })
+            .unzip();
+        let points = PhotonMap::new(&points)?;
+        let r2 = points.order().iter().map(|&i| radii[i as usize]).collect();
+        let f = params.disc_fraction;
+        let stretch = if f > 0.0 && f < 1.0 {
+            1.0 / (f * f) - 1.0
+        } else {
+            0.0
+        };
+        Ok(IrradianceCache {
+            points,
+            r2,
+            stretch,
+        })
+    }
+
+    /// Number of cache points.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// The irradiance of the nearest cache point within `max_r2` of `p` whose normal agrees
+    /// with `n` and whose own estimate covered `p` (see the module docs); `None` when there
+    /// is none.
+    pub fn lookup(&self, p: Vec3, n: Vec3, max_r2: f32, buf: &mut KnnResult) -> Option<Vec3> {
+        let (points, r2, stretch) = (&self.points, &self.r2, self.stretch);
+        points.tree().knn_by(p, 1, max_r2, buf, |i, off, d2| {
+            let ph = points.photon(i);
+            let normal = ph.dir();
+            if normal.dot(n) <= MIN_NORMAL_COS {
+                return None;
+            }
+            let h = off.dot(normal);
+            (d2 + stretch * h * h <= r2[i as usize]).then_some(d2)
+        });
+        let nb = buf.neighbors().first()?;
+        Some(points.photon(nb.idx).power())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `n x n` photons of `power` on the square `[0, side]^2` at height `z`, arriving from
+    /// above, facing `+z`.
+    fn grid(n: usize, side: f32, z: f32, x0: f32, power: f32) -> Vec<Photon> {
+        let cell = side / n as f32;
+        let mut out = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                let p = Vec3::new(x0 + (i as f32 + 0.5) * cell, (j as f32 + 0.5) * cell, z);
+                out.push(Photon::new(p, Vec3::splat(power), -Vec3::Z, 0));
+            }
+        }
+        out
+    }
+
+    /// Two parallel surfaces facing the same way, 0.1 apart (a wall and the inside of a lamp
+    /// can beside it): the wall dim and sparse, the can's inside bright and dense. A point on
+    /// the wall under the can must read the wall's irradiance, not the can's: the nearest
+    /// normal-agreeing cache point is the can's (0.1 away), whose estimate did not cover it.
+    #[test]
+    fn a_point_reads_only_a_cache_point_whose_estimate_covered_it() {
+        let wall = grid(20, 2.0, 0.0, 0.0, 0.01);
+        let can = grid(40, 0.5, 0.1, 0.75, 1.0);
+        let photons: Vec<Photon> = wall.iter().chain(&can).copied().collect();
+        let global = PhotonMap::with_normals(&photons, |_| Vec3::Z).unwrap();
+        let params = EstimateParams::new(20, 1.0);
+        let cache = IrradianceCache::build(&global, &params).unwrap();
+        let mut buf = KnnResult::new();
+        let p = Vec3::new(1.0, 0.25, 0.0);
+        let (wall_e, _, _) = irradiance_with(&global, p, Vec3::Z, &params, &mut buf);
+        let e = cache
+            .lookup(p, Vec3::Z, 1.0, &mut buf)
+            .expect("a wall cache point covers p");
+        // The wall alone: 400 photons of 0.01 over 4 m^2 = 1.0; the can: 1600 of 1.0 over
+        // 0.25 m^2 = 6400.
+        assert!((wall_e.x - 1.0).abs() < 0.25, "full estimate {wall_e:?}");
+        assert!(
+            (e.x - 1.0).abs() < 0.25,
+            "cached {e:?} (the can reads 6400)"
+        );
+        // On the can itself, the can's own value.
+        let q = Vec3::new(1.0, 0.25, 0.1);
+        let e = cache.lookup(q, Vec3::Z, 1.0, &mut buf).expect("covered");
+        assert!(e.x > 3000.0, "on the can {e:?}");
+    }
+}
