@@ -221,6 +221,33 @@ fn case_07_photon_counts_are_checked_against_the_budget() {
         GIB,
     );
     assert_error(&r, &["--global-photons"]);
+    // `--time` scales the file's counts with the budget (8x from 32 s): checked again, so a
+    // render that fits with the file's counts but not with the budget's stops before pass 1
+    // (it went on unchecked).
+    let few = small_scene("").replace(
+        "WorldBegin",
+        "Integrator \"photonmap\" \"integer globalphotons\" [ 10000 ] \"integer causticphotons\" [ 10000 ]\nWorldBegin",
+    );
+    let scene = write(&d, "few.pbrt", &few);
+    let out = d.join("few.exr");
+    let run = |extra: &[&str]| {
+        let mut args: Vec<std::ffi::OsString> = vec!["render".into(), scene.clone().into()];
+        args.extend(["--no-png", "--max-memory", "100M", "-o"].map(Into::into));
+        args.push(out.clone().into());
+        args.extend(extra.iter().map(Into::into));
+        run_capped(args, GIB, T)
+    };
+    let r = run(&["--spp", "1"]);
+    assert_eq!(
+        r.code,
+        Some(0),
+        "the file's counts fit in 100M: {}",
+        r.describe()
+    );
+    assert_error(
+        &run(&["--time", "32s"]),
+        &["--time:", "photon maps", "(--max-memory)"],
+    );
     let text = small_scene("").replace(
         "WorldBegin",
         "Integrator \"photonmap\" \"integer globalphotons\" [ 2147483647 ]\nWorldBegin",

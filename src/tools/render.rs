@@ -282,7 +282,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
         res: opts.res.is_some(),
         photons: opts.photon.global_photons.is_some() || opts.photon.caustic_photons.is_some(),
     };
-    let estimate = crate::resources::check_render(
+    let mut estimate = crate::resources::check_render(
         &scene,
         &settings,
         (opts.integrator, opts.backend),
@@ -389,6 +389,16 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
                 opts.photon.global_photons.is_some() || opts.photon.caustic_photons.is_some();
             if !given && !settings.photon.progressive {
                 settings.photon.scale_for_budget(budget, 200_000);
+                // The budget's counts are checked like the file's were.
+                estimate = crate::resources::check_render(
+                    &scene,
+                    &settings,
+                    (opts.integrator, opts.backend),
+                    opts.threads,
+                    opts.max_memory,
+                    cli,
+                )
+                .map_err(|e| ToolError(format!("--time: {e}")))?;
             }
             let (out, spp) = pool.install(|| {
                 integrator::render_for_time(&scene, &accel, &settings, opts.integrator, budget)
