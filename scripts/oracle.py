@@ -16,7 +16,8 @@ resolve, named `_oracle-<res>.pbrt`; nothing is written into this repository):
           is the mean of its chunks so far; ref.json holds spp, seconds and the reference's own
           relMSE (chunk variance / chunks). The file's integrator (its own line for sppm; others -> bdpt).
   table   REFDIR SCENE... --res 128 --seconds 30 [--seeds 2] [--out DIR] [--integrators path,bdpt,sppm]
-          for each scene with a reference REFDIR/<scene>/ref.exr: photon `render --time`, and each
+          for each scene with a reference REFDIR/<scene>/ref.exr: photon `render --time` (relMSE,
+          the relMSE of its 3x3-median-filtered image: far below relMSE means fireflies), and each
           pbrt-v4 integrator at the spp that fills the same wall time (from 4- and 32-spp
           timings, process wall time both), all against the reference; prints a Markdown row
           per scene (relMSE means over seeds, mean ratio, wall seconds) and appends JSON lines
@@ -253,9 +254,9 @@ def cmd_table(a):
     os.makedirs(a.out, exist_ok=True)
     log = open(os.path.join(a.out, "table.jsonl"), "a")
     integs = a.integrators.split(",")
-    print("| scene | photon relMSE | photon mean ratio | photon s | " +
+    print("| scene | photon relMSE | photon 3x3-median relMSE | photon mean ratio | photon s | " +
           " | ".join(f"pbrt {i} relMSE (spp, s)" for i in integs) + " | best pbrt / photon |")
-    print("|---|---|---|---|" + "---|" * len(integs) + "---|")
+    print("|---|---|---|---|---|" + "---|" * len(integs) + "---|")
     for scene in a.scenes:
         name = os.path.basename(os.path.dirname(os.path.dirname(os.path.abspath(scene))))
         ref_path = os.path.join(a.refs, name, "ref.exr")
@@ -274,7 +275,8 @@ def cmd_table(a):
             errs.append(c["relmse"]); means.append(c["mean_ratio"]); secs.append(dt)
             row.setdefault("photon_median3", []).append(c["relmse_median3"])
         row.update(photon_relmse=float(np.mean(errs)), photon_mean=float(np.mean(means)),
-                   photon_s=float(np.mean(secs)))
+                   photon_s=float(np.mean(secs)),
+                   photon_median3_mean=float(np.mean(row["photon_median3"])))
         cells = []
         for integ in integs:
             try:
@@ -300,7 +302,8 @@ def cmd_table(a):
                 cells.append("fails")
         best = min((row[f"pbrt_{i}"]["relmse"] for i in integs if "relmse" in row[f"pbrt_{i}"]),
                    default=float("nan"))
-        print(f"| {name} | {row['photon_relmse']:.4g} | {row['photon_mean']:.3f} | "
+        print(f"| {name} | {row['photon_relmse']:.4g} | {row['photon_median3_mean']:.4g} | "
+              f"{row['photon_mean']:.3f} | "
               f"{row['photon_s']:.0f} | " + " | ".join(cells) +
               f" | {best / row['photon_relmse']:.2f} |", flush=True)
         log.write(json.dumps(row) + "\n")

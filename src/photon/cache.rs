@@ -11,9 +11,8 @@
 //! the same way as its outside, a point lit by the bulb served the outside and the wall
 //! beside it glowed. Where no point covers `p`, the caller runs the full estimate.
 use super::estimate::{irradiance_with, EstimateParams};
-use super::kdtree::{KnnResult, TooManyPoints};
+use super::kdtree::{KdTree, KnnResult, TooManyPoints};
 use super::map::PhotonMap;
-use super::record::Photon;
 use crate::math::Vec3;
 use rayon::prelude::*;
 
@@ -23,12 +22,21 @@ pub const CACHE_SPACING: usize = 4;
 /// Smallest cosine between a cache point's normal and the query's.
 const MIN_NORMAL_COS: f32 = 0.9;
 
+/// One cache point: what a lookup reads of it, in one 28-byte record (a lookup's filter
+/// touches one record per candidate).
+#[derive(Clone, Copy, Debug)]
+struct CachePoint {
+    normal: Vec3,
+    /// Squared radius of the estimate.
+    r2: f32,
+    irradiance: Vec3,
+}
+
 /// Precomputed irradiance at a subset of the photon positions.
 pub struct IrradianceCache {
-    /// `power` holds the irradiance, `dir` the surface normal.
-    points: PhotonMap,
-    /// Squared radius of each point's estimate, in the map's tree order.
-    r2: Vec<f32>,
+    tree: KdTree,
+    /// In the tree's order.
+    points: Vec<CachePoint>,
     /// The estimates' ellipsoid stretch `1 / f^2 - 1` (see [`super::estimate`]).
     stretch: f32,
 }
@@ -41,25 +49,28 @@ impl IrradianceCache {
         params: &EstimateParams,
     ) -> Result<IrradianceCache, TooManyPoints> {
         let (photons, normals) = (global.photons(), global.normals());
-        if normals.len() != photons.len() {
-            return PhotonMap::new(&[]).map(|points| IrradianceCache {
-                points,
-                r2: Vec::new(),
-                stretch: 0.0,
-            });
-        }
-        let (points, radii): (Vec<Photon>, Vec<f32>) = (0..photons.len())
+        let len = if normals.len() == photons.len() {
+            photons.len()
+        } else {
+            0
+        };
+        let (positions, points): (Vec<Vec3>, Vec<CachePoint>) = (0..len)
             .into_par_iter()
             .step_by(CACHE_SPACING)
             .map_init(KnnResult::new, |buf, i| {
                 let p = photons[i].pos();
-                let n = normals[i];
-                let (e, _, r2) = irradiance_with(global, p, n, params, buf);
-                (Photon::new(p, e, n, 0), r2)
+                let normal = normals[i];
+                let (irradiance, _, r2) = irradiance_with(global, p, normal, params, buf);
+                let point = CachePoint {
+                    normal,
+                    r2,
+                    irradiance,
+                };
+                (p, point)
             })
             .unzip();
-        let points = PhotonMap::new(&points)?;
-        let r2 = points.order().iter().map(|&i| radii[i as usize]).collect();
+        let (tree, order) = KdTree::build(&positions)?;
+        let points = order.iter().map(|&i| points[i as usize]).collect();
         let f = params.disc_fraction;
         let stretch = if f > 0.0 && f < 1.0 {
             1.0 / (f * f) - 1.0
@@ -67,8 +78,8 @@ impl IrradianceCache {
             0.0
         };
         Ok(IrradianceCache {
+            tree,
             points,
-            r2,
             stretch,
         })
     }
@@ -86,24 +97,24 @@ impl IrradianceCache {
     /// with `n` and whose own estimate covered `p` (see the module docs); `None` when there
     /// is none.
     pub fn lookup(&self, p: Vec3, n: Vec3, max_r2: f32, buf: &mut KnnResult) -> Option<Vec3> {
-        let (points, r2, stretch) = (&self.points, &self.r2, self.stretch);
-        points.tree().knn_by(p, 1, max_r2, buf, |i, off, d2| {
-            let ph = points.photon(i);
-            let normal = ph.dir();
-            if normal.dot(n) <= MIN_NORMAL_COS {
+        let (points, stretch) = (&self.points[..], self.stretch);
+        self.tree.knn_by(p, 1, max_r2, buf, |i, off, d2| {
+            let c = &points[i as usize];
+            if c.normal.dot(n) <= MIN_NORMAL_COS {
                 return None;
             }
-            let h = off.dot(normal);
-            (d2 + stretch * h * h <= r2[i as usize]).then_some(d2)
+            let h = off.dot(c.normal);
+            (d2 + stretch * h * h <= c.r2).then_some(d2)
         });
         let nb = buf.neighbors().first()?;
-        Some(points.photon(nb.idx).power())
+        Some(self.points[nb.idx as usize].irradiance)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::photon::Photon;
 
     /// `n x n` photons of `power` on the square `[0, side]^2` at height `z`, arriving from
     /// above, facing `+z`.
