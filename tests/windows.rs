@@ -7,11 +7,7 @@
 //! a metre); the final gather read that from the cache everywhere: the image came out 1.85x
 //! the path tracer's (classroom: 1.19x). Gather hits now take the sun's and sky's direct light
 //! by a shadow ray and the photons only for the rest.
-use photon::accel::{Accel, AccelOptions, BackendKind};
-use photon::integrator::{self, IntegratorKind, RenderSettings};
-use photon::math::Vec3;
-use photon::scene::loader;
-use std::path::Path;
+use photon::integrator::IntegratorKind;
 
 mod common;
 use common::TempDir;
@@ -103,48 +99,21 @@ Shape "trianglemesh" "point3 P" [ 1.0 0.45 1.75  1.4 0.45 1.75  1.4 0.45 2.09999
     )
 }
 
-fn render(path: &Path, kind: IntegratorKind) -> Vec<Vec3> {
-    let scene = loader::load(path).unwrap_or_else(|e| panic!("{e}"));
-    let accel = Accel::build(&scene, BackendKind::Embree, AccelOptions::default()).expect("accel");
-    let settings = RenderSettings::from_scene(&scene).expect("settings");
-    let out = integrator::render(&scene, &accel, &settings, kind, &|_, _| {});
-    out.image
-        .pixels
-        .iter()
-        .map(|p| Vec3::from_array(*p))
-        .collect()
-}
-
 /// Mean and the 4x4 block means of the photon mapper (100k photons emitted, 64 spp) against
 /// the path tracer (2048 spp): measured mean -0.4%, blocks 0.83-1.19 (before: mean +88%,
 /// blocks up to 4.3x).
 #[test]
 fn sun_and_sky_through_a_window_against_the_path_tracer() {
     let dir = TempDir::new("windows-room");
-    let reference = render(
+    let reference = common::render_file(
         &dir.write("path.pbrt", scene("path", 2048)),
         IntegratorKind::Path,
     );
-    let image = render(
+    let image = common::render_file(
         &dir.write("pm.pbrt", scene("photonmap", 64)),
         IntegratorKind::Photonmap,
     );
-    let (w, h) = (32, 24);
-    let lum = |v: &Vec3| (v.x + v.y + v.z) as f64 / 3.0;
-    let mean = image.iter().map(lum).sum::<f64>() / reference.iter().map(lum).sum::<f64>();
-    let mut blocks = vec![];
-    for by in 0..4 {
-        for bx in 0..4 {
-            let (mut s, mut r) = (0.0, 0.0);
-            for y in by * h / 4..(by + 1) * h / 4 {
-                for x in bx * w / 4..(bx + 1) * w / 4 {
-                    s += lum(&image[y * w + x]);
-                    r += lum(&reference[y * w + x]);
-                }
-            }
-            blocks.push(s / r);
-        }
-    }
+    let (mean, blocks) = common::block_ratios(&image, &reference, 32, 4);
     let (lo, hi) = blocks
         .iter()
         .fold((f64::MAX, 0.0f64), |(lo, hi), &b| (lo.min(b), hi.max(b)));

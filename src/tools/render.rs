@@ -282,15 +282,12 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
         res: opts.res.is_some(),
         photons: opts.photon.global_photons.is_some() || opts.photon.caustic_photons.is_some(),
     };
-    let mut estimate = crate::resources::check_render(
-        &scene,
-        &settings,
-        (opts.integrator, opts.backend),
-        opts.threads,
-        opts.max_memory,
-        cli,
-    )
-    .map_err(ToolError)?;
+    let check = |settings: &RenderSettings| {
+        let (kind, backend) = (opts.integrator, opts.backend);
+        let (threads, max) = (opts.threads, opts.max_memory);
+        crate::resources::check_render(&scene, settings, (kind, backend), threads, max, cli)
+    };
+    let mut estimate = check(&settings).map_err(ToolError)?;
 
     let pool = thread_pool(opts.threads)?;
     let t1 = Instant::now();
@@ -390,15 +387,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
             if !given && !settings.photon.progressive {
                 settings.photon.scale_for_budget(budget, 200_000);
                 // The budget's counts are checked like the file's were.
-                estimate = crate::resources::check_render(
-                    &scene,
-                    &settings,
-                    (opts.integrator, opts.backend),
-                    opts.threads,
-                    opts.max_memory,
-                    cli,
-                )
-                .map_err(|e| ToolError(format!("--time: {e}")))?;
+                estimate = check(&settings).map_err(|e| ToolError(format!("--time: {e}")))?;
             }
             let (out, spp) = pool.install(|| {
                 integrator::render_for_time(&scene, &accel, &settings, opts.integrator, budget)

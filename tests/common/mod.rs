@@ -367,3 +367,47 @@ pub fn render_repo_scene(scene: &str, res: &str, spp: u32, dir: &TempDir, name: 
     );
     out
 }
+
+/// Luminance ratio of `image` to `reference` (row-major `w` wide) over the whole image and
+/// over each block of an `n x n` grid, row by row.
+#[allow(dead_code)]
+pub fn block_ratios(
+    image: &[photon::math::Vec3],
+    reference: &[photon::math::Vec3],
+    w: usize,
+    n: usize,
+) -> (f64, Vec<f64>) {
+    let h = image.len() / w;
+    let lum = |v: &photon::math::Vec3| (v.x + v.y + v.z) as f64 / 3.0;
+    let mean = image.iter().map(lum).sum::<f64>() / reference.iter().map(lum).sum::<f64>();
+    let mut blocks = vec![];
+    for by in 0..n {
+        for bx in 0..n {
+            let (mut s, mut r) = (0.0, 0.0);
+            for y in by * h / n..(by + 1) * h / n {
+                for x in bx * w / n..(bx + 1) * w / n {
+                    s += lum(&image[y * w + x]);
+                    r += lum(&reference[y * w + x]);
+                }
+            }
+            blocks.push(s / r);
+        }
+    }
+    (mean, blocks)
+}
+
+/// The pixels of the scene file at `path` rendered with `kind` and the file's own settings
+/// (Embree).
+#[allow(dead_code)]
+pub fn render_file(
+    path: &Path,
+    kind: photon::integrator::IntegratorKind,
+) -> Vec<photon::math::Vec3> {
+    use photon::accel::{Accel, AccelOptions, BackendKind};
+    let scene = photon::scene::loader::load(path).unwrap_or_else(|e| panic!("{e}"));
+    let accel = Accel::build(&scene, BackendKind::Embree, AccelOptions::default()).expect("accel");
+    let settings = photon::integrator::RenderSettings::from_scene(&scene).expect("settings");
+    let out = photon::integrator::render(&scene, &accel, &settings, kind, &|_, _| {});
+    let pixels = out.image.pixels.iter();
+    pixels.map(|p| photon::math::Vec3::from_array(*p)).collect()
+}
