@@ -385,9 +385,32 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
             let given =
                 opts.photon.global_photons.is_some() || opts.photon.caustic_photons.is_some();
             if !given && !settings.photon.progressive {
+                // The budget's counts, halved until the memory estimate fits; the file's
+                // counts (already checked) are the floor.
+                let file = settings.photon.trace.clone();
                 settings.photon.scale_for_budget(budget, 200_000);
-                // The budget's counts are checked like the file's were.
+                let t = &mut settings.photon.trace;
+                let wanted = (t.global_photons, t.caustic_photons);
+                while check(&settings).is_err() {
+                    let t = &mut settings.photon.trace;
+                    if t.global_photons <= file.global_photons
+                        && t.caustic_photons <= file.caustic_photons
+                    {
+                        (t.global_photons, t.caustic_photons) =
+                            (file.global_photons, file.caustic_photons);
+                        break;
+                    }
+                    t.global_photons = (t.global_photons / 2).max(file.global_photons);
+                    t.caustic_photons = (t.caustic_photons / 2).max(file.caustic_photons);
+                }
                 estimate = check(&settings).map_err(|e| ToolError(format!("--time: {e}")))?;
+                let t = &settings.photon.trace;
+                if (t.global_photons, t.caustic_photons) != wanted {
+                    println!(
+                        "time budget: {} + {} photons would not fit the memory budget: {} + {}",
+                        wanted.0, wanted.1, t.global_photons, t.caustic_photons
+                    );
+                }
             }
             let (out, spp) = pool.install(|| {
                 integrator::render_for_time(&scene, &accel, &settings, opts.integrator, budget)
