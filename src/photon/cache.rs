@@ -12,7 +12,7 @@
 //! 128 px, 64 spp, against pbrt-v4: relMSE 0.182 -> 0.106 with the bound; a ceiling above a
 //! can's lid 2.6x -> 1.3x the path tracer in `tests/lamp_can.rs`). Where no point covers `p`
 //! (0.6% of lookups on veach-bidir, 0.007% on cornell-box), the caller runs the full estimate.
-use super::estimate::{irradiance_with, EstimateParams};
+use super::estimate::{disc_d2, irradiance_with, EstimateParams};
 use super::kdtree::{KdTree, KnnResult, TooManyPoints};
 use super::map::PhotonMap;
 use crate::math::Vec3;
@@ -39,7 +39,7 @@ pub struct IrradianceCache {
     tree: KdTree,
     /// In the tree's order.
     points: Vec<CachePoint>,
-    /// The estimates' ellipsoid stretch `1 / f^2 - 1` (see [`super::estimate`]).
+    /// The estimates' [`EstimateParams::stretch`].
     stretch: f32,
 }
 
@@ -73,16 +73,10 @@ impl IrradianceCache {
             .unzip();
         let (tree, order) = KdTree::build(&positions)?;
         let points = order.iter().map(|&i| points[i as usize]).collect();
-        let f = params.disc_fraction;
-        let stretch = if f > 0.0 && f < 1.0 {
-            1.0 / (f * f) - 1.0
-        } else {
-            0.0
-        };
         Ok(IrradianceCache {
             tree,
             points,
-            stretch,
+            stretch: params.stretch(),
         })
     }
 
@@ -105,8 +99,7 @@ impl IrradianceCache {
             if c.normal.dot(n) <= MIN_NORMAL_COS {
                 return None;
             }
-            let h = off.dot(c.normal);
-            (d2 + stretch * h * h <= c.r2).then_some(d2)
+            (disc_d2(stretch, d2, off.dot(c.normal)) <= c.r2).then_some(d2)
         });
         let nb = buf.neighbors().first()?;
         Some(self.points[nb.idx as usize].irradiance)

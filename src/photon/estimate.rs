@@ -98,6 +98,32 @@ impl EstimateParams {
     }
 }
 
+impl EstimateParams {
+    /// The stretch `1 / f^2 - 1` of the flattened search for `f` = [`Self::disc_fraction`]:
+    /// 0 for `f >= 1` (a sphere), infinite for `f <= 0` or NaN (only photons on the plane).
+    pub fn stretch(&self) -> f32 {
+        let f = self.disc_fraction;
+        if f > 0.0 && f < 1.0 {
+            1.0 / (f * f) - 1.0
+        } else if f >= 1.0 {
+            0.0
+        } else {
+            f32::INFINITY
+        }
+    }
+}
+
+/// The flattened search's squared distance of a point at squared distance `d2` and height `h`
+/// above the tangent plane: `d2 + stretch h^2 = t^2 + h^2 / f^2` (an ellipsoid).
+#[inline]
+pub fn disc_d2(stretch: f32, d2: f32, h: f32) -> f32 {
+    if h == 0.0 {
+        d2
+    } else {
+        d2 + stretch * h * h
+    }
+}
+
 /// Irradiance estimate at `p` on a surface with unit normal `n`, with the default guards of
 /// [`EstimateParams::new`] and the given `kernel`. Returns (irradiance, photons used, r^2).
 pub fn irradiance(
@@ -219,22 +245,12 @@ fn estimate_by(
     side: bool,
     value: impl Fn(&Photon) -> Vec3,
 ) -> (Vec3, usize, f32) {
-    let f = params.disc_fraction;
-    // Ellipsoid metric d2 + (1/f^2 - 1) h^2 = t^2 + h^2 / f^2.
-    let stretch = if f > 0.0 && f < 1.0 {
-        1.0 / (f * f) - 1.0
-    } else if f >= 1.0 {
-        0.0
-    } else {
-        f32::INFINITY // f <= 0 or NaN: only photons exactly on the plane
-    };
+    let stretch = params.stretch();
     map.knn_by(p, params.k, params.max_r2, buf, |ph, off, d2| {
         if ph.flags() & params.exclude_flags != 0 || (side && !ph.arrives_against(n)) {
             return None;
         }
-        let h = off.dot(n);
-        let extra = if h == 0.0 { 0.0 } else { stretch * h * h };
-        Some(d2 + extra)
+        Some(disc_d2(stretch, d2, off.dot(n)))
     });
     let r2 = buf.r2();
     // When full, the farthest photon (the heap top) only defines the radius.

@@ -387,21 +387,19 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
             if !given && !settings.photon.progressive {
                 // The budget's counts, halved until the memory estimate fits; the file's
                 // counts (already checked) are the floor.
-                let file = settings.photon.trace.clone();
+                let t = &settings.photon.trace;
+                let file = (t.global_photons, t.caustic_photons);
                 settings.photon.scale_for_budget(budget, 200_000);
-                let t = &mut settings.photon.trace;
+                let t = &settings.photon.trace;
                 let wanted = (t.global_photons, t.caustic_photons);
                 while check(&settings).is_err() {
                     let t = &mut settings.photon.trace;
-                    if t.global_photons <= file.global_photons
-                        && t.caustic_photons <= file.caustic_photons
-                    {
-                        (t.global_photons, t.caustic_photons) =
-                            (file.global_photons, file.caustic_photons);
+                    if t.global_photons <= file.0 && t.caustic_photons <= file.1 {
+                        (t.global_photons, t.caustic_photons) = file;
                         break;
                     }
-                    t.global_photons = (t.global_photons / 2).max(file.global_photons);
-                    t.caustic_photons = (t.caustic_photons / 2).max(file.caustic_photons);
+                    t.global_photons = (t.global_photons / 2).max(file.0);
+                    t.caustic_photons = (t.caustic_photons / 2).max(file.1);
                 }
                 estimate = check(&settings).map_err(|e| ToolError(format!("--time: {e}")))?;
                 let t = &settings.photon.trace;
