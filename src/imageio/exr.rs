@@ -4,10 +4,15 @@
 //! `build.rs` into `OUT_DIR`) sit in the private `ffi` module, and everything public is safe.
 //!
 //! - [`write_exr`] writes one scanline part, ZIP-compressed, half or float, with channels
-//!   `R`, `G`, `B` and `<layer>.R`, `<layer>.G`, `<layer>.B` per extra named layer (AOVs).
+//!   `R`, `G`, `B` and `<layer>.R`, `<layer>.G`, `<layer>.B` per extra named layer (AOVs);
+//!   [`write_exr_channels`] writes any channels, any stored type and compression, scanline or
+//!   tiled (both through one encoder).
 //! - [`read_exr`] / [`read_exr_layer`] read part 0 of a scanline or tiled file (tiled: the
-//!   full-resolution level), any compression the library decodes, half/float/uint channels,
-//!   into linear f32. The image is the part's data window.
+//!   full-resolution level), any compression the library decodes (DWA is not: a one-line
+//!   error says so), half/float/uint channels, into linear f32; a `Y` (luminance) image reads
+//!   as grey. The image is the part's data window. Every channel of a chunk is decoded, the
+//!   unread ones into scratch planes: OpenEXRCore's specialised unpackers do not skip a
+//!   channel given a null destination (RGBA half files crashed inside the library).
 //!
 //! Library errors come back as [`ImageError`] with the failing call, the code's name
 //! (`exr_get_error_code_as_string`) and the library's own message (captured by an error
@@ -199,21 +204,95 @@ impl Drop for Context {
     }
 }
 
-/// Pixels of one written layer: three 4-byte samples per pixel.
-#[derive(Clone, Copy)]
-enum Samples<'a> {
-    /// Linear radiance, stored as half or float.
-    F32(&'a [[f32; 3]]),
-    /// Raw 32-bit words, stored as `UINT` channels bit for bit.
-    U32(&'a [[u32; 3]]),
+/// How a written channel's samples are stored in the file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExrStored {
+    /// 16-bit IEEE half (rounded to nearest even from f32 samples).
+    Half,
+    /// 32-bit IEEE float.
+    Float,
+    /// 32-bit unsigned words (from u32 samples, bit for bit).
+    Uint,
 }
 
-/// One written channel: its name and where its samples come from.
+/// The samples of one written channel, one per pixel in row-major order.
+#[derive(Clone, Copy, Debug)]
+pub enum ExrSamples<'a> {
+    /// Stored as `Half` or `Float`.
+    F32(&'a [f32]),
+    /// Stored as `Uint`.
+    U32(&'a [u32]),
+}
+
+/// One channel for [`write_exr_channels`].
+#[derive(Clone, Copy, Debug)]
+pub struct ExrChannel<'a> {
+    pub name: &'a str,
+    pub stored: ExrStored,
+    pub samples: ExrSamples<'a>,
+}
+
+/// The compressions of the OpenEXR format, as the library names them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExrCompression {
+    None,
+    Rle,
+    Zips,
+    Zip,
+    Piz,
+    Pxr24,
+    B44,
+    B44a,
+    Dwaa,
+    Dwab,
+}
+
+impl ExrCompression {
+    /// Every compression, in the library's order.
+    pub const ALL: [ExrCompression; 10] = [
+        ExrCompression::None,
+        ExrCompression::Rle,
+        ExrCompression::Zips,
+        ExrCompression::Zip,
+        ExrCompression::Piz,
+        ExrCompression::Pxr24,
+        ExrCompression::B44,
+        ExrCompression::B44a,
+        ExrCompression::Dwaa,
+        ExrCompression::Dwab,
+    ];
+
+    fn raw(self) -> ffi::exr_compression_t {
+        match self {
+            ExrCompression::None => ffi::EXR_COMPRESSION_NONE,
+            ExrCompression::Rle => ffi::EXR_COMPRESSION_RLE,
+            ExrCompression::Zips => ffi::EXR_COMPRESSION_ZIPS,
+            ExrCompression::Zip => ffi::EXR_COMPRESSION_ZIP,
+            ExrCompression::Piz => ffi::EXR_COMPRESSION_PIZ,
+            ExrCompression::Pxr24 => ffi::EXR_COMPRESSION_PXR24,
+            ExrCompression::B44 => ffi::EXR_COMPRESSION_B44,
+            ExrCompression::B44a => ffi::EXR_COMPRESSION_B44A,
+            ExrCompression::Dwaa => ffi::EXR_COMPRESSION_DWAA,
+            ExrCompression::Dwab => ffi::EXR_COMPRESSION_DWAB,
+        }
+    }
+}
+
+/// How [`write_exr_channels`] lays the part out.
+#[derive(Clone, Copy, Debug)]
+pub struct ExrLayout {
+    pub compression: ExrCompression,
+    /// `Some((w, h))`: tiled with `w`x`h` tiles (one level); `None`: scanlines.
+    pub tile: Option<(u32, u32)>,
+}
+
+/// One written channel: its samples at `samples[offset + i * stride]` for pixel `i`.
 struct ChannelSource<'a> {
     name: CString,
-    samples: Samples<'a>,
-    /// 0, 1 or 2: R, G or B of `samples`.
-    component: usize,
+    stored: ffi::exr_pixel_type_t,
+    samples: ExrSamples<'a>,
+    offset: usize,
+    stride: usize,
 }
 
 /// What [`write_exr_with`] stores besides the RGB image and its float layers.
@@ -250,25 +329,32 @@ pub fn write_exr_with(
     extra: ExrExtra,
 ) -> Result<(), ImageError> {
     let (width, height) = checked_size(path, rgb)?;
-    let mut channels = rgb_channels(path, "", Samples::F32(&rgb.pixels))?;
+    let stored = match pixel {
+        ExrPixel::Half => ffi::EXR_PIXEL_HALF,
+        ExrPixel::Float => ffi::EXR_PIXEL_FLOAT,
+    };
+    let mut channels = rgb_channels(path, "", ExrSamples::F32(rgb.pixels.as_flattened()), stored)?;
     let named = layers
         .iter()
         .map(|(n, i)| {
             let same = (i.width, i.height) == (rgb.width, rgb.height);
             (
                 *n,
-                Samples::F32(&i.pixels),
+                ExrSamples::F32(i.pixels.as_flattened()),
+                stored,
                 if same { i.width * i.height } else { usize::MAX },
             )
         })
-        .chain(
-            extra
-                .uint_layers
-                .iter()
-                .map(|(n, p)| (*n, Samples::U32(p), rgb.width * rgb.height)),
-        );
+        .chain(extra.uint_layers.iter().map(|(n, p)| {
+            (
+                *n,
+                ExrSamples::U32(p.as_flattened()),
+                ffi::EXR_PIXEL_UINT,
+                rgb.width * rgb.height,
+            )
+        }));
     let mut seen: Vec<&str> = Vec::new();
-    for (name, samples, declared) in named {
+    for (name, samples, stored, declared) in named {
         if name.is_empty() || seen.contains(&name) {
             return Err(ImageError::invalid(
                 path,
@@ -276,10 +362,7 @@ pub fn write_exr_with(
             ));
         }
         seen.push(name);
-        let len = match samples {
-            Samples::F32(p) => p.len(),
-            Samples::U32(p) => p.len(),
-        };
+        let len = samples.len() / 3;
         if declared != rgb.width * rgb.height || len != declared {
             return Err(ImageError::invalid(
                 path,
@@ -289,10 +372,82 @@ pub fn write_exr_with(
                 ),
             ));
         }
-        channels.extend(rgb_channels(path, &format!("{name}."), samples)?);
+        channels.extend(rgb_channels(path, &format!("{name}."), samples, stored)?);
     }
-    let attributes = extra
-        .attributes
+    let layout = ExrLayout {
+        compression: ExrCompression::Zip,
+        tile: None,
+    };
+    write_part_atomically(path, (width, height), &channels, extra.attributes, layout)
+}
+
+/// Writes `channels` (each `width * height` samples, row-major) to `path` as one part laid
+/// out as `layout`, through a temporary file renamed over `path` on success. For files of any
+/// channel layout (tests of the reader, data layers); `Uint` channels take `U32` samples, the
+/// others `F32`.
+pub fn write_exr_channels(
+    path: &Path,
+    width: usize,
+    height: usize,
+    channels: &[ExrChannel],
+    layout: ExrLayout,
+) -> Result<(), ImageError> {
+    let size = i32::try_from(width)
+        .ok()
+        .zip(i32::try_from(height).ok())
+        .filter(|&(w, h)| w > 0 && h > 0)
+        .ok_or_else(|| ImageError::invalid(path, format!("cannot write {width}x{height}")))?;
+    let sources = channels
+        .iter()
+        .map(|c| {
+            let stored = match (c.stored, c.samples) {
+                (ExrStored::Half, ExrSamples::F32(_)) => ffi::EXR_PIXEL_HALF,
+                (ExrStored::Float, ExrSamples::F32(_)) => ffi::EXR_PIXEL_FLOAT,
+                (ExrStored::Uint, ExrSamples::U32(_)) => ffi::EXR_PIXEL_UINT,
+                _ => {
+                    return Err(ImageError::invalid(
+                        path,
+                        format!("channel {:?}: u32 samples go with Uint only", c.name),
+                    ))
+                }
+            };
+            if c.samples.len() != width * height {
+                return Err(ImageError::invalid(
+                    path,
+                    format!("channel {:?} holds {} samples", c.name, c.samples.len()),
+                ));
+            }
+            Ok(ChannelSource {
+                name: CString::new(c.name)
+                    .map_err(|_| ImageError::invalid(path, "NUL in a channel name"))?,
+                stored,
+                samples: c.samples,
+                offset: 0,
+                stride: 1,
+            })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    write_part_atomically(path, size, &sources, &[], layout)
+}
+
+impl ExrSamples<'_> {
+    fn len(&self) -> usize {
+        match self {
+            ExrSamples::F32(p) => p.len(),
+            ExrSamples::U32(p) => p.len(),
+        }
+    }
+}
+
+/// Checks the attributes and writes the part through a temporary file.
+fn write_part_atomically(
+    path: &Path,
+    size: (i32, i32),
+    channels: &[ChannelSource],
+    attributes: &[(&str, &str)],
+    layout: ExrLayout,
+) -> Result<(), ImageError> {
+    let attributes = attributes
         .iter()
         .map(|(k, v)| {
             Ok((
@@ -302,7 +457,7 @@ pub fn write_exr_with(
         })
         .collect::<Result<Vec<_>, ImageError>>()?;
     write_atomically(path, |tmp| {
-        write_scanlines(tmp, path, width, height, &channels, &attributes, pixel)
+        write_part(tmp, path, size, channels, &attributes, layout)
     })
 }
 
@@ -324,11 +479,12 @@ fn checked_size(path: &Path, img: &RgbImage) -> Result<(i32, i32), ImageError> {
     }
 }
 
-/// The three channels `<prefix>R`, `<prefix>G`, `<prefix>B` of `image`.
+/// The three channels `<prefix>R`, `<prefix>G`, `<prefix>B` of interleaved RGB `samples`.
 fn rgb_channels<'a>(
     path: &Path,
     prefix: &str,
-    samples: Samples<'a>,
+    samples: ExrSamples<'a>,
+    stored: ffi::exr_pixel_type_t,
 ) -> Result<Vec<ChannelSource<'a>>, ImageError> {
     ["R", "G", "B"]
         .iter()
@@ -338,34 +494,33 @@ fn rgb_channels<'a>(
                 .map_err(|_| ImageError::invalid(path, "layer name contains a NUL byte"))?;
             Ok(ChannelSource {
                 name,
+                stored,
                 samples,
-                component,
+                offset: component,
+                stride: 3,
             })
         })
         .collect()
 }
 
 /// Writes the whole file `tmp` (errors name `shown`): header, then every chunk, then finish.
-#[allow(clippy::too_many_arguments)]
-fn write_scanlines(
+fn write_part(
     tmp: &Path,
     shown: &Path,
-    width: i32,
-    height: i32,
+    (width, height): (i32, i32),
     channels: &[ChannelSource],
     attributes: &[(CString, CString)],
-    pixel: ExrPixel,
+    layout: ExrLayout,
 ) -> Result<(), ImageError> {
     let ctx = Context::create_write(tmp, shown)?;
     let mut part = 0;
+    let storage = match layout.tile {
+        Some(_) => ffi::EXR_STORAGE_TILED,
+        None => ffi::EXR_STORAGE_SCANLINE,
+    };
     // SAFETY (all calls below): `ctx.raw` is a live write context, pointers are valid locals.
     ctx.check("exr_add_part", || unsafe {
-        ffi::exr_add_part(
-            ctx.raw,
-            std::ptr::null(),
-            ffi::EXR_STORAGE_SCANLINE,
-            &mut part,
-        )
+        ffi::exr_add_part(ctx.raw, std::ptr::null(), storage, &mut part)
     })?;
     ctx.check("exr_initialize_required_attr_simple", || unsafe {
         ffi::exr_initialize_required_attr_simple(
@@ -373,29 +528,33 @@ fn write_scanlines(
             part,
             width,
             height,
-            ffi::EXR_COMPRESSION_ZIP,
+            layout.compression.raw(),
         )
     })?;
-    let ptype = match pixel {
-        ExrPixel::Half => ffi::EXR_PIXEL_HALF,
-        ExrPixel::Float => ffi::EXR_PIXEL_FLOAT,
-    };
+    if let Some((tw, th)) = layout.tile {
+        ctx.check("exr_set_tile_descriptor", || unsafe {
+            ffi::exr_set_tile_descriptor(
+                ctx.raw,
+                part,
+                tw,
+                th,
+                ffi::EXR_TILE_ONE_LEVEL,
+                ffi::EXR_TILE_ROUND_DOWN,
+            )
+        })?;
+    }
     for (k, v) in attributes {
         ctx.check("exr_attr_set_string", || unsafe {
             ffi::exr_attr_set_string(ctx.raw, part, k.as_ptr(), v.as_ptr())
         })?;
     }
     for ch in channels {
-        let ptype = match ch.samples {
-            Samples::F32(_) => ptype,
-            Samples::U32(_) => ffi::EXR_PIXEL_UINT,
-        };
         ctx.check("exr_add_channel", || unsafe {
             ffi::exr_add_channel(
                 ctx.raw,
                 part,
                 ch.name.as_ptr(),
-                ptype,
+                ch.stored,
                 ffi::EXR_PERCEPTUALLY_LOGARITHMIC,
                 1,
                 1,
@@ -405,7 +564,51 @@ fn write_scanlines(
     ctx.check("exr_write_header", || unsafe {
         ffi::exr_write_header(ctx.raw)
     })?;
-    encode_chunks(&ctx, part, width, height, channels)?;
+    let mut enc = Encoder {
+        ctx: &ctx,
+        pipe: Box::default(),
+        initialized: false,
+    };
+    match layout.tile {
+        None => {
+            let mut lines = 0;
+            // SAFETY: live context, valid out-pointer.
+            ctx.check("exr_get_scanlines_per_chunk", || unsafe {
+                ffi::exr_get_scanlines_per_chunk(ctx.raw, part, &mut lines)
+            })?;
+            let step = usize::try_from(lines)
+                .ok()
+                .filter(|&l| l > 0)
+                .ok_or_else(|| {
+                    ImageError::invalid(&ctx.path, format!("{lines} scanlines per chunk"))
+                })?;
+            for y in (0..height).step_by(step) {
+                let mut cinfo = ffi::exr_chunk_info_t::default();
+                // SAFETY: live context, valid out-pointer.
+                ctx.check("exr_write_scanline_chunk_info", || unsafe {
+                    ffi::exr_write_scanline_chunk_info(ctx.raw, part, y, &mut cinfo)
+                })?;
+                let origin = (cinfo.start_x, cinfo.start_y);
+                encode_chunk(&mut enc, part, &cinfo, origin, (width, height), channels)?;
+            }
+        }
+        Some((tw, th)) => {
+            let tiles = |size: i32, t: u32| (size as u32).div_ceil(t.max(1)) as i32;
+            for ty in 0..tiles(height, th) {
+                for tx in 0..tiles(width, tw) {
+                    let mut cinfo = ffi::exr_chunk_info_t::default();
+                    // SAFETY: live context, valid out-pointer.
+                    ctx.check("exr_write_tile_chunk_info", || unsafe {
+                        ffi::exr_write_tile_chunk_info(ctx.raw, part, tx, ty, 0, 0, &mut cinfo)
+                    })?;
+                    // A tile's chunk info holds tile indices, not pixels, in `start_x/y`.
+                    let origin = (tx * tw as i32, ty * th as i32);
+                    encode_chunk(&mut enc, part, &cinfo, origin, (width, height), channels)?;
+                }
+            }
+        }
+    }
+    drop(enc);
     ctx.finish()
 }
 
@@ -425,89 +628,71 @@ impl Drop for Encoder<'_> {
     }
 }
 
-/// Encodes and writes every scanline chunk of part `part` from `channels`.
-fn encode_chunks(
-    ctx: &Context,
+/// Encodes and writes the chunk `cinfo` (scanlines or a tile, its top-left pixel at `origin`)
+/// of part `part` of a `width` x `height` image from `channels`.
+fn encode_chunk(
+    enc: &mut Encoder,
     part: i32,
-    width: i32,
-    height: i32,
+    cinfo: &ffi::exr_chunk_info_t,
+    origin: (i32, i32),
+    (width, height): (i32, i32),
     channels: &[ChannelSource],
 ) -> Result<(), ImageError> {
-    let mut lines = 0;
-    // SAFETY: live context, valid out-pointer.
-    ctx.check("exr_get_scanlines_per_chunk", || unsafe {
-        ffi::exr_get_scanlines_per_chunk(ctx.raw, part, &mut lines)
-    })?;
-    let step = usize::try_from(lines)
-        .ok()
-        .filter(|&l| l > 0)
-        .ok_or_else(|| ImageError::invalid(&ctx.path, format!("{lines} scanlines per chunk")))?;
-    let mut enc = Encoder {
-        ctx,
-        pipe: Box::default(),
-        initialized: false,
-    };
-    let row_stride = width * 3 * F32_BYTES;
-    for y in (0..height).step_by(step) {
-        let mut cinfo = ffi::exr_chunk_info_t::default();
-        // SAFETY: live context, valid out-pointer; the pipeline is boxed and never moves.
-        ctx.check("exr_write_scanline_chunk_info", || unsafe {
-            ffi::exr_write_scanline_chunk_info(ctx.raw, part, y, &mut cinfo)
+    let ctx = enc.ctx;
+    // SAFETY (initialize/update/choose/run): live context; the pipeline is boxed, never moves.
+    let fresh = !enc.initialized;
+    if fresh {
+        ctx.check("exr_encoding_initialize", || unsafe {
+            ffi::exr_encoding_initialize(ctx.raw, part, cinfo, &mut *enc.pipe)
         })?;
-        let fresh = !enc.initialized;
-        if fresh {
-            ctx.check("exr_encoding_initialize", || unsafe {
-                ffi::exr_encoding_initialize(ctx.raw, part, &cinfo, &mut *enc.pipe)
-            })?;
-            enc.initialized = true;
-        } else {
-            ctx.check("exr_encoding_update", || unsafe {
-                ffi::exr_encoding_update(ctx.raw, part, &cinfo, &mut *enc.pipe)
-            })?;
-        }
-        // The chunk's rows, which the library reads through the pointers set below.
-        let rows = usize::try_from(cinfo.start_y)
-            .ok()
-            .zip(usize::try_from(cinfo.height).ok())
-            .filter(|&(y0, n)| y0 + n <= height as usize)
-            .ok_or_else(|| ImageError::invalid(&ctx.path, "chunk outside the image"))?;
-        let first_pixel = rows.0 * width as usize;
-        for info in pipeline_channels(&mut enc.pipe) {
-            // SAFETY: the library sets `channel_name` to a NUL-terminated name it owns.
-            let name = unsafe { CStr::from_ptr(info.channel_name) };
-            let src = channels
-                .iter()
-                .find(|c| c.name.as_c_str() == name)
-                .ok_or_else(|| ImageError::invalid(&ctx.path, "library added a channel"))?;
-            let (start, user_type) = match src.samples {
-                Samples::F32(p) => (
-                    p.as_ptr().wrapping_add(first_pixel).cast::<u8>(),
-                    ffi::EXR_PIXEL_FLOAT,
-                ),
-                Samples::U32(p) => (
-                    p.as_ptr().wrapping_add(first_pixel).cast::<u8>(),
-                    ffi::EXR_PIXEL_UINT,
-                ),
-            };
-            info.user_bytes_per_element = F32_BYTES as i16;
-            info.user_data_type = user_type as u16;
-            info.user_pixel_stride = 3 * F32_BYTES;
-            info.user_line_stride = row_stride;
-            // The chunk's rows start at `first_pixel` (checked in bounds above); the channel is
-            // `component` floats into each pixel. The image outlives the pipeline run below.
-            info.__bindgen_anon_1.encode_from_ptr =
-                start.wrapping_add(src.component * F32_BYTES as usize);
-        }
-        if fresh {
-            ctx.check("exr_encoding_choose_default_routines", || unsafe {
-                ffi::exr_encoding_choose_default_routines(ctx.raw, part, &mut *enc.pipe)
-            })?;
-        }
-        ctx.check("exr_encoding_run", || unsafe {
-            ffi::exr_encoding_run(ctx.raw, part, &mut *enc.pipe)
+        enc.initialized = true;
+    } else {
+        ctx.check("exr_encoding_update", || unsafe {
+            ffi::exr_encoding_update(ctx.raw, part, cinfo, &mut *enc.pipe)
         })?;
     }
-    Ok(())
+    let inside = |start: i32, len: i32, size: i32| {
+        start >= 0 && len >= 0 && i64::from(start) + i64::from(len) <= i64::from(size)
+    };
+    if !inside(origin.0, cinfo.width, width) || !inside(origin.1, cinfo.height, height) {
+        return Err(ImageError::invalid(&ctx.path, "chunk outside the image"));
+    }
+    let first_pixel = origin.1 as usize * width as usize + origin.0 as usize;
+    for info in pipeline_channels(&mut enc.pipe) {
+        // SAFETY: the library sets `channel_name` to a NUL-terminated name it owns.
+        let name = unsafe { CStr::from_ptr(info.channel_name) };
+        let src = channels
+            .iter()
+            .find(|c| c.name.as_c_str() == name)
+            .ok_or_else(|| ImageError::invalid(&ctx.path, "library added a channel"))?;
+        // The chunk's first sample of this channel; the chunk lies inside the image (checked
+        // above), so every sample the library reads lies inside `samples`, which outlives the
+        // pipeline run below.
+        let first = first_pixel * src.stride + src.offset;
+        let (start, user_type) = match src.samples {
+            ExrSamples::F32(p) => (
+                p.as_ptr().wrapping_add(first).cast::<u8>(),
+                ffi::EXR_PIXEL_FLOAT,
+            ),
+            ExrSamples::U32(p) => (
+                p.as_ptr().wrapping_add(first).cast::<u8>(),
+                ffi::EXR_PIXEL_UINT,
+            ),
+        };
+        info.user_bytes_per_element = F32_BYTES as i16;
+        info.user_data_type = user_type as u16;
+        info.user_pixel_stride = src.stride as i32 * F32_BYTES;
+        info.user_line_stride = width * src.stride as i32 * F32_BYTES;
+        info.__bindgen_anon_1.encode_from_ptr = start;
+    }
+    if fresh {
+        ctx.check("exr_encoding_choose_default_routines", || unsafe {
+            ffi::exr_encoding_choose_default_routines(ctx.raw, part, &mut *enc.pipe)
+        })?;
+    }
+    ctx.check("exr_encoding_run", || unsafe {
+        ffi::exr_encoding_run(ctx.raw, part, &mut *enc.pipe)
+    })
 }
 
 /// The channel descriptions the library allocated in an initialized encode pipeline.
@@ -524,16 +709,21 @@ fn pipeline_channels(
 }
 
 /// Reads channels `R`, `G`, `B` of part 0 of `path` (scanline or tiled, any compression the
-/// library decodes, half/float/uint) into a linear f32 image of the data window's size.
-/// Other channels (A, layers) are ignored.
+/// library decodes, half/float/uint) into a linear f32 image of the data window's size; a
+/// luminance image (`Y`, no `R`/`G`/`B`) reads as grey. Other channels (A, layers) are ignored.
 pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
-    read_rgb_channels(path, ["R".into(), "G".into(), "B".into()], false)
+    read_rgb_channels(path, ["R", "G", "B"].map(String::from), false, true)
 }
 
 /// Reads the extra layer `layer` (channels `<layer>.R`, `<layer>.G`, `<layer>.B`) of part 0
 /// of `path`, as written by [`write_exr`].
 pub fn read_exr_layer(path: &Path, layer: &str) -> Result<RgbImage, ImageError> {
-    read_rgb_channels(path, ["R", "G", "B"].map(|c| format!("{layer}.{c}")), false)
+    read_rgb_channels(
+        path,
+        ["R", "G", "B"].map(|c| format!("{layer}.{c}")),
+        false,
+        false,
+    )
 }
 
 /// Reads the `UINT` layer `layer` (as written through [`ExrExtra::uint_layers`]) bit for bit:
@@ -542,7 +732,12 @@ pub fn read_exr_uint_layer(
     path: &Path,
     layer: &str,
 ) -> Result<(usize, usize, Vec<[u32; 3]>), ImageError> {
-    let img = read_rgb_channels(path, ["R", "G", "B"].map(|c| format!("{layer}.{c}")), true)?;
+    let img = read_rgb_channels(
+        path,
+        ["R", "G", "B"].map(|c| format!("{layer}.{c}")),
+        true,
+        false,
+    )?;
     let words = img.pixels.iter().map(|p| p.map(f32::to_bits)).collect();
     Ok((img.width, img.height, words))
 }
@@ -601,10 +796,15 @@ struct PartInfo {
 
 /// Reads the three named channels of part 0 into an image.
 /// With `raw`, the samples are decoded as `UINT` words and stored bit for bit in the f32s.
-fn read_rgb_channels(path: &Path, names: [String; 3], raw: bool) -> Result<RgbImage, ImageError> {
+fn read_rgb_channels(
+    path: &Path,
+    names: [String; 3],
+    raw: bool,
+    grey: bool,
+) -> Result<RgbImage, ImageError> {
     let ctx = Context::open_read(path)?;
     let info = part_info(&ctx)?;
-    check_channels(&ctx, &names)?;
+    let names = choose_channels(&ctx, names, grey)?;
     let mut img = RgbImage::new(info.width, info.height);
     let mut dec = Decoder {
         ctx: &ctx,
@@ -641,6 +841,21 @@ fn part_info(ctx: &Context) -> Result<PartInfo, ImageError> {
     ctx.check("exr_get_data_window", || unsafe {
         ffi::exr_get_data_window(ctx.raw, 0, &mut dw)
     })?;
+    let mut compression = ffi::EXR_COMPRESSION_NONE;
+    ctx.check("exr_get_compression", || unsafe {
+        ffi::exr_get_compression(ctx.raw, 0, &mut compression)
+    })?;
+    if matches!(
+        compression,
+        ffi::EXR_COMPRESSION_DWAA | ffi::EXR_COMPRESSION_DWAB
+    ) {
+        // The C library of Debian 12 (OpenEXR 3.1) has no DWA codec: say so before decoding.
+        return Err(ImageError::invalid(
+            &ctx.path,
+            "DWA compression cannot be decoded by this OpenEXR C library; \
+             re-save the file with ZIP or PIZ (e.g. `exrmaketiled -z zip IN OUT`)",
+        ));
+    }
     let tiled = match storage {
         ffi::EXR_STORAGE_SCANLINE => false,
         ffi::EXR_STORAGE_TILED => true,
@@ -680,8 +895,8 @@ fn v2i(v: ffi::exr_attr_v2i_t) -> [i32; 2] {
     unsafe { v.__bindgen_anon_1.arr }
 }
 
-/// Checks that part 0 has the three channels, unsubsampled; the error lists what it has.
-fn check_channels(ctx: &Context, names: &[String; 3]) -> Result<(), ImageError> {
+/// Part 0's channels: name and whether it is subsampled.
+fn channel_list(ctx: &Context) -> Result<Vec<(String, bool)>, ImageError> {
     let mut list: *const ffi::exr_attr_chlist_t = std::ptr::null();
     // SAFETY: live context, valid out-pointer.
     ctx.check("exr_get_channels", || unsafe {
@@ -694,29 +909,55 @@ fn check_channels(ctx: &Context, names: &[String; 3]) -> Result<(), ImageError> 
         },
         _ => &[],
     };
-    let mut found = Vec::new();
-    for e in entries {
-        let name = if e.name.str_.is_null() {
-            String::new()
-        } else {
-            // SAFETY: channel names are NUL-terminated strings owned by the context.
-            unsafe { CStr::from_ptr(e.name.str_) }
-                .to_string_lossy()
-                .into_owned()
-        };
-        if names.contains(&name) && (e.x_sampling != 1 || e.y_sampling != 1) {
-            return Err(ImageError::invalid(
-                &ctx.path,
-                format!("channel {name} is subsampled"),
-            ));
-        }
-        found.push(name);
+    Ok(entries
+        .iter()
+        .map(|e| {
+            let name = if e.name.str_.is_null() {
+                String::new()
+            } else {
+                // SAFETY: channel names are NUL-terminated strings owned by the context.
+                unsafe { CStr::from_ptr(e.name.str_) }
+                    .to_string_lossy()
+                    .into_owned()
+            };
+            (name, e.x_sampling != 1 || e.y_sampling != 1)
+        })
+        .collect())
+}
+
+/// The channels to read for `names`: those, or `Y` three times when `grey` allows it and the
+/// part has a `Y` channel but none of `names` (luminance images, `Y` or `YA`, as pbrt-v4
+/// reads them: grey). Errors name a missing or subsampled channel and list what the part has.
+fn choose_channels(
+    ctx: &Context,
+    names: [String; 3],
+    grey: bool,
+) -> Result<[String; 3], ImageError> {
+    let found = channel_list(ctx)?;
+    let has = |n: &str| found.iter().any(|(f, _)| f == n);
+    let names = if grey && has("Y") && !names.iter().any(|n| has(n)) {
+        ["Y", "Y", "Y"].map(String::from)
+    } else {
+        names
+    };
+    if let Some((name, _)) = found.iter().find(|(f, sub)| *sub && names.contains(f)) {
+        return Err(ImageError::invalid(
+            &ctx.path,
+            format!("channel {name} is subsampled"),
+        ));
     }
-    match names.iter().find(|n| !found.contains(n)) {
-        None => Ok(()),
+    match names.iter().find(|n| !has(n)) {
+        None => Ok(names),
         Some(missing) => Err(ImageError::invalid(
             &ctx.path,
-            format!("no channel {missing} (channels: {})", found.join(", ")),
+            format!(
+                "no channel {missing} (channels: {})",
+                found
+                    .iter()
+                    .map(|(f, _)| f.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
         )),
     }
 }
@@ -855,10 +1096,6 @@ fn decode_chunk(
             ffi::exr_decoding_update(ctx.raw, 0, cinfo, &mut *dec.pipe)
         })?;
     }
-    let plane = cw * ch;
-    dec.buffer.clear();
-    dec.buffer.resize(3 * plane, 0.0);
-    let base = dec.buffer.as_mut_ptr();
     let n = usize::try_from(dec.pipe.channel_count).unwrap_or(0);
     let infos: &mut [ffi::exr_coding_channel_info_t] = if dec.pipe.channels.is_null() || n == 0 {
         &mut []
@@ -866,24 +1103,46 @@ fn decode_chunk(
         // SAFETY: after initialize/update, `channels` holds `channel_count` entries.
         unsafe { std::slice::from_raw_parts_mut(dec.pipe.channels, n) }
     };
-    for info in infos {
+    // Every channel of the part is decoded, each into its own plane of the buffer (its own
+    // sample counts: subsampled channels have fewer): OpenEXRCore's specialised unpackers (e.g.
+    // four half channels to float) write every channel and do not skip a null destination.
+    let sizes: Vec<usize> = infos
+        .iter()
+        .map(|i| i.width.max(0) as usize * i.height.max(0) as usize)
+        .collect();
+    dec.buffer.clear();
+    dec.buffer.resize(sizes.iter().sum(), 0.0);
+    let base = dec.buffer.as_mut_ptr();
+    // Where each of `names` starts in the buffer.
+    let mut planes = [None; 3];
+    let mut offset = 0;
+    for (info, size) in infos.iter_mut().zip(&sizes) {
         // SAFETY: the library sets `channel_name` to a NUL-terminated name it owns.
         let name = unsafe { CStr::from_ptr(info.channel_name) }.to_string_lossy();
-        let target = names.iter().position(|n| *n == name);
+        let target = names.iter().any(|n| *n == name);
+        for (k, n) in names.iter().enumerate() {
+            if *n == name && info.width.max(0) as usize == cw && info.height.max(0) as usize == ch {
+                planes[k] = Some(offset);
+            }
+        }
         info.user_bytes_per_element = F32_BYTES as i16;
-        info.user_data_type = if dec.raw {
+        info.user_data_type = if dec.raw && target {
             ffi::EXR_PIXEL_UINT as u16
         } else {
             ffi::EXR_PIXEL_FLOAT as u16
         };
         info.user_pixel_stride = F32_BYTES;
-        info.user_line_stride = cw as i32 * F32_BYTES;
-        // Plane k of the buffer (cw * ch floats) receives channel k; others are skipped.
-        info.__bindgen_anon_1.decode_to_ptr = match target {
-            Some(k) => base.wrapping_add(k * plane).cast::<u8>(),
-            None => std::ptr::null_mut(),
-        };
+        info.user_line_stride = info.width.max(0) * F32_BYTES;
+        // The buffer holds `sizes` summed: this plane lies inside it.
+        info.__bindgen_anon_1.decode_to_ptr = base.wrapping_add(offset).cast::<u8>();
+        offset += size;
     }
+    let Some(planes) = planes.iter().copied().collect::<Option<Vec<usize>>>() else {
+        return Err(ImageError::invalid(
+            &ctx.path,
+            format!("chunk {} lacks one of {}", cinfo.idx, names.join(", ")),
+        ));
+    };
     if fresh {
         ctx.check("exr_decoding_choose_default_routines", || unsafe {
             ffi::exr_decoding_choose_default_routines(ctx.raw, 0, &mut *dec.pipe)
@@ -896,8 +1155,8 @@ fn decode_chunk(
     for r in 0..ch {
         let row = &mut img.pixels[(y0 + r) * img.width + x0..][..cw];
         for (c, px) in row.iter_mut().enumerate() {
-            for (k, v) in px.iter_mut().enumerate() {
-                *v = dec.buffer[k * plane + r * cw + c];
+            for (v, plane) in px.iter_mut().zip(&planes) {
+                *v = dec.buffer[plane + r * cw + c];
             }
         }
     }

@@ -21,8 +21,9 @@ pub mod metrics;
 pub mod png;
 
 pub use exr::{
-    read_exr, read_exr_attributes, read_exr_layer, read_exr_uint_layer, write_exr, write_exr_with,
-    ExrExtra, ExrPixel,
+    read_exr, read_exr_attributes, read_exr_layer, read_exr_uint_layer, write_exr,
+    write_exr_channels, write_exr_with, ExrChannel, ExrCompression, ExrExtra, ExrLayout, ExrPixel,
+    ExrSamples, ExrStored,
 };
 pub use png::write_png;
 
