@@ -11,7 +11,10 @@
 # identical bit for bit. Also checks that a failing array cancels its merge job instead of
 # leaving it waiting, that one task submitted again alone writes the same part, that
 # merge.sbatch refuses parts with a pass range missing and that submit.sh refuses an output
-# directory that already holds parts. Prints timings and ends with "N passed, M failed"; exit
+# directory that already holds parts. Before the cluster comes up, hostile names: a part name
+# carrying `$(cmd)` is refused without running cmd, an OUTDIR with a space and `*` reaches
+# photon as one word, and a comma in PHOTON_BIN's path never reaches sbatch's --export list
+# (a fake sbatch records what it was given). Prints timings and ends with "N passed, M failed"; exit
 # status 1 on any failure.
 # --dry replaces photon by a shell stub (tests/slurm-lib.sh: stub_photon) whose "parts" are
 # text files: it tests the cluster plumbing without the renderer's progressive mode.
@@ -103,7 +106,7 @@ failing_run() {
 rerun_one_task() {
   local part=$work/four/parts/part-00002-00004.exr job
   mv "$part" "$work/four/part-00002-00004.first.exr"
-  job=$(sbatch --parsable --array=1 --export="ALL,PHOTON_BIN=$PHOTON_BIN,PHOTON_ARRAY_TASKS=4" \
+  job=$(PHOTON_ARRAY_TASKS=4 sbatch --parsable --array=1 --export=ALL \
     --output="$work/four/logs/rerun-%A_%a.log" \
     contrib/slurm/render-array.sbatch "$PWD/$scene" 8 "$work/four" "${args[@]}") &&
     contrib/slurm/wait.sh "$job" "$timeout" >/dev/null &&
@@ -135,6 +138,53 @@ submit_refuses_reuse() {
   [[ $msg == *"already holds parts"* ]] && [ "$(squeue -h | wc -l)" = "$before" ]
 }
 
+# Hostile names, without the cluster. A part whose name holds `$(cmd)` in an arithmetic
+# subscript ran cmd in merge.sbatch (issue 22, case 5); it must be refused, cmd not run.
+merge_refuses_hostile_part_name() {
+  local d=$work/hostile msg
+  mkdir -p "$d/parts"
+  : >"$d/parts/part-00000-00008.exr"
+  : >"$d/parts/part-00000-00002+parts[\$(touch PWNED)].exr"
+  if msg=$(cd "$d" && PHOTON_BIN=/bin/false bash "$OLDPWD/contrib/slurm/merge.sbatch" "$d" 8 2>&1); then
+    echo "     merge.sbatch accepted a hostile part name" >&2; return 1
+  fi
+  echo "     merge.sbatch: $msg"
+  [ ! -e "$d/PWNED" ] && [[ $msg == *"is not a part name"* ]]
+}
+
+# An OUTDIR with a space and a `*`: photon merge gets `--png OUTDIR/image.png` as two words,
+# unsplit and unglobbed (it split and globbed).
+merge_quotes_outdir() {
+  local d="$work/out dir *" got
+  mkdir -p "$d/parts"
+  : >"$d/parts/part-00000-00008.exr"
+  printf '#!/bin/sh\nfor a in "$@"; do printf "%%s\\n" "$a"; done >"$ARGS_FILE"\n' >"$work/argstub"
+  chmod +x "$work/argstub"
+  ARGS_FILE=$work/args PHOTON_BIN=$work/argstub bash contrib/slurm/merge.sbatch "$d" 8 >/dev/null || return 1
+  got=$(tail -n 2 "$work/args")
+  [ "$got" = "--png
+$d/image.png" ] || { echo "     photon merge got: $(tr '\n' '|' <"$work/args")" >&2; return 1; }
+  echo "     photon merge got the preview path as one word: $d/image.png"
+}
+
+# A comma in PHOTON_BIN's path must not reach sbatch's --export list, where it would start a
+# new variable (issue 22, case 6). A fake sbatch records its arguments and environment.
+submit_passes_bin_as_data() {
+  local d=$work/fake bin
+  bin="$d/a,LD_PRELOAD=evil.so/photon"
+  mkdir -p "$d/path" "$(dirname "$bin")"
+  printf '#!/bin/sh\nexit 0\n' >"$bin"
+  chmod +x "$bin"
+  printf '#!/bin/sh\nprintf "%%s\\n" "$@" >>"%s/sbatch.args"\nprintf "%%s\\n" "$PHOTON_BIN" >>"%s/sbatch.env"\necho 42\n' "$d" "$d" >"$d/path/sbatch"
+  chmod +x "$d/path/sbatch"
+  PATH="$d/path:$PATH" PHOTON_BIN=$bin contrib/slurm/submit.sh "$scene" 8 4 "$d/out" >/dev/null || return 1
+  if grep -q LD_PRELOAD "$d/sbatch.args"; then
+    echo "     sbatch arguments name LD_PRELOAD: $(grep -- --export "$d/sbatch.args")" >&2; return 1
+  fi
+  [ "$(sort -u "$d/sbatch.env")" = "$bin" ] && grep -qx -- --export=ALL "$d/sbatch.args" &&
+    echo "     both sbatch calls: --export=ALL, PHOTON_BIN in the environment as one value"
+}
+
 daemons_running() {
   local n
   n=$(.ci/slurm ps "$SLURM_STATE" | grep -cE '^[0-9]+ (munged|slurmctld|slurmd) ')
@@ -151,6 +201,9 @@ nothing_left() { # STATE PIDS...
 }
 
 [ "$DRY" = 1 ] && echo "dry run: photon is a stub (tests/slurm-lib.sh: stub_photon)"
+check "merge.sbatch refuses a hostile part name without running it" merge_refuses_hostile_part_name
+check "merge.sbatch passes an OUTDIR with a space and * as one word" merge_quotes_outdir
+check "submit.sh passes a PHOTON_BIN holding a comma as data" submit_passes_bin_as_data
 check "cluster up" cluster_up || { summary; exit 1; }
 echo "     cluster up in ${UP_SECONDS} s, package check/install included (state $SLURM_STATE)"
 check "daemons running" daemons_running

@@ -48,7 +48,11 @@ fi
 mkdir -p "$outdir/parts" "$outdir/logs"
 
 read -r -a extra <<<"${PHOTON_SBATCH_ARGS:-}"
-common=(--parsable --export="ALL,PHOTON_BIN=$bin,PHOTON_ARRAY_TASKS=$tasks" --chdir="$outdir" "${extra[@]}")
+# The jobs get PHOTON_BIN and PHOTON_ARRAY_TASKS through the environment (--export=ALL), not
+# in --export's comma-separated list, where a comma in the binary's path would start another
+# variable (e.g. LD_PRELOAD).
+export PHOTON_BIN=$bin PHOTON_ARRAY_TASKS=$tasks
+common=(--parsable --export=ALL --chdir="$outdir" "${extra[@]}")
 array=$(sbatch "${common[@]}" --array="0-$((tasks - 1))" --cpus-per-task="$cpus" \
   --output="$outdir/logs/render-%A_%a.log" \
   "$here/render-array.sbatch" "$scene" "$passes" "$outdir" "$@")
