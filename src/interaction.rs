@@ -103,8 +103,9 @@ impl<'s> SurfaceInteraction<'s> {
     /// else the second when a hash of the point and `wo` (and the two materials) is below a.
     pub fn material<'a>(&self, scene: &'a Scene) -> &'a Material {
         let mut m = &scene.materials[self.mesh.material as usize];
-        // Mixes name materials defined before them, so chains end; the bound is for safety.
-        for _ in 0..64 {
+        // Mixes name materials defined before them, so chains end, and the loader refuses a
+        // chain deeper than MAX_MIX_DEPTH: the loop always reaches a material that is no mix.
+        for _ in 0..crate::scene::MAX_MIX_DEPTH {
             let MaterialKind::Mix {
                 materials, amount, ..
             } = &m.kind

@@ -684,3 +684,106 @@ fn resource_model_bounds_the_measured_peak() {
     println!("3M photons: estimate {est}, peak {peak}");
     assert!(peak <= est, "{est} vs {peak}");
 }
+
+// Issue 22 ("Hostile input III"): graphs of textures and materials.
+
+/// `Texture` lines defining `n` textures `t1..tn` of `class` (after a constant `t0`), each
+/// naming the one before it in `params` (`{prev}` stands for its name).
+fn texture_chain(n: usize, class: &str, params: &str) -> String {
+    let mut s = String::from("Texture \"t0\" \"float\" \"constant\" \"float value\" 0.5\n");
+    for i in 1..=n {
+        let p = params.replace("{prev}", &format!("t{}", i - 1));
+        s += &format!("Texture \"t{i}\" \"float\" \"{class}\" {p}\n");
+    }
+    s
+}
+
+/// 10,000 nested `scale` textures overflowed the stack (rc 134): the texture 65 deep (`t64`,
+/// over `t63` ... `t0`) is refused where it is defined.
+#[test]
+fn issue22_case_02_deep_texture_chains_are_refused_where_defined() {
+    let d = tmp_dir("i22c02");
+    let chain = texture_chain(10_000, "scale", "\"texture tex\" \"{prev}\"");
+    let world = format!(
+        "{chain}Material \"conductor\" \"texture roughness\" \"t10000\"\n\
+         Shape \"sphere\" \"float radius\" 0.3\n"
+    );
+    let r = render_text(&d, &small_scene(&world), &[], GIB);
+    assert_error(
+        &r,
+        &[
+            "scene.pbrt:76:",
+            "\"t64\"",
+            "65 textures deep",
+            "at most 64",
+        ],
+    );
+    // 64 deep renders.
+    let chain = texture_chain(63, "scale", "\"texture tex\" \"{prev}\"");
+    let world = format!(
+        "{chain}Material \"conductor\" \"texture roughness\" \"t63\"\n\
+         Shape \"sphere\" \"float radius\" 0.3\n"
+    );
+    let r = render_text(&d, &small_scene(&world), &[], GIB);
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+}
+
+/// 40 `mix` textures each naming the previous one twice (3.4 kB) ran forever in `render` and
+/// `check` (2^40 visits); the one whose lookup would pass 10,000 evaluations is refused, and
+/// `check` says the same.
+#[test]
+fn issue22_case_13_doubling_texture_graphs_are_refused() {
+    let d = tmp_dir("i22c13");
+    let chain = texture_chain(
+        40,
+        "mix",
+        "\"texture tex1\" \"{prev}\" \"texture tex2\" \"{prev}\"",
+    );
+    let world = format!(
+        "{chain}Material \"conductor\" \"texture roughness\" \"t40\"\n\
+         Shape \"sphere\" \"float radius\" 0.3\n"
+    );
+    let r = render_text(&d, &small_scene(&world), &[], GIB);
+    // t_k's lookup evaluates 3 (2^k - 1) + 2^k textures (tex1, tex2 and a constant amount at
+    // each level): t12, 12286, is the first past 10,000.
+    assert_error(
+        &r,
+        &[
+            "scene.pbrt:24:",
+            "\"t12\"",
+            "12286 textures",
+            "at most 10000",
+        ],
+    );
+    let scene = d.join("scene.pbrt");
+    let c = run_capped(["check".as_ref(), scene.as_os_str()], GIB, T);
+    assert_eq!(c.code, Some(2), "{}", c.describe());
+    assert!(c.stdout.contains("\"t12\""), "{}", c.describe());
+}
+
+/// More than 64 nested `mix` materials rendered black without a word: the 65th is refused at
+/// its `materials` parameter; one naming the previous twice at each of 64 levels loads at once
+/// (the depth is found in linear time).
+#[test]
+fn issue22_case_20_mix_materials_nest_at_most_64_deep() {
+    let d = tmp_dir("i22c20");
+    let mixes = |n: usize| {
+        let mut s = String::from(
+            "MakeNamedMaterial \"m0\" \"string type\" \"diffuse\" \"rgb reflectance\" [ 0.5 0.5 0.5 ]\n",
+        );
+        for i in 1..=n {
+            s += &format!(
+                "MakeNamedMaterial \"m{i}\" \"string type\" \"mix\" \"string materials\" [ \"m{p}\" \"m{p}\" ]\n",
+                p = i - 1
+            );
+        }
+        s + &format!("NamedMaterial \"m{n}\"\nShape \"sphere\" \"float radius\" 0.3\n")
+    };
+    let r = render_text(&d, &small_scene(&mixes(65)), &[], GIB);
+    assert_error(
+        &r,
+        &["scene.pbrt:77:45", "nests 65 mix materials", "at most 64"],
+    );
+    let r = render_text(&d, &small_scene(&mixes(64)), &[], GIB);
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+}

@@ -230,6 +230,10 @@ impl From<MaterialKind> for Material {
     }
 }
 
+/// Deepest chain of `mix` materials accepted (a mix of a mix of ...); hits resolve the chain
+/// in at most this many steps.
+pub const MAX_MIX_DEPTH: usize = 64;
+
 /// The closed set of scattering models (pbrt-v4 names and defaults). Parameters that pbrt-v4
 /// lets be textures are [`Tex`]: a constant or a texture, evaluated per hit.
 #[derive(Clone, Debug, PartialEq)]

@@ -55,6 +55,7 @@ use super::textures::texture_param;
 use crate::math::Vec3;
 use crate::scene::{Coat, Loc, Material, MaterialKind, Metal, Roughness, SceneError};
 use crate::texture::{Tex, Textures};
+use std::collections::HashMap;
 
 /// Builds material `ty` from `params` (all of which must be used); `loc` is where the type is
 /// named; `textures` are those defined so far.
@@ -151,12 +152,45 @@ fn mix(params: &mut ParamSet, loc: &Loc, cx: &MaterialContext) -> Result<Materia
         materials[i] = idx;
         flags = flags | cx.materials[idx as usize].kind.flags();
     }
+    let depth = 1 + materials
+        .iter()
+        .map(|&m| mix_depth(cx.materials, m, &mut HashMap::new()))
+        .max()
+        .unwrap_or(0);
+    if depth > crate::scene::MAX_MIX_DEPTH {
+        return Err(p.err(format!(
+            "this mix nests {depth} mix materials (at most {})",
+            crate::scene::MAX_MIX_DEPTH
+        )));
+    }
     let amount = tex(params, "amount", false, 0.5, cx.textures)?;
     Ok(MaterialKind::Mix {
         materials,
         amount,
         flags,
     })
+}
+
+/// How many `mix` materials deep material `m` nests (0 for any other material); `memo` keeps
+/// each material's depth so that a mix naming the same mix twice at every level costs linear
+/// time. Mixes name materials defined before them, so the recursion ends (and was checked to
+/// be at most [`crate::scene::MAX_MIX_DEPTH`] deep when each was made).
+fn mix_depth(materials: &[Material], m: u32, memo: &mut HashMap<u32, usize>) -> usize {
+    if let Some(&d) = memo.get(&m) {
+        return d;
+    }
+    let d = match &materials[m as usize].kind {
+        MaterialKind::Mix { materials: two, .. } => {
+            1 + two
+                .iter()
+                .map(|&c| mix_depth(materials, c, memo))
+                .max()
+                .unwrap_or(0)
+        }
+        _ => 0,
+    };
+    memo.insert(m, d);
+    d
 }
 
 /// A parameter that may be a texture: `spectrum` (RGB) or float, `default` when absent.

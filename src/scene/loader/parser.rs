@@ -131,6 +131,8 @@ pub struct Builder {
     texture_count: usize,
     textures: crate::texture::Textures,
     images: super::textures::ImageCache,
+    /// Lookup work (textures evaluated, depth) of each named texture, by its `Arc`'s address.
+    texture_work: std::collections::HashMap<usize, (u64, u32)>,
     /// `ObjectBegin` definitions: world-space meshes as defined (CTM at definition).
     objects: HashMap<String, Vec<Mesh>>,
     /// The definition being read: its name, meshes and where it began.
@@ -188,6 +190,7 @@ impl Builder {
             texture_count: 0,
             textures: Default::default(),
             images: Default::default(),
+            texture_work: Default::default(),
             objects: HashMap::new(),
             object: None,
         }
@@ -756,7 +759,29 @@ impl Builder {
                 format!("{kind} texture \"{name}\" redefined"),
             ));
         }
-        map.insert(name, Arc::new(tex));
+        use super::textures::{lookup_work, MAX_TEXTURE_DEPTH, MAX_TEXTURE_LOOKUPS};
+        let (work, depth) = lookup_work(&tex, &self.texture_work);
+        if depth > MAX_TEXTURE_DEPTH {
+            return Err(SceneError::at(
+                &name_at,
+                format!(
+                    "texture \"{name}\" nests {depth} textures deep (at most {MAX_TEXTURE_DEPTH})"
+                ),
+            ));
+        }
+        if work > MAX_TEXTURE_LOOKUPS {
+            return Err(SceneError::at(
+                &name_at,
+                format!(
+                    "texture \"{name}\": one lookup would evaluate {work} textures (at most \
+                     {MAX_TEXTURE_LOOKUPS}; each texture named twice by the next doubles it)"
+                ),
+            ));
+        }
+        let tex = Arc::new(tex);
+        self.texture_work
+            .insert(Arc::as_ptr(&tex) as usize, (work, depth));
+        map.insert(name, tex);
         Ok(())
     }
 

@@ -92,6 +92,32 @@ pub fn make_texture(
     })
 }
 
+/// Deepest texture graph accepted (a texture naming one that names another ... `n` deep):
+/// lookups recurse this deep.
+pub const MAX_TEXTURE_DEPTH: u32 = 64;
+/// Most textures one lookup may evaluate, counting a texture each time it is reached: a
+/// texture named twice by the next one doubles the work at every step.
+pub const MAX_TEXTURE_LOOKUPS: u64 = 10_000;
+
+/// What one lookup of `t` costs: textures evaluated (with repetition, saturating) and depth.
+/// `known` holds the cost of named textures by address (their `Arc`'s pointer), so that the
+/// cost of a graph whose parts are shared is found in time linear in its definitions.
+pub fn lookup_work(t: &Texture, known: &HashMap<usize, (u64, u32)>) -> (u64, u32) {
+    let children: Vec<&Arc<Texture>> = match t {
+        Texture::Constant(_) | Texture::Image(_) => vec![],
+        Texture::Checkerboard { tex1, tex2, .. } => vec![tex1, tex2],
+        Texture::Scale { tex, scale } => vec![tex, scale],
+        Texture::Mix { tex1, tex2, amount } => vec![tex1, tex2, amount],
+    };
+    children.iter().fold((1, 1), |(n, d), c| {
+        let (cn, cd) = known
+            .get(&(Arc::as_ptr(c) as usize))
+            .copied()
+            .unwrap_or_else(|| lookup_work(c, known));
+        (n.saturating_add(cn), d.max(cd.saturating_add(1)))
+    })
+}
+
 /// A constant value: `rgb` for a spectrum texture, `float` otherwise (splatted).
 fn value(
     params: &mut ParamSet,
