@@ -341,3 +341,146 @@ fn progressive_time_budget_renders_an_ordinary_image() {
     assert_eq!(img.count_nonfinite(), 0);
     assert!(img.pixels.iter().any(|p| p[0] > 0.0));
 }
+
+/// Writes a copy of partial image `src` to `dst` with attribute `key` set to `value` and each
+/// sum word passed through `word` (layer name, word): a forged part.
+fn forge(src: &Path, dst: &Path, key: &str, value: &str, word: &dyn Fn(&str, u32) -> u32) {
+    use photon::imageio::{read_exr, read_exr_attributes, read_exr_uint_layer, write_exr_with};
+    let rgb = read_exr(src).unwrap();
+    let mut attrs = read_exr_attributes(src).unwrap();
+    attrs.retain(|(k, _)| k.starts_with("photon."));
+    for (k, v) in attrs.iter_mut() {
+        if k == key {
+            *v = value.to_string();
+        }
+    }
+    let mut layers: Vec<(String, Vec<[u32; 3]>)> = Vec::new();
+    for c in photon::integrator::passes::COMPONENTS {
+        for half in ["hi", "lo"] {
+            let name = format!("sum.{c}.{half}");
+            let (_, _, words) = read_exr_uint_layer(src, &name).unwrap();
+            let words = words.iter().map(|p| p.map(|x| word(&name, x))).collect();
+            layers.push((name, words));
+        }
+    }
+    let uint: Vec<(&str, &[[u32; 3]])> = layers.iter().map(|(n, w)| (n.as_str(), &w[..])).collect();
+    let attributes: Vec<(&str, &str)> = attrs
+        .iter()
+        .map(|(k, v)| (k.as_str(), v.as_str()))
+        .collect();
+    let extra = photon::imageio::ExrExtra {
+        uint_layers: &uint,
+        attributes: &attributes,
+    };
+    write_exr_with(dst, &rgb, &[], photon::imageio::ExrPixel::Float, extra).unwrap();
+}
+
+/// Forged parts (issue 22, cases 3 and 21): a `photon.resolution` of 400000x600000 made
+/// `merge` and `--resume` abort on a 960 GB allocation; a negative sum was merged as if
+/// photon had written it; two sums whose total leaves the i64 range saturated silently. Each is
+/// now a one-line error naming the file (or the pixel).
+#[test]
+fn merge_refuses_forged_sizes_negative_and_overflowing_sums() {
+    let dir = tmp("forged");
+    render(&dir, "a.exr", &["--passes", "0..1", "--res", "8x6"]);
+    render(&dir, "b.exr", &["--passes", "1..2", "--res", "8x6"]);
+    let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+    let keep = |_: &str, x: u32| x;
+    let stderr = |o: &Output| String::from_utf8_lossy(&o.stderr).into_owned();
+
+    forge(
+        &a,
+        &dir.join("huge.exr"),
+        "photon.resolution",
+        "400000x600000",
+        &keep,
+    );
+    let o = merge(&dir, &["huge.exr", "b.exr"], "m.exr");
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("huge.exr: photon.resolution 400000x600000"),
+        "{}",
+        stderr(&o)
+    );
+    let o = photon()
+        .args(["render", "scenes/cornell-glass.pbrt", "--resume"])
+        .arg(dir.join("huge.exr"))
+        .args(SMALL)
+        .args(["--res", "8x6", "--passes", "0..3", "-o"])
+        .arg(dir.join("r.exr"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("photon.resolution 400000x600000"),
+        "{}",
+        stderr(&o)
+    );
+
+    // The file's own size must agree too: a smaller forged resolution.
+    forge(
+        &a,
+        &dir.join("small.exr"),
+        "photon.resolution",
+        "4x3",
+        &keep,
+    );
+    let o = merge(&dir, &["small.exr", "b.exr"], "m.exr");
+    assert!(
+        stderr(&o).contains("is 8x6, expected 4x3"),
+        "{}",
+        stderr(&o)
+    );
+
+    let negative = |n: &str, x: u32| {
+        if n == "sum.direct.hi" {
+            x | 0x8000_0000
+        } else {
+            x
+        }
+    };
+    forge(
+        &a,
+        &dir.join("neg.exr"),
+        "photon.format",
+        "photon-partial-1",
+        &negative,
+    );
+    let o = merge(&dir, &["neg.exr", "b.exr"], "m.exr");
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("neg.exr: sum.direct is negative at pixel (0, 0)"),
+        "{}",
+        stderr(&o)
+    );
+
+    let big = |n: &str, x: u32| {
+        if n == "sum.indirect.hi" {
+            0x7fff_ffff
+        } else {
+            x
+        }
+    };
+    forge(
+        &a,
+        &dir.join("big-a.exr"),
+        "photon.format",
+        "photon-partial-1",
+        &big,
+    );
+    forge(
+        &b,
+        &dir.join("big-b.exr"),
+        "photon.format",
+        "photon-partial-1",
+        &big,
+    );
+    let o = merge(&dir, &["big-a.exr", "big-b.exr"], "m.exr");
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("the sum at pixel (0, 0) overflows"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!dir.join("m.exr").exists());
+}

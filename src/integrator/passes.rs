@@ -143,16 +143,27 @@ impl Partial {
         self.passes.end += 1;
     }
 
-    /// Adds another part of the same render (the caller checks headers and ranges).
-    pub fn absorb(&mut self, other: &Partial) {
-        for (a, b) in self.sums.iter_mut().zip(&other.sums) {
+    /// Adds another part of the same render (the caller checks headers and ranges). A sum
+    /// that would leave the i64 range is an error naming the pixel (saturating would give a
+    /// wrong image without a word).
+    pub fn absorb(&mut self, other: &Partial) -> Result<(), String> {
+        let w = self.header.width.max(1);
+        for (i, (a, b)) in self.sums.iter_mut().zip(&other.sums).enumerate() {
             for (x, y) in a.iter_mut().zip(b) {
-                *x = x.saturating_add(*y);
+                *x = x.checked_add(*y).ok_or_else(|| {
+                    format!(
+                        "the sum at pixel ({}, {}) overflows: the parts hold more than \
+                         2^39 units of radiance there",
+                        i % w,
+                        i / w
+                    )
+                })?;
             }
         }
-        self.rejected += other.rejected;
+        self.rejected = self.rejected.saturating_add(other.rejected);
         self.passes =
             self.passes.start.min(other.passes.start)..self.passes.end.max(other.passes.end);
+        Ok(())
     }
 
     /// The mean over the passes: the total image and one image per component.
@@ -269,6 +280,14 @@ impl Partial {
             .and_then(|(a, b)| Some(a.parse().ok()?..b.parse().ok()?))
             .filter(|r: &Range<u64>| r.start <= r.end)
             .ok_or_else(|| bad("photon.passes"))?;
+        let pixels = w as u64 * h as u64;
+        if w == 0 || h == 0 || pixels > crate::resources::MAX_IMAGE_PIXELS {
+            return Err(format!(
+                "{shown}: photon.resolution {w}x{h} is not a size photon renders (at most {} \
+                 pixels)",
+                crate::resources::MAX_IMAGE_PIXELS
+            ));
+        }
         let header = PartialHeader {
             scene: get("photon.scene")?,
             seed: get("photon.seed")?
@@ -278,7 +297,9 @@ impl Partial {
             height: h,
             settings: get("photon.settings")?,
         };
-        let mut sums = vec![[0i64; 12]; w * h];
+        // Allocated once the first layer has shown the file really holds w x h pixels (a
+        // forged photon.resolution asked for 960 GB here).
+        let mut sums: Vec<[i64; 12]> = Vec::new();
         for (c, name) in COMPONENTS.iter().enumerate() {
             let read = |half: &str| {
                 let layer = format!("sum.{name}.{half}");
@@ -292,9 +313,23 @@ impl Partial {
                 Ok(words)
             };
             let (hi, lo) = (read("hi")?, read("lo")?);
-            for ((s, a), b) in sums.iter_mut().zip(&hi).zip(&lo) {
+            if sums.is_empty() {
+                sums = vec![[0i64; 12]; w * h];
+            }
+            for (i, ((s, a), b)) in sums.iter_mut().zip(&hi).zip(&lo).enumerate() {
                 for k in 0..3 {
-                    s[3 * c + k] = ((a[k] as u64) << 32 | b[k] as u64) as i64;
+                    let v = ((a[k] as u64) << 32 | b[k] as u64) as i64;
+                    // Radiance and the pixel filters (box, triangle, Gaussian) are never
+                    // negative: a negative sum was not written by photon.
+                    if v < 0 {
+                        return Err(format!(
+                            "{shown}: sum.{name} is negative at pixel ({}, {}): not a sum \
+                             photon wrote",
+                            i % w,
+                            i / w
+                        ));
+                    }
+                    s[3 * c + k] = v;
                 }
             }
         }
@@ -364,7 +399,7 @@ pub fn merge(parts: &[(std::path::PathBuf, Partial)]) -> Result<Partial, String>
     }
     let mut acc = Partial::new(first.header.clone(), 0);
     for (_, p) in order {
-        acc.absorb(p);
+        acc.absorb(p)?;
     }
     Ok(acc)
 }
@@ -587,7 +622,7 @@ mod tests {
         let mut b = Partial::new(header.clone(), 4);
         (0..4).for_each(|k| a.add_pass(&pass(k)));
         (4..9).for_each(|k| b.add_pass(&pass(k)));
-        b.absorb(&a);
+        b.absorb(&a).unwrap();
         assert_eq!(b, whole);
         // The mean is the f64 mean of the passes to within the fixed-point step.
         let (total, parts) = whole.mean();
