@@ -67,10 +67,16 @@ fn parse() -> Result<Cli, ExitCode> {
                 .collect();
             let line = lines.join(" ");
             let line = line.strip_prefix("error: ").unwrap_or(&line);
-            eprintln!("photon: {}", photon::scene::clip_for_message(line, 400));
+            eprintln!("photon: {}", one_line(line));
             ExitCode::from(2)
         }
     })
+}
+
+/// An error as the one line photon prints after `photon: ` (at most
+/// [`photon::scene::MAX_LINE`] bytes in all).
+fn one_line(msg: &str) -> String {
+    photon::scene::one_line(msg, photon::scene::MAX_LINE - "photon: ".len())
 }
 
 fn main() -> ExitCode {
@@ -90,7 +96,7 @@ fn main() -> ExitCode {
     // A render stopped by SIGINT/SIGTERM has saved what it finished; report the signal.
     if let Some(sig) = photon::interrupt::requested() {
         if let Err(e) = &result {
-            eprintln!("photon: {e}");
+            eprintln!("photon: {}", one_line(&e.to_string()));
         }
         return ExitCode::from(sig.exit_code());
     }
@@ -98,8 +104,7 @@ fn main() -> ExitCode {
         Ok(true) => ExitCode::SUCCESS,
         Ok(false) => ExitCode::from(1),
         Err(e) => {
-            let msg = photon::scene::clip_for_message(&e.to_string(), 1000);
-            eprintln!("photon: {msg}");
+            eprintln!("photon: {}", one_line(&e.to_string()));
             match photon::interrupt::requested() {
                 Some(sig) => ExitCode::from(sig.exit_code()),
                 None => ExitCode::from(2),

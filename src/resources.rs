@@ -16,8 +16,8 @@
 //! kd-trees, times an upper estimate of the photons stored), the per-thread gather, shadow and
 //! k-nearest buffers (bounded: they are flushed in batches of [`BATCH`]) and the acceleration
 //! structure over the loaded triangles. [`check`] turns an estimate above the budget into one
-//! line: `--res: the render needs ~116 GB (film 116 GB, ...) for 32768x32768 ...; the limit is
-//! 20.2 GB (80% of physical memory 25.3 GB)`. A render prints its estimate and its peak
+//! line: `--res: needs ~116 GB (film 116 GB) for 32768x32768 ..., over the limit of 20.2 GB
+//! (80% of physical 25.3 GB; --max-memory)`. A render prints its estimate and its peak
 //! resident memory (VmHWM) at the end, which `tests/hostile.rs` compares.
 use crate::accel::BackendKind;
 use crate::integrator::{IntegratorKind, RenderSettings};
@@ -28,6 +28,8 @@ use crate::scene::{MaterialKind, Scene};
 pub const MAX_RESOLUTION: u32 = 32768;
 /// Largest samples per pixel.
 pub const MAX_SPP: u32 = 1 << 20;
+/// Longest duration a flag takes (`--time`, `--every`): a year.
+pub const MAX_SECONDS: f64 = 365.0 * 24.0 * 3600.0;
 /// Largest final-gather rays per diffuse point.
 pub const MAX_GATHER_SAMPLES: u32 = 4096;
 /// Largest shadow rays per shading point.
@@ -81,6 +83,22 @@ pub fn triangle_bytes(backend: BackendKind) -> u64 {
         BackendKind::Obvhs => 410,
     }
 }
+/// Bytes each mesh costs beyond its triangles (the `Mesh` and its vectors' headers, the
+/// loader's record of where it was written, the backend's per-geometry objects). Measured:
+/// see BENCHMARKS.md ("Memory per mesh").
+pub const MESH_OVERHEAD_BYTES: u64 = 768;
+
+/// Bytes a copy of `mesh` holds (its arrays plus [`MESH_OVERHEAD_BYTES`]): what an
+/// `ObjectInstance` of it allocates in the loader.
+pub fn mesh_bytes(mesh: &crate::scene::Mesh) -> u64 {
+    let v = mesh.positions.len() as u64;
+    MESH_OVERHEAD_BYTES
+        + v * 12
+        + mesh.normals.as_ref().map_or(0, |n| n.len() as u64 * 12)
+        + mesh.uvs.as_ref().map_or(0, |u| u.len() as u64 * 8)
+        + mesh.indices.len() as u64 * 12
+}
+
 /// Bytes the ray-query backend's alpha masks copy from meshes with `alpha` and uvs (see
 /// `accel::AlphaMask`): their indices (12 per triangle) and uvs (8 per vertex). Exact sizes,
 /// not measured; 0 without alpha.
@@ -116,13 +134,18 @@ pub struct Estimate {
     pub parts: Vec<(&'static str, u64)>,
     /// What the estimate is for, for the message (`512x512, 400000 photons`).
     pub what: String,
+    /// The loader's own peak ([`Scene::load_peak`]: a decode's transient buffers), which
+    /// the process reached before any part was allocated: the total is at least this.
+    pub load_peak: u64,
 }
 
 impl Estimate {
+    /// The parts summed, or the loader's peak when that is larger.
     pub fn total(&self) -> u64 {
         self.parts
             .iter()
             .fold(0u64, |a, (_, b)| a.saturating_add(*b))
+            .max(self.load_peak)
     }
 }
 
@@ -228,7 +251,7 @@ pub fn default_budget() -> Budget {
     let mut budget = Budget {
         bytes: (physical as f64 * DEFAULT_FRACTION) as u64,
         source: format!(
-            "{:.0}% of physical memory {}",
+            "{:.0}% of physical {}",
             DEFAULT_FRACTION * 100.0,
             human(physical)
         ),
@@ -241,7 +264,7 @@ pub fn default_budget() -> Budget {
             budget = Budget {
                 bytes: left,
                 source: format!(
-                    "{:.0}% of what the address-space limit {} leaves",
+                    "{:.0}% of what address-space limit {} leaves",
                     DEFAULT_FRACTION * 100.0,
                     human(limit)
                 ),
@@ -295,6 +318,7 @@ pub fn estimate(
     let mut e = Estimate {
         parts: vec![("film", pixels.saturating_mul(FILM_BYTES_PER_PIXEL))],
         what: format!("{}x{}", settings.width, settings.height),
+        load_peak: scene.load_peak,
     };
     if kind == IntegratorKind::Photonmap {
         let t = &settings.photon.trace;
@@ -304,13 +328,17 @@ pub fn estimate(
         let bytes = (stored * PHOTON_PEAK_BYTES as f64).min(u64::MAX as f64) as u64;
         e.parts.push(("photon maps", bytes));
         e.what += &format!(
-            " with {} + {} photons (~{:.1} stored per photon emitted, {PHOTON_PEAK_BYTES} bytes each at peak)",
-            t.global_photons, t.caustic_photons, per
+            ", {} + {} photons x{per:.1} stored x {PHOTON_PEAK_BYTES} B",
+            t.global_photons, t.caustic_photons
         );
     }
     let tris = scene.triangle_count() as u64;
-    e.parts
-        .push(("geometry", tris.saturating_mul(triangle_bytes(backend))));
+    let meshes = scene.meshes.len() as u64;
+    e.parts.push((
+        "geometry",
+        tris.saturating_mul(triangle_bytes(backend))
+            .saturating_add(meshes.saturating_mul(MESH_OVERHEAD_BYTES)),
+    ));
     // Already decoded by the loader (each image checked against MAX_IMAGE_PIXELS first).
     e.parts.push(("textures", scene.textures.decoded_bytes()));
     // Environment maps: texels and sampling tables, shared (Arc) by every render's lights.
@@ -329,19 +357,23 @@ pub fn check(e: &Estimate, budget: &Budget) -> Result<(), String> {
     if total <= budget.bytes {
         return Ok(());
     }
+    // The parts that matter (a tenth of the total or more), to keep the line short.
     let parts: Vec<String> = e
         .parts
         .iter()
-        .filter(|(_, b)| *b > 0)
+        .filter(|(_, b)| *b > 0 && *b >= total / 10)
         .map(|(n, b)| format!("{n} {}", human(*b)))
         .collect();
+    let source = match budget.source.as_str() {
+        "--max-memory" => budget.source.clone(),
+        other => format!("{other}; --max-memory"),
+    };
     Err(format!(
-        "the render needs ~{} ({}) for {}; the limit is {} ({}); lower the resolution or photon counts, or raise --max-memory",
+        "needs ~{} ({}) for {}, over the limit of {} ({source})",
         human(total),
         parts.join(", "),
         e.what,
         human(budget.bytes),
-        budget.source
     ))
 }
 

@@ -715,6 +715,14 @@ pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
     read_rgb_channels(path, ["R", "G", "B"].map(String::from), false, true)
 }
 
+/// The size of part 0's data window, from the header alone (nothing is decoded).
+pub fn read_exr_size(path: &Path) -> Result<(usize, usize), ImageError> {
+    let ctx = Context::open_read(path)?;
+    let info = part_info(&ctx)?;
+    ctx.finish()?;
+    Ok((info.width, info.height))
+}
+
 /// Reads the extra layer `layer` (channels `<layer>.R`, `<layer>.G`, `<layer>.B`) of part 0
 /// of `path`, as written by [`write_exr`].
 pub fn read_exr_layer(path: &Path, layer: &str) -> Result<RgbImage, ImageError> {

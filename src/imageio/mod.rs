@@ -21,7 +21,7 @@ pub mod metrics;
 pub mod png;
 
 pub use exr::{
-    read_exr, read_exr_attributes, read_exr_layer, read_exr_uint_layer, write_exr,
+    read_exr, read_exr_attributes, read_exr_layer, read_exr_size, read_exr_uint_layer, write_exr,
     write_exr_channels, write_exr_with, ExrChannel, ExrCompression, ExrExtra, ExrLayout, ExrPixel,
     ExrSamples, ExrStored,
 };

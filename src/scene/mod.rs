@@ -87,6 +87,38 @@ pub fn clip_for_message(s: &str, max: usize) -> String {
     out
 }
 
+/// Longest error line photon prints, in bytes: one readable line.
+pub const MAX_LINE: usize = 200;
+
+/// `s` as one line of at most `max` bytes: control characters escaped, and when longer, its
+/// start (two thirds: where the error is) and its end (the last third: what is wrong) joined
+/// by " … ".
+pub fn one_line(s: &str, max: usize) -> String {
+    let escaped: String = s
+        .chars()
+        .flat_map(|c| {
+            let e: Vec<char> = if c.is_control() {
+                c.escape_default().collect()
+            } else {
+                vec![c]
+            };
+            e
+        })
+        .collect();
+    if escaped.len() <= max {
+        return escaped;
+    }
+    let cut = |mut i: usize, down: bool| {
+        while !escaped.is_char_boundary(i) {
+            i = if down { i - 1 } else { i + 1 };
+        }
+        i
+    };
+    let head = cut(max * 2 / 3, true);
+    let tail = cut(escaped.len() - (max - head - " … ".len()), false);
+    format!("{} … {}", &escaped[..head], &escaped[tail..])
+}
+
 impl std::error::Error for SceneError {}
 
 /// A triangle mesh in world space.
@@ -557,8 +589,11 @@ pub struct Scene {
     pub integrator: IntegratorDesc,
     /// The file the scene was read from (outputs default next to the working directory).
     pub path: PathBuf,
-    /// The `Texture`s the file defines (parsed; the integrators do not read them yet).
+    /// The `Texture`s the file defines (materials and alpha hold what they use).
     pub textures: crate::texture::Textures,
+    /// The most bytes the loader held at once for data files (decoded images with their
+    /// transient decode buffers, PLY meshes, instanced copies): a floor of the process's peak.
+    pub load_peak: u64,
     /// What the loader accepted but ignores, one line each with its location (`Accelerator`,
     /// another renderer's integrator parameters, `Option`s): printed before a render.
     pub notes: Vec<String>,
@@ -591,6 +626,7 @@ impl Scene {
             path: PathBuf::from("generated.pbrt"),
             notes: Vec::new(),
             textures: Default::default(),
+            load_peak: 0,
         }
     }
 

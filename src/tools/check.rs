@@ -133,11 +133,12 @@ impl fmt::Display for SceneReport {
             self.textures,
             self.memory
         )?;
+        let line = |s: String| crate::scene::one_line(&s, crate::scene::MAX_LINE - 2);
         for p in &self.problems {
-            write!(f, "\n  {p}")?;
+            write!(f, "\n  {}", line(p.to_string()))?;
         }
         for n in &self.notes {
-            write!(f, "\n  note: {n}")?;
+            write!(f, "\n  {}", line(format!("note: {n}")))?;
         }
         Ok(())
     }

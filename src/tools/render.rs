@@ -100,7 +100,7 @@ pub struct PassOptions {
     #[arg(long, value_parser = parse_pass_range)]
     pub passes: Option<std::ops::Range<u64>>,
     /// Samples per pixel of each pass (default: `"integer passspp"`, else 4).
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
     pub pass_spp: Option<u32>,
     /// Write the partial image to FILE as the render goes (atomically), at most every
     /// --every; on SIGINT/SIGTERM it is written before exiting.
@@ -248,7 +248,10 @@ fn default_output(film_filename: Option<&str>, scene: &Path) -> PathBuf {
 pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     // Load and validate everything before any work is done.
     let t0 = Instant::now();
-    let scene = loader::load(&opts.scene)?;
+    let max_memory = opts
+        .max_memory
+        .unwrap_or_else(|| crate::resources::default_budget().bytes);
+    let scene = loader::load_within(&opts.scene, max_memory)?;
     let load_s = t0.elapsed().as_secs_f64();
     let mut settings = RenderSettings::from_scene(&scene)?;
     if let Some((w, h)) = opts.res {
@@ -516,7 +519,8 @@ fn print_stats(out: &crate::integrator::RenderOutput, threads: usize) {
     );
 }
 
-/// Parses a duration: seconds as a number, or with a suffix `s`, `m` or `ms`.
+/// Parses a duration: seconds as a number, or with a suffix `s`, `m` or `ms`; at most
+/// [`crate::resources::MAX_SECONDS`].
 pub fn parse_duration(s: &str) -> Result<f64, String> {
     let t = s.trim();
     let (num, scale) = if let Some(v) = t.strip_suffix("ms") {
@@ -528,10 +532,12 @@ pub fn parse_duration(s: &str) -> Result<f64, String> {
     } else {
         (t, 1.0)
     };
+    let max = crate::resources::MAX_SECONDS;
     match num.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v * scale),
+        Ok(v) if v.is_finite() && v > 0.0 && v * scale <= max => Ok(v * scale),
         _ => Err(format!(
-            "expected a positive duration such as 10s, 2.5 or 1m, got {s:?}"
+            "expected a positive duration of at most {max} s such as 10s, 2.5 or 1m, got {}",
+            crate::scene::clip_for_message(s, 40)
         )),
     }
 }

@@ -143,6 +143,7 @@ pub fn has_location(line: &str) -> bool {
         || line.starts_with("photon: -o ")
         || line.starts_with("photon: --")
         || line.contains(".pbrt: ")
+        || line.contains(".exr: ")
         || line.contains("cannot read \"")
 }
 
@@ -183,6 +184,10 @@ pub fn check_run(r: &Run) -> Result<(), String> {
             }
             if lines[0].chars().any(|c| c.is_control()) {
                 return Err(format!("control characters: {}", r.describe()));
+            }
+            // One readable line (issue 22, case 19: lines of 599-1012 bytes).
+            if lines[0].len() > 200 {
+                return Err(format!("{} bytes: {}", lines[0].len(), r.describe()));
             }
             if !has_location(lines[0]) {
                 return Err(format!("no location: {}", r.describe()));

@@ -215,13 +215,13 @@ pub fn light_source(
     params: &mut ParamSet,
     loc: &Loc,
     ctm: &Mat4,
-    base_dir: &Path,
+    files: (&Path, &super::LoadBudget),
 ) -> Result<Light, SceneError> {
     let light = match ty {
         "point" => point(params, loc, ctm)?,
         "spot" => spot(params, loc, ctm)?,
         "distant" => distant(params, loc, ctm)?,
-        "infinite" => infinite(params, loc, ctm, base_dir)?,
+        "infinite" => infinite(params, loc, ctm, files)?,
         other => {
             return Err(SceneError::at(
                 loc,
@@ -331,7 +331,7 @@ fn infinite(
     params: &mut ParamSet,
     loc: &Loc,
     ctm: &Mat4,
-    base_dir: &Path,
+    (base_dir, budget): (&Path, &super::LoadBudget),
 ) -> Result<Light, SceneError> {
     let portal = portal(params)?;
     let scale = params.get_float("scale", 1.0)?;
@@ -361,7 +361,7 @@ fn infinite(
     let map = match filename {
         Some(name) => {
             let rotation = light_rotation(ctm, loc)?;
-            let image = env_image(&base_dir.join(&name), loc)?;
+            let image = env_image(&base_dir.join(&name), loc, budget)?;
             let k = match illuminance {
                 Some(e) => {
                     let upper = EnvMap::upper_illuminance(&image);
@@ -482,10 +482,17 @@ fn light_rotation(ctm: &Mat4, loc: &Loc) -> Result<Mat3, SceneError> {
 }
 
 /// Reads an environment image: square, every texel finite.
-fn env_image(path: &Path, loc: &Loc) -> Result<Image, SceneError> {
-    let err =
-        |m: String| SceneError::at(loc, format!("infinite light \"{}\": {m}", path.display()));
-    let image = super::textures::read_image(path, Encoding::Srgb).map_err(err)?;
+fn env_image(path: &Path, loc: &Loc, budget: &super::LoadBudget) -> Result<Image, SceneError> {
+    let err = |m: String| {
+        SceneError::at(
+            loc,
+            format!(
+                "infinite light \"{}\": {m}",
+                path.file_name().unwrap_or_default().to_string_lossy()
+            ),
+        )
+    };
+    let image = super::textures::read_image(path, Encoding::Srgb, budget).map_err(err)?;
     if image.width != image.height {
         return Err(err(format!(
             "the image is {}x{}, not square: not an equal-area environment map",

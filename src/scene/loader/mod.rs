@@ -81,6 +81,61 @@ pub fn read_capped(path: &Path, cap: u64) -> std::io::Result<Vec<u8>> {
     Ok(bytes)
 }
 
+/// What the loader may allocate for the data files a scene names (decoded images, PLY meshes,
+/// instanced copies): every size read from a file header is reserved here before the
+/// allocation it implies, so that a 249 kB PNG declaring 16000x16000 pixels or 20,000
+/// instances of a large object is an error naming the file, not gigabytes allocated before the
+/// render's memory check. Shared by reference (a `Cell`) through the loader's contexts.
+#[derive(Debug)]
+pub struct LoadBudget {
+    limit: u64,
+    held: std::cell::Cell<u64>,
+    peak: std::cell::Cell<u64>,
+}
+
+impl LoadBudget {
+    /// A budget of `limit` bytes (the render's `--max-memory`, or the default budget).
+    pub fn new(limit: u64) -> LoadBudget {
+        LoadBudget {
+            limit,
+            held: std::cell::Cell::new(0),
+            peak: std::cell::Cell::new(0),
+        }
+    }
+
+    /// Bytes reserved now.
+    pub fn held(&self) -> u64 {
+        self.held.get()
+    }
+
+    /// The most bytes reserved at once (a decode's transient peak included).
+    pub fn peak(&self) -> u64 {
+        self.peak.get()
+    }
+
+    /// Reserves `bytes` for `what` ("decoding it", "its 20000 copies"), or says why not.
+    pub fn reserve(&self, bytes: u64, what: &str) -> Result<(), String> {
+        let held = self.held.get();
+        if held.saturating_add(bytes) > self.limit {
+            return Err(format!(
+                "{what} needs {}, and with the {} loaded before that is more than the memory \
+                 budget of {} (--max-memory)",
+                crate::resources::human(bytes),
+                crate::resources::human(held),
+                crate::resources::human(self.limit)
+            ));
+        }
+        self.held.set(held + bytes);
+        self.peak.set(self.peak.get().max(held + bytes));
+        Ok(())
+    }
+
+    /// Gives back `bytes` of an earlier reservation (a decode's transient peak).
+    pub fn release(&self, bytes: u64) {
+        self.held.set(self.held.get().saturating_sub(bytes));
+    }
+}
+
 /// Reads a scene or PLY file as [`read_capped`] does, and when its name ends in `.gz` (as
 /// pbrt-v4 decides) decompresses it, at most `cap` bytes of output too: a gzip bomb is an error
 /// ("decompresses to more than the limit"), not an allocation failure.
@@ -112,9 +167,15 @@ pub fn gunzip_capped(gz: &[u8], cap: u64) -> std::io::Result<Vec<u8>> {
     Ok(out)
 }
 
-/// Loads a pbrt-v4 scene file (and everything it includes) into a [`Scene`].
+/// Loads a pbrt-v4 scene file (and everything it includes) into a [`Scene`], its data files
+/// within the default memory budget ([`crate::resources::default_budget`]).
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
-    parser::Builder::new(path).run()
+    load_within(path, crate::resources::default_budget().bytes)
+}
+
+/// [`load`] with the data files' allocations held to `max_memory` bytes ([`LoadBudget`]).
+pub fn load_within(path: &Path, max_memory: u64) -> Result<Scene, SceneError> {
+    parser::Builder::new(path).budget(max_memory).run()
 }
 
 /// What [`load_collecting`] found: the scene as far as it could be read, every error in file

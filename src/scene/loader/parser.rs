@@ -133,6 +133,8 @@ pub struct Builder {
     images: super::textures::ImageCache,
     /// Lookup work (textures evaluated, depth) of each named texture, by its `Arc`'s address.
     texture_work: std::collections::HashMap<usize, (u64, u32)>,
+    /// What the data files (images, PLY meshes, instanced copies) may allocate.
+    budget: super::LoadBudget,
     /// `ObjectBegin` definitions: world-space meshes as defined (CTM at definition).
     objects: HashMap<String, Vec<Mesh>>,
     /// The definition being read: its name, meshes and where it began.
@@ -191,9 +193,16 @@ impl Builder {
             textures: Default::default(),
             images: Default::default(),
             texture_work: Default::default(),
+            budget: super::LoadBudget::new(crate::resources::default_budget().bytes),
             objects: HashMap::new(),
             object: None,
         }
+    }
+
+    /// Holds the data files' allocations to `bytes` ([`super::LoadBudget`]).
+    pub fn budget(mut self, bytes: u64) -> Self {
+        self.budget = super::LoadBudget::new(bytes);
+        self
     }
 
     /// Records every error and reads on (see [`super::load_collecting`]).
@@ -271,6 +280,7 @@ impl Builder {
             path: self.main_path,
             notes: self.notes,
             textures: self.textures,
+            load_peak: self.budget.peak(),
         }
     }
 
@@ -510,7 +520,13 @@ impl Builder {
                 let (ty, at) = string_arg(tok, "a light type")?;
                 let mut params = read_params(tok)?;
                 let portal = params.loc("portal").cloned();
-                let light = light_source(&ty, &mut params, &at, &self.gs.ctm, &self.base_dir)?;
+                let light = light_source(
+                    &ty,
+                    &mut params,
+                    &at,
+                    &self.gs.ctm,
+                    (&self.base_dir, &self.budget),
+                )?;
                 if let Some(p) = portal {
                     self.notes.push(format!(
                         "{p}: portal: light enters only through it, as in pbrt-v4, but photon \
@@ -744,6 +760,7 @@ impl Builder {
             textures: &self.textures,
             images: &mut self.images,
             base_dir: &self.base_dir,
+            budget: &self.budget,
             notes: &mut self.notes,
         };
         let tex = super::textures::make_texture(&kind, &class, &mut params, &class_at, &mut cx)?;
@@ -856,7 +873,7 @@ impl Builder {
                 // Check the other parameters before reading a possibly large file.
                 params.get_string_opt("filename")?;
                 params.check_unused()?;
-                let obj = shapes::ply_mesh(&mut params, &at, &self.base_dir)?;
+                let obj = shapes::ply_mesh(&mut params, &at, &self.base_dir, &self.budget)?;
                 shapes::to_world(obj, &gs.ctm, gs.reverse, &at)?
             }
             "sphere" => {
@@ -961,6 +978,10 @@ impl Builder {
         let at_open = self.gs.ctm;
         self.note_motion(at);
         let meshes = &self.objects[name];
+        let bytes: u64 = meshes.iter().map(crate::resources::mesh_bytes).sum();
+        self.budget
+            .reserve(bytes, &format!("a copy of object \"{name}\""))
+            .map_err(|m| SceneError::at(at, m))?;
         for m in meshes {
             let moved = shapes::transform_mesh(m, &at_open)
                 .map_err(|e| SceneError::at(at, format!("object \"{name}\": {e}")))?;

@@ -132,14 +132,49 @@ fn one_line(s: &str) -> String {
     }
 }
 
-/// Reads the PLY file at `path` (at most [`crate::resources::MAX_PLY_FILE`] bytes, also after
-/// decompressing a `.ply.gz`).
-pub fn read_ply(path: &Path) -> Result<ObjMesh, String> {
-    let bytes = super::read_input(path, crate::resources::MAX_PLY_FILE)
-        .map_err(|e| format!("cannot open: {e}"))?;
-    let mut cursor = Cursor::new(&bytes[..]);
+/// Reads the PLY file at `path` (at most [`crate::resources::MAX_PLY_FILE`] bytes). A
+/// `.ply.gz` is decompressed only as far as its header's element counts allow (a file
+/// declaring 3 vertices followed by gigabytes of zeros stops there). What parsing holds is
+/// reserved in `budget` from the declared counts before it is parsed; the mesh stays reserved.
+pub fn read_ply(path: &Path, budget: &super::LoadBudget) -> Result<ObjMesh, String> {
+    let cap = crate::resources::MAX_PLY_FILE;
+    let raw = super::read_capped(path, cap).map_err(|e| format!("cannot open: {e}"))?;
+    let file_bytes = raw.len() as u64;
+    budget.reserve(file_bytes, "reading it")?;
+    let bytes = if path.extension().is_some_and(|e| e == "gz") {
+        let out = gunzip_declared(&raw, cap);
+        drop(raw);
+        budget.release(file_bytes);
+        let out = out?;
+        budget.reserve(out.len() as u64, "decompressing it")?;
+        out
+    } else {
+        raw
+    };
+    let held = bytes.len() as u64;
+    let declared = strict::check_header(&bytes)?;
+    let payload = held.saturating_sub(declared.offset as u64);
+    if payload < declared.least() {
+        budget.release(held);
+        return Err(format!(
+            "truncated file: its element counts need at least {} bytes of data, it holds {payload}",
+            declared.least()
+        ));
+    }
+    let (parsing, kept) = declared.memory();
+    budget.reserve(parsing + kept, "parsing it")?;
+    let result = read_bytes(&bytes, &declared);
+    budget.release(parsing + held);
+    if result.is_err() {
+        budget.release(kept);
+    }
+    result
+}
+
+/// Parses the whole file in memory, then the strict checks.
+fn read_bytes(bytes: &[u8], payload: &strict::Payload) -> Result<ObjMesh, String> {
+    let mut cursor = Cursor::new(bytes);
     let mesh = parse(&mut cursor)?;
-    let payload = strict::check_header(&bytes)?;
     if bytes.starts_with(b"ply\nformat ascii") || bytes.starts_with(b"ply\r\nformat ascii") {
         strict::check_ascii(&bytes[payload.offset..], &payload.elements)?;
     } else if (cursor.position() as usize) < bytes.len() {
@@ -149,6 +184,49 @@ pub fn read_ply(path: &Path) -> Result<ObjMesh, String> {
         ));
     }
     Ok(mesh)
+}
+
+/// Decompresses a `.ply.gz`: the header (at most 1 MiB), then at most what its element
+/// counts declare ([`strict::Payload::bound`]) and `cap` in all; more data is an error.
+fn gunzip_declared(gz: &[u8], cap: u64) -> Result<Vec<u8>, String> {
+    use std::io::Read;
+    let bad = |e: std::io::Error| format!("not valid gzip data: {e}");
+    let mut input = flate2::read::MultiGzDecoder::new(gz);
+    let mut out = Vec::new();
+    let mut chunk = [0u8; 4096];
+    const HEADER_CAP: usize = 1 << 20;
+    let header_end = loop {
+        if let Some(i) = out.windows(10).position(|w| w == b"end_header") {
+            if let Some(nl) = out[i..].iter().position(|&b| b == b'\n') {
+                break i + nl + 1;
+            }
+        }
+        if out.len() > HEADER_CAP {
+            return Err("no end_header in the first 1 MiB".to_string());
+        }
+        let n = input.read(&mut chunk).map_err(bad)?;
+        if n == 0 {
+            return Err("no end_header".to_string());
+        }
+        out.extend_from_slice(&chunk[..n]);
+    };
+    let bound = strict::check_header(&out[..header_end])?
+        .bound()
+        .saturating_add(header_end as u64)
+        .min(cap);
+    let have = out.len() as u64;
+    input
+        .take((bound + 1).saturating_sub(have))
+        .read_to_end(&mut out)
+        .map_err(bad)?;
+    if out.len() as u64 > bound {
+        return Err(format!(
+            "decompresses to more than its header declares ({} bytes at most: more data than \
+             the element counts, or faces of more than 4 vertices)",
+            bound
+        ));
+    }
+    Ok(out)
 }
 
 /// Parses the header and payload through `ply-rs-bw`.
@@ -221,7 +299,19 @@ fn vertices(def: &ElementDef, elems: &[Elem], mesh: &mut ObjMesh) -> Result<(), 
     if let Some(bad) = mesh.positions.iter().position(|p| !p.is_finite()) {
         return Err(format!("vertex {bad} is not finite"));
     }
-    if ["nx", "ny", "nz"].iter().all(|n| has_prop(def, n)) {
+    let normals = ["nx", "ny", "nz"].map(|n| has_prop(def, n));
+    if normals.iter().any(|&h| h) && !normals.iter().all(|&h| h) {
+        let have: Vec<&str> = ["nx", "ny", "nz"]
+            .into_iter()
+            .zip(normals)
+            .filter_map(|(n, h)| h.then_some(n))
+            .collect();
+        return Err(format!(
+            "the vertex element has {} but not all of nx, ny, nz: normals need the three",
+            have.join(", ")
+        ));
+    }
+    if normals.iter().all(|&h| h) {
         mesh.normals = Some(
             elems
                 .iter()
@@ -292,12 +382,65 @@ mod strict {
         name: String,
         count: usize,
         props: Vec<(String, bool)>,
+        /// Most bytes one element takes in the file (binary: exact for scalars, lists of the
+        /// vertex indices at most 4 long, other lists at most 255; ASCII: 64 bytes a value).
+        max_bytes: u64,
+        /// Fewest bytes one element takes (lists of vertex indices at least 3 long, others
+        /// empty; ASCII: 2 bytes a value).
+        min_bytes: u64,
     }
 
     /// The header's elements and where the payload starts.
     pub struct Payload {
         pub elements: Vec<ElementDecl>,
         pub offset: usize,
+        /// `format ascii`: values are text, one separator fewer than values at least.
+        ascii: bool,
+    }
+
+    impl Payload {
+        /// Fewest payload bytes the declared elements can take.
+        pub fn least(&self) -> u64 {
+            let n = self.elements.iter().fold(0u64, |a, e| {
+                a.saturating_add((e.count as u64).saturating_mul(e.min_bytes))
+            });
+            n.saturating_sub(self.ascii as u64)
+        }
+
+        /// Most payload bytes the declared elements can take.
+        pub fn bound(&self) -> u64 {
+            self.elements.iter().fold(0u64, |a, e| {
+                a.saturating_add((e.count as u64).saturating_mul(e.max_bytes))
+            })
+        }
+
+        /// Bytes parsing holds at its peak beyond the file (the crate's element records:
+        /// 128 a vertex or face at most) and bytes the mesh keeps (32 a vertex: position,
+        /// normal, uv; 24 a face: up to two triangles), from the declared counts.
+        pub fn memory(&self) -> (u64, u64) {
+            let count = |n: &str| {
+                self.elements
+                    .iter()
+                    .filter(|e| e.name == n)
+                    .map(|e| e.count as u64)
+                    .sum::<u64>()
+            };
+            let all: u64 = self.elements.iter().map(|e| e.count as u64).sum();
+            let kept = count("vertex")
+                .saturating_mul(32)
+                .saturating_add(count("face").saturating_mul(24));
+            (all.saturating_mul(128), kept)
+        }
+    }
+
+    /// Bytes of a PLY scalar type (unknown names: 8, the largest).
+    fn type_bytes(t: &str) -> u64 {
+        match t {
+            "char" | "uchar" | "int8" | "uint8" => 1,
+            "short" | "ushort" | "int16" | "uint16" => 2,
+            "int" | "uint" | "float" | "int32" | "uint32" | "float32" => 4,
+            _ => 8,
+        }
     }
 
     /// Reads the (already validated by the crate) header again: version 1.0 only, and no
@@ -313,6 +456,9 @@ mod strict {
             .map_or(bytes.len(), |i| end + i + 1);
         let text = String::from_utf8_lossy(&bytes[..end]);
         let mut elements: Vec<ElementDecl> = Vec::new();
+        let ascii = text
+            .lines()
+            .any(|l| l.trim_start().starts_with("format ascii"));
         for line in text.lines() {
             let words: Vec<&str> = line.split_whitespace().collect();
             match words.as_slice() {
@@ -326,6 +472,8 @@ mod strict {
                     name: name.to_string(),
                     count: count.parse().unwrap_or(0),
                     props: Vec::new(),
+                    max_bytes: if ascii { 2 } else { 0 },
+                    min_bytes: 0,
                 }),
                 ["property", .., name] => {
                     let Some(e) = elements.last_mut() else {
@@ -338,12 +486,33 @@ mod strict {
                             crate::scene::clip_for_message(name, crate::scene::MAX_TOKEN)
                         ));
                     }
-                    e.props.push((name.to_string(), words[1] == "list"));
+                    let list = words[1] == "list";
+                    // (most values, most bytes, fewest values, fewest bytes)
+                    let (values, bytes, few, least) = match words.as_slice() {
+                        ["property", "list", count, item, _] => {
+                            let (lo, hi) = if super::is_index_list(name) {
+                                (3, 4)
+                            } else {
+                                (0, 255)
+                            };
+                            let (c, i) = (type_bytes(count), type_bytes(item));
+                            (1 + hi, c + hi * i, 1 + lo, c + lo * i)
+                        }
+                        ["property", ty, _] => (1, type_bytes(ty), 1, type_bytes(ty)),
+                        _ => (1, 8, 1, 1),
+                    };
+                    e.max_bytes += if ascii { values * 64 } else { bytes };
+                    e.min_bytes += if ascii { few * 2 } else { least };
+                    e.props.push((name.to_string(), list));
                 }
                 _ => {}
             }
         }
-        Ok(Payload { elements, offset })
+        Ok(Payload {
+            elements,
+            offset,
+            ascii,
+        })
     }
 
     /// Every ASCII payload line holds exactly the values its element declares, and nothing

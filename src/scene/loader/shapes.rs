@@ -53,7 +53,7 @@ use super::params::ParamSet;
 use super::ply::read_ply;
 use super::textures::named_texture;
 use crate::math::{Mat3, Mat4, Vec2, Vec3};
-use crate::scene::{Loc, Mesh, SceneError};
+use crate::scene::{clip_for_message, Loc, Mesh, SceneError};
 use crate::texture::{Texture, Textures};
 use std::f32::consts::PI;
 use std::path::Path;
@@ -181,20 +181,29 @@ fn triangles_from_ints(ix: &[i32], n: usize) -> Result<Vec<[u32; 3]>, String> {
 
 /// `Shape "plymesh"`: `string filename`, relative to `base_dir` (the main file's directory).
 /// Errors name the Shape's location and the PLY file.
-pub fn ply_mesh(params: &mut ParamSet, loc: &Loc, base_dir: &Path) -> Result<ObjMesh, SceneError> {
+pub fn ply_mesh(
+    params: &mut ParamSet,
+    loc: &Loc,
+    base_dir: &Path,
+    budget: &super::LoadBudget,
+) -> Result<ObjMesh, SceneError> {
     let Some(name) = params.get_string_opt("filename")? else {
         return Err(SceneError::at(loc, "plymesh needs \"string filename\""));
     };
     let path = base_dir.join(&name);
-    let mesh = read_ply(&path)
-        .map_err(|m| SceneError::at(loc, format!("plymesh \"{}\": {m}", path.display())))?;
+    let mesh = read_ply(&path, budget).map_err(|m| {
+        SceneError::at(
+            loc,
+            format!("plymesh \"{}\": {m}", clip_for_message(&name, 60)),
+        )
+    })?;
     if let Some(nn) = &mesh.normals {
         if let Some(i) = nn.iter().position(|v| v.length_squared() == 0.0) {
             return Err(SceneError::at(
                 loc,
                 format!(
                     "plymesh \"{}\": normal of vertex {i} is zero",
-                    path.display()
+                    clip_for_message(&name, 60)
                 ),
             ));
         }

@@ -19,8 +19,9 @@
 //! decoded once, and its MIP pyramid built once when a `trilinear` texture reads it. Only the `uv` mapping and 2D checkerboards are supported.
 
 use super::params::{ParamSet, ParamType};
+use super::LoadBudget;
 use crate::math::{Vec2, Vec3};
-use crate::scene::{Loc, SceneError};
+use crate::scene::{clip_for_message, Loc, SceneError};
 use crate::texture::{
     Encoding, Filter, Image, ImageMap, Pyramid, Texture, Textures, UvMapping, Wrap,
 };
@@ -37,6 +38,8 @@ pub struct TextureContext<'a> {
     pub textures: &'a Textures,
     pub images: &'a mut ImageCache,
     pub base_dir: &'a Path,
+    /// What decoded images may allocate.
+    pub budget: &'a super::LoadBudget,
     /// Notes on what was accepted but read otherwise than written (`file:line:col: ...`).
     pub notes: &'a mut Vec<String>,
 }
@@ -261,14 +264,25 @@ fn image_map(
     let invert = params.get_bool("invert", false)?;
     let key = (path.clone(), encoding_name);
     if !cx.images.contains_key(&key) {
-        let im =
-            Arc::new(read_image(&path, encoding).map_err(|m| {
-                SceneError::at(at, format!("imagemap \"{}\": {m}", path.display()))
-            })?);
+        let im = Arc::new(read_image(&path, encoding, cx.budget).map_err(|m| {
+            SceneError::at(
+                at,
+                format!("imagemap \"{}\": {m}", clip_for_message(&name, 60)),
+            )
+        })?);
         cx.images.insert(key.clone(), (im, None));
     }
     let (image, pyramid) = cx.images.get_mut(&key).expect("inserted above");
     if filter == Filter::Trilinear && pyramid.is_none() {
+        let texels = Pyramid::texel_count(image.width, image.height) as u64;
+        cx.budget
+            .reserve(texels * 12, "its MIP pyramid")
+            .map_err(|m| {
+                SceneError::at(
+                    at,
+                    format!("imagemap \"{}\": {m}", clip_for_message(&name, 60)),
+                )
+            })?;
         *pyramid = Some(Arc::new(Pyramid::build(image)));
     }
     let (image, pyramid) = (image.clone(), pyramid.clone());
@@ -317,46 +331,74 @@ fn image_encoding(
 
 /// Reads an image file into linear RGB: EXR through [`crate::imageio`], PFM here, others
 /// through the `image` crate; integer images are decoded with `encoding`, float ones (EXR,
-/// PFM, float TIFF...) are taken as linear.
-pub fn read_image(path: &Path, encoding: Encoding) -> Result<Image, String> {
+/// PFM, float TIFF...) are taken as linear. The size in the file's header is checked against
+/// [`crate::resources::MAX_IMAGE_PIXELS`] and the decode's peak (file or decoder buffer,
+/// converted copy, texels) reserved in `budget` before anything is decoded; the texels (12
+/// bytes each) stay reserved.
+pub fn read_image(path: &Path, encoding: Encoding, budget: &LoadBudget) -> Result<Image, String> {
     let ext = |x: &str| path.extension().is_some_and(|e| e.eq_ignore_ascii_case(x));
+    let too_many = |w: u64, h: u64| {
+        (w.saturating_mul(h) > crate::resources::MAX_IMAGE_PIXELS).then(|| {
+            format!(
+                "{w}x{h} pixels is more than the {} an image may have",
+                crate::resources::MAX_IMAGE_PIXELS
+            )
+        })
+    };
     if ext("pfm") {
-        // A colour PFM holds 12 bytes per pixel after a short header.
+        // A colour PFM holds 12 bytes per pixel after a short header: the file, then texels.
         let cap = crate::resources::MAX_IMAGE_PIXELS * 12 + 4096;
+        let len = std::fs::metadata(path).map_or(0, |m| m.len().min(cap));
+        budget.reserve(2 * len, "decoding it")?;
         let bytes = super::read_capped(path, cap).map_err(|e| e.to_string())?;
-        return read_pfm(&bytes);
+        let image = read_pfm(&bytes);
+        budget.release(len);
+        return image;
     }
     if ext("exr") {
+        let (w, h) = crate::imageio::read_exr_size(path).map_err(|e| e.to_string())?;
+        let (w, h) = (w as u64, h as u64);
+        // The decoded image, then the texels copied from it.
+        budget.reserve(w * h * 24, "decoding it")?;
         let im = crate::imageio::read_exr(path).map_err(|e| e.to_string())?;
+        budget.release(w * h * 12);
         return Ok(Image {
             width: im.width,
             height: im.height,
             texels: im.pixels.into_iter().map(Vec3::from_array).collect(),
         });
     }
-    // The header first: no decode of an image larger than the limit.
-    let (w, h) = image::image_dimensions(path).map_err(|e| e.to_string())?;
-    if w as u64 * h as u64 > crate::resources::MAX_IMAGE_PIXELS {
-        return Err(format!(
-            "{w}x{h} pixels is more than the {} an image may have",
-            crate::resources::MAX_IMAGE_PIXELS
-        ));
+    // The header first: nothing is decoded before the size is checked and reserved.
+    let mut reader = image::ImageReader::open(path).map_err(|e| e.to_string())?;
+    reader.no_limits(); // the budget below is the limit
+    use image::ImageDecoder;
+    let decoder = reader.into_decoder().map_err(|e| e.to_string())?;
+    let (w, h) = decoder.dimensions();
+    let (w, h) = (w as u64, h as u64);
+    if let Some(m) = too_many(w, h) {
+        return Err(m);
     }
-    let dynamic = image::open(path).map_err(|e| e.to_string())?;
+    // The decoder's buffer, the f32 RGB copy, the texels.
+    let native = decoder.color_type().bytes_per_pixel() as u64;
+    let peak = w * h * (native + 12 + 12);
+    budget.reserve(peak, "decoding it")?;
+    let dynamic = image::DynamicImage::from_decoder(decoder).map_err(|e| e.to_string())?;
     let linear = matches!(
         dynamic,
         image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_)
     );
     let rgb = dynamic.to_rgb32f();
     let decode = |v: f32| if linear { v } else { encoding.decode(v) };
-    Ok(Image {
+    let image = Image {
         width: rgb.width() as usize,
         height: rgb.height() as usize,
         texels: rgb
             .pixels()
             .map(|p| Vec3::new(decode(p[0]), decode(p[1]), decode(p[2])))
             .collect(),
-    })
+    };
+    budget.release(peak - w * h * 12);
+    Ok(image)
 }
 
 /// Decodes a PFM image (`PF` colour or `Pf` grey; width height; scale, negative for
