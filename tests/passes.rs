@@ -427,7 +427,7 @@ fn merge_refuses_forged_sizes_negative_and_overflowing_sums() {
     );
     let o = merge(&dir, &["small.exr", "b.exr"], "m.exr");
     assert!(
-        stderr(&o).contains("is 8x6, expected 4x3"),
+        stderr(&o).contains("the image is 8x6, photon.resolution says 4x3"),
         "{}",
         stderr(&o)
     );

@@ -288,6 +288,15 @@ impl Partial {
                 crate::resources::MAX_IMAGE_PIXELS
             ));
         }
+        // The file's own data window (from its header) must be that size before any layer is
+        // decoded: a forged window would make the decoder allocate for it.
+        let size = crate::imageio::read_exr_size(path).map_err(|e| e.to_string())?;
+        if size != (w, h) {
+            return Err(format!(
+                "{shown}: the image is {}x{}, photon.resolution says {w}x{h}",
+                size.0, size.1
+            ));
+        }
         let header = PartialHeader {
             scene: get("photon.scene")?,
             seed: get("photon.seed")?
