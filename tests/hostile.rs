@@ -787,3 +787,106 @@ fn issue22_case_20_mix_materials_nest_at_most_64_deep() {
     let r = render_text(&d, &small_scene(&mixes(64)), &[], GIB);
     assert_eq!(r.code, Some(0), "{}", r.describe());
 }
+
+/// The path in "saved to PATH instead" of a message on stderr.
+fn saved_path(stderr: &str) -> PathBuf {
+    let after = stderr
+        .split("saved to ")
+        .nth(1)
+        .unwrap_or_else(|| panic!("no \"saved to\" in {stderr:?}"));
+    PathBuf::from(after.split(" instead").next().unwrap())
+}
+
+/// `-o` through a symlink was followed by photon itself (it reads the link and renames over
+/// its target), so the kernel's protected-symlink rule could not help in a shared sticky
+/// folder such as /tmp: another user's link there sent the image wherever it pointed. Such a
+/// link (in a sticky directory, owned by another uid) is refused; the same link owned by this
+/// process's user is followed as before.
+#[test]
+fn issue22_case_07_other_users_symlinks_in_sticky_dirs_are_refused() {
+    use std::os::unix::fs::{MetadataExt, PermissionsExt};
+    let d = tmp_dir("i22c07");
+    let scene = write(&d, "scene.pbrt", small_scene(""));
+    let sticky = d.join("sticky");
+    std::fs::create_dir(&sticky).unwrap();
+    std::fs::set_permissions(&sticky, std::fs::Permissions::from_mode(0o1777)).unwrap();
+    let victim = write(&d, "victim.exr", "precious");
+    let link = sticky.join("out.exr");
+    std::os::unix::fs::symlink(&victim, &link).unwrap();
+    std::os::unix::fs::lchown(&link, Some(65534), Some(65534)).unwrap();
+    let mut args = render_args(&scene, &d, &[]);
+    let n = args.len();
+    args[n - 1] = link.clone().into();
+    let r = run_capped(&args, GIB, T);
+    assert_error(&r, &["-o ", "sticky/out.exr", "symlink", "uid 65534"]);
+    assert!(!r.stdout.contains("rendered in"), "{}", r.stdout);
+    assert_eq!(std::fs::read_to_string(&victim).unwrap(), "precious");
+    assert!(std::fs::symlink_metadata(&link)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    // Owned by this process's user, the link is followed: its target gets the image.
+    let me = std::fs::metadata(&scene).unwrap().uid();
+    std::os::unix::fs::lchown(&link, Some(me), None).unwrap();
+    let r = run_capped(&args, GIB, T);
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    assert!(photon::imageio::read_exr(&victim).is_ok());
+}
+
+/// When `-o` could not be written at the end (disk full; its folder removed during the
+/// render) the finished image was discarded. It is saved to a fallback file, named in one line
+/// on stderr, and the exit code is 2.
+#[test]
+fn issue22_case_10_an_unwritable_destination_keeps_the_image_elsewhere() {
+    let d = tmp_dir("i22c10");
+    let scene = write(&d, "scene.pbrt", small_scene(""));
+    let mut args = render_args(&scene, &d, &[]);
+    let n = args.len();
+    args[n - 1] = "/dev/full".into();
+    let r = run_capped(&args, GIB, T);
+    assert_error(&r, &["-o /dev/full: ", "saved to "]);
+    let saved = saved_path(&r.stderr);
+    let image = photon::imageio::read_exr(&saved);
+    let _ = std::fs::remove_file(&saved);
+    assert_eq!(image.unwrap().width, 8);
+    // The folder of -o removed while the render writes its checkpoint into a FIFO (the test
+    // reads the FIFO only once the folder is gone; at 128x128 the checkpoint is far larger
+    // than a pipe's buffer, so the render waits for it).
+    let sub = d.join("sub");
+    std::fs::create_dir(&sub).unwrap();
+    let fifo = d.join("ck.fifo");
+    mkfifo(&fifo);
+    let (f, s) = (fifo.clone(), sub.clone());
+    let reader = std::thread::spawn(move || {
+        use std::io::Read;
+        let mut pipe = std::fs::File::open(f).unwrap();
+        std::fs::remove_dir_all(s).unwrap();
+        let mut bytes = Vec::new();
+        pipe.read_to_end(&mut bytes).unwrap();
+    });
+    let fifo_s = fifo.to_str().unwrap();
+    let extra = [
+        "--res",
+        "128x128",
+        "--passes",
+        "0..1",
+        "--checkpoint",
+        fifo_s,
+    ];
+    let args = render_args(&scene, &sub, &extra);
+    let r = run_capped(&args, GIB, T);
+    // Besides the "pass 0 done" progress line, one error line.
+    assert_eq!(r.code, Some(2), "{}", r.describe());
+    let lines: Vec<&str> = r
+        .stderr
+        .lines()
+        .filter(|l| !l.starts_with("pass "))
+        .collect();
+    assert_eq!(lines.len(), 1, "{}", r.describe());
+    assert!(lines[0].starts_with("photon: -o ") && lines[0].contains("sub/out.exr: "));
+    reader.join().unwrap();
+    let saved = saved_path(&r.stderr);
+    let part = photon::integrator::passes::Partial::read(&saved);
+    let _ = std::fs::remove_file(&saved);
+    assert_eq!(part.unwrap().passes, 0..1);
+}
