@@ -890,3 +890,74 @@ fn issue22_case_10_an_unwritable_destination_keeps_the_image_elsewhere() {
     let _ = std::fs::remove_file(&saved);
     assert_eq!(part.unwrap().passes, 0..1);
 }
+
+/// `merge -o`, `merge --png` and `compare --error-png` replaced a FIFO or a device with a
+/// regular file (as root, `-o /dev/null` replaced /dev/null): they are planned and written as
+/// `render`'s outputs, so a FIFO gets the bytes and stays a FIFO.
+#[test]
+fn issue22_case_11_merge_and_compare_write_into_fifos() {
+    let d = tmp_dir("i22c11");
+    let scene = write(&d, "scene.pbrt", small_scene(""));
+    let r = run_capped(render_args(&scene, &d, &["--passes", "0..1"]), GIB, T);
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    let part = d.join("out.exr");
+    let got = |rx: std::sync::mpsc::Receiver<Vec<u8>>, r: &Run| {
+        rx.recv_timeout(Duration::from_secs(30))
+            .unwrap_or_else(|_| panic!("nothing written into the FIFO: {}", r.describe()))
+    };
+    // merge -o FIFO.
+    let fifo = d.join("merged.fifo");
+    mkfifo(&fifo);
+    let rx = fifo_reader(&fifo);
+    let args: Vec<&std::ffi::OsStr> = vec![
+        "merge".as_ref(),
+        part.as_os_str(),
+        "--no-png".as_ref(),
+        "-o".as_ref(),
+        fifo.as_os_str(),
+    ];
+    let r = run_capped(&args, GIB, T);
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    assert!(is_fifo(&fifo), "merge -o replaced the FIFO");
+    assert_eq!(&got(rx, &r)[..4], &[0x76, 0x2f, 0x31, 0x01], "EXR magic");
+    // merge --png FIFO.
+    let png = d.join("png.fifo");
+    mkfifo(&png);
+    let rx = fifo_reader(&png);
+    let merged = d.join("merged.exr");
+    let args: Vec<&std::ffi::OsStr> = vec![
+        "merge".as_ref(),
+        part.as_os_str(),
+        "-o".as_ref(),
+        merged.as_os_str(),
+        "--png".as_ref(),
+        png.as_os_str(),
+    ];
+    let r = run_capped(&args, GIB, T);
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    assert!(is_fifo(&png), "merge --png replaced the FIFO");
+    assert_eq!(&got(rx, &r)[1..4], b"PNG");
+    // compare --error-png FIFO.
+    let err = d.join("error.fifo");
+    mkfifo(&err);
+    let rx = fifo_reader(&err);
+    let args: Vec<&std::ffi::OsStr> = vec![
+        "compare".as_ref(),
+        merged.as_os_str(),
+        part.as_os_str(),
+        "--error-png".as_ref(),
+        err.as_os_str(),
+    ];
+    let r = run_capped(&args, GIB, T);
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    assert!(is_fifo(&err), "compare --error-png replaced the FIFO");
+    assert_eq!(&got(rx, &r)[1..4], b"PNG");
+    // A directory for merge -o is refused before the parts are read, as for render.
+    let args: Vec<&std::ffi::OsStr> = vec![
+        "merge".as_ref(),
+        "missing.exr".as_ref(),
+        "-o".as_ref(),
+        d.as_os_str(),
+    ];
+    assert_error(&run_capped(&args, GIB, T), &["-o ", "is a directory"]);
+}
