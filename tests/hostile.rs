@@ -833,6 +833,73 @@ fn issue22_case_07_other_users_symlinks_in_sticky_dirs_are_refused() {
     assert!(photon::imageio::read_exr(&victim).is_ok());
 }
 
+/// A checkpoint write that failed (disk full: `/dev/full`) stopped the render with exit 2 and
+/// dropped every finished pass; `-o` was never written. It is a one-line warning now and the
+/// render writes its image.
+#[test]
+fn issue22_case_08_a_failing_checkpoint_is_a_warning() {
+    let d = tmp_dir("i22c08");
+    let extra = [
+        "--passes",
+        "0..3",
+        "--checkpoint",
+        "/dev/full",
+        "--every",
+        "1ms",
+    ];
+    let r = render_text(&d, &small_scene(""), &extra, GIB);
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    let warnings: Vec<&str> = r.stderr.lines().filter(|l| l.contains("warning")).collect();
+    assert!(!warnings.is_empty(), "{}", r.describe());
+    for w in warnings {
+        assert!(
+            w.starts_with("photon: warning: --checkpoint /dev/full: "),
+            "{w}"
+        );
+    }
+    let p = photon::integrator::passes::Partial::read(&d.join("out.exr")).unwrap();
+    assert_eq!(p.passes, 0..3);
+}
+
+/// A render given an existing checkpoint without `--resume` replaced it silently (passes 0..12
+/// became 0..2): it is refused before any work, and `--resume` continues it.
+#[test]
+fn issue22_case_09_an_existing_checkpoint_needs_resume() {
+    let d = tmp_dir("i22c09");
+    let ck = d.join("ck.exr");
+    let ck_s = ck.to_str().unwrap();
+    let r = render_text(
+        &d,
+        &small_scene(""),
+        &["--passes", "0..2", "--checkpoint", ck_s],
+        GIB,
+    );
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    let before = std::fs::read(&ck).unwrap();
+    let r = render_text(
+        &d,
+        &small_scene(""),
+        &["--passes", "0..1", "--checkpoint", ck_s],
+        GIB,
+    );
+    assert_error(&r, &["--checkpoint ", "ck.exr", "already", "--resume"]);
+    assert!(!r.stdout.contains("rendered in"), "{}", r.stdout);
+    assert_eq!(
+        std::fs::read(&ck).unwrap(),
+        before,
+        "the checkpoint is kept"
+    );
+    let r = render_text(
+        &d,
+        &small_scene(""),
+        &["--passes", "0..3", "--checkpoint", ck_s, "--resume", ck_s],
+        GIB,
+    );
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    let p = photon::integrator::passes::Partial::read(&ck).unwrap();
+    assert_eq!(p.passes, 0..3);
+}
+
 /// When `-o` could not be written at the end (disk full; its folder removed during the
 /// render) the finished image was discarded. It is saved to a fallback file, named in one line
 /// on stderr, and the exit code is 2.
@@ -960,4 +1027,100 @@ fn issue22_case_11_merge_and_compare_write_into_fifos() {
         d.as_os_str(),
     ];
     assert_error(&run_capped(&args, GIB, T), &["-o ", "is a directory"]);
+}
+
+/// An ordinary render stopped by SIGTERM exited 143 without a word and without its finished
+/// tiles. It says so in one line and saves the finished tiles (the others black) beside the
+/// other fallbacks, leaving `-o` as it was (a stopped render never replaces an output).
+#[test]
+fn issue22_case_12_an_interrupted_render_keeps_its_finished_tiles() {
+    let d = tmp_dir("i22c12");
+    let scene = write(&d, "scene.pbrt", small_scene(""));
+    let out = write(&d, "out.exr", "old");
+    let extra = ["--res", "256x256", "--spp", "1024", "--integrator", "path"];
+    let mut bg = Background::start(render_args(&scene, &d, &extra));
+    assert!(bg.wait_for_line("render:"));
+    // Not a timing assertion: long enough for some of the 256 tiles to finish, far from all.
+    std::thread::sleep(Duration::from_secs(3));
+    bg.signal("TERM");
+    let r = bg.finish(T);
+    assert_eq!(r.code, Some(143), "{}", r.describe());
+    let lines: Vec<&str> = r.stderr.lines().collect();
+    assert_eq!(lines.len(), 1, "{}", r.describe());
+    assert!(lines[0].contains("SIGTERM") && lines[0].contains(" of 256 tiles"));
+    assert_eq!(std::fs::read(&out).unwrap(), b"old");
+    let saved = saved_path(&r.stderr);
+    let image = photon::imageio::read_exr(&saved);
+    let _ = std::fs::remove_file(&saved);
+    let image = image.unwrap();
+    assert_eq!((image.width, image.height), (256, 256));
+    assert!(image.pixels.iter().any(|p| p[0] > 0.0), "finished tiles");
+}
+
+/// `--passes` with a pass number near 1e13 (or such a range forged in a `--resume` file) hung
+/// in the radius schedule and ignored SIGTERM: pass numbers are bounded (at most 2^20 passes)
+/// with a located error; and `-o` naming a FIFO nobody reads ignored SIGTERM and left its
+/// temporary EXR in the temporary directory.
+#[test]
+fn issue22_case_14_pass_ranges_are_bounded_and_fifo_writes_interruptible() {
+    let d = tmp_dir("i22c14");
+    let huge = ["--passes", "10000000000000..10000000000001"];
+    let r = render_text(&d, &small_scene(""), &huge, GIB);
+    assert_error(&r, &["--passes", "1048576"]);
+    // A partial image claiming passes 0..1e13, resumed: refused, naming the file.
+    let r = render_text(&d, &small_scene(""), &["--passes", "0..1"], GIB);
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    let mut p = photon::integrator::passes::Partial::read(&d.join("out.exr")).unwrap();
+    p.passes = 0..10_000_000_000_000;
+    let forged = d.join("forged.exr");
+    p.write(&forged).unwrap();
+    let extra = ["--progressive", "--resume", forged.to_str().unwrap()];
+    let r = render_text(&d, &small_scene(""), &extra, GIB);
+    assert_error(&r, &["--resume ", "forged.exr", "1048576"]);
+    // -o FIFO without a reader, then SIGTERM.
+    let fifo = d.join("pipe.exr");
+    mkfifo(&fifo);
+    let scene = d.join("scene.pbrt");
+    let mut args = render_args(&scene, &d, &[]);
+    let n = args.len();
+    args[n - 1] = fifo.clone().into();
+    let mut bg = Background::start(&args);
+    let prefix = format!("photon-{}-", bg.pid());
+    assert!(bg.wait_for_line("rendered in"));
+    bg.signal("TERM");
+    let r = bg.finish(Duration::from_secs(60));
+    assert_eq!(r.code, Some(143), "{}", r.describe());
+    assert!(r.stderr.contains("SIGTERM"), "{}", r.describe());
+    assert!(is_fifo(&fifo));
+    assert_eq!(temp_files_starting_with(&prefix), Vec::<PathBuf>::new());
+}
+
+/// A render blocked opening a FIFO (`--png` here) ignored SIGINT: the open is interruptible,
+/// the temporaries are removed, nothing is replaced (not `-o` either), exit 130.
+#[test]
+fn issue22_case_23_opening_a_fifo_is_interruptible() {
+    let d = tmp_dir("i22c23");
+    let scene = write(&d, "scene.pbrt", small_scene(""));
+    let out = write(&d, "out.exr", "old");
+    let fifo = d.join("preview.png");
+    mkfifo(&fifo);
+    let mut args = render_args(&scene, &d, &[]);
+    args.retain(|a| a != "--no-png");
+    args.extend(["--png".into(), fifo.clone().into()]);
+    let mut bg = Background::start(&args);
+    let prefix = format!("photon-{}-", bg.pid());
+    assert!(bg.wait_for_line("rendered in"));
+    bg.signal("INT");
+    let r = bg.finish(Duration::from_secs(60));
+    assert_eq!(r.code, Some(130), "{}", r.describe());
+    assert!(r.stderr.contains("SIGINT"), "{}", r.describe());
+    assert!(is_fifo(&fifo));
+    assert_eq!(std::fs::read(&out).unwrap(), b"old");
+    assert_eq!(temp_files_starting_with(&prefix), Vec::<PathBuf>::new());
+    let mut names: Vec<String> = std::fs::read_dir(&d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["out.exr", "preview.png", "scene.pbrt"]);
 }
