@@ -1124,3 +1124,16 @@ fn issue22_case_23_opening_a_fifo_is_interruptible() {
     names.sort();
     assert_eq!(names, ["out.exr", "preview.png", "scene.pbrt"]);
 }
+
+/// `bench --csv`/`--json` were written with `fs::write` after the whole benchmark, outside the
+/// output planner (a bad destination was found only at the end, a regular file was truncated
+/// in place): they are planned before the work like every other output, so a directory is
+/// refused at once.
+#[test]
+fn issue22_case_11_bench_outputs_are_planned_before_the_work() {
+    let d = tmp_dir("i22c11b");
+    let args: Vec<&std::ffi::OsStr> = vec!["bench".as_ref(), "--csv".as_ref(), d.as_os_str()];
+    let r = run_capped(&args, 4 * GIB, T);
+    assert_error(&r, &["--csv ", "is a directory"]);
+    assert!(!r.stdout.contains("plan:"), "{}", r.stdout);
+}
