@@ -30,6 +30,10 @@ pub const MAX_RESOLUTION: u32 = 32768;
 pub const MAX_SPP: u32 = 1 << 20;
 /// Longest duration a flag takes (`--time`, `--every`): a year.
 pub const MAX_SECONDS: f64 = 365.0 * 24.0 * 3600.0;
+/// Largest pass number + 1 of a render in passes (`--passes A..B`, a `--resume` file's range,
+/// `--time` with passes): as many passes as samples per pixel, and the radius schedule of the
+/// last one (a product over the passes before it) takes milliseconds, not days.
+pub const MAX_PASSES: u64 = 1 << 20;
 /// Largest final-gather rays per diffuse point.
 pub const MAX_GATHER_SAMPLES: u32 = 4096;
 /// Largest shadow rays per shading point.

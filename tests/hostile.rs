@@ -1013,3 +1013,387 @@ fn issue22_case_19_every_error_is_one_short_line() {
     let r = run_capped(args, GIB, T);
     assert_error(&r, &["part.exr"]);
 }
+
+/// The path in "saved to PATH instead" of a message on stderr.
+fn saved_path(stderr: &str) -> PathBuf {
+    let after = stderr
+        .split("saved to ")
+        .nth(1)
+        .unwrap_or_else(|| panic!("no \"saved to\" in {stderr:?}"));
+    PathBuf::from(after.split(" instead").next().unwrap())
+}
+
+/// `-o` through a symlink was followed by photon itself (it reads the link and renames over
+/// its target), so the kernel's protected-symlink rule could not help in a shared sticky
+/// folder such as /tmp: another user's link there sent the image wherever it pointed. Such a
+/// link (in a sticky directory, owned by another uid) is refused; the same link owned by this
+/// process's user is followed as before.
+#[test]
+fn issue22_case_07_other_users_symlinks_in_sticky_dirs_are_refused() {
+    use std::os::unix::fs::{MetadataExt, PermissionsExt};
+    let d = tmp_dir("i22c07");
+    let scene = write(&d, "scene.pbrt", small_scene(""));
+    let sticky = d.join("sticky");
+    std::fs::create_dir(&sticky).unwrap();
+    std::fs::set_permissions(&sticky, std::fs::Permissions::from_mode(0o1777)).unwrap();
+    let victim = write(&d, "victim.exr", "precious");
+    let link = sticky.join("out.exr");
+    std::os::unix::fs::symlink(&victim, &link).unwrap();
+    std::os::unix::fs::lchown(&link, Some(65534), Some(65534)).unwrap();
+    let mut args = render_args(&scene, &d, &[]);
+    let n = args.len();
+    args[n - 1] = link.clone().into();
+    let r = run_capped(&args, GIB, T);
+    assert_error(&r, &["-o ", "sticky/out.exr", "symlink", "uid 65534"]);
+    assert!(!r.stdout.contains("rendered in"), "{}", r.stdout);
+    assert_eq!(std::fs::read_to_string(&victim).unwrap(), "precious");
+    assert!(std::fs::symlink_metadata(&link)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    // Owned by this process's user, the link is followed: its target gets the image.
+    let me = std::fs::metadata(&scene).unwrap().uid();
+    std::os::unix::fs::lchown(&link, Some(me), None).unwrap();
+    let r = run_capped(&args, GIB, T);
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    assert!(photon::imageio::read_exr(&victim).is_ok());
+}
+
+/// A checkpoint write that failed (disk full: `/dev/full`) stopped the render with exit 2 and
+/// dropped every finished pass; `-o` was never written. It is a one-line warning now and the
+/// render writes its image.
+#[test]
+fn issue22_case_08_a_failing_checkpoint_is_a_warning() {
+    let d = tmp_dir("i22c08");
+    let extra = [
+        "--passes",
+        "0..3",
+        "--checkpoint",
+        "/dev/full",
+        "--every",
+        "1ms",
+    ];
+    let r = render_text(&d, &small_scene(""), &extra, GIB);
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    let warnings: Vec<&str> = r.stderr.lines().filter(|l| l.contains("warning")).collect();
+    assert!(!warnings.is_empty(), "{}", r.describe());
+    for w in warnings {
+        assert!(
+            w.starts_with("photon: warning: --checkpoint /dev/full: "),
+            "{w}"
+        );
+    }
+    let p = photon::integrator::passes::Partial::read(&d.join("out.exr")).unwrap();
+    assert_eq!(p.passes, 0..3);
+}
+
+/// A render given an existing checkpoint without `--resume` replaced it silently (passes 0..12
+/// became 0..2): it is refused before any work, and `--resume` continues it.
+#[test]
+fn issue22_case_09_an_existing_checkpoint_needs_resume() {
+    let d = tmp_dir("i22c09");
+    let ck = d.join("ck.exr");
+    let ck_s = ck.to_str().unwrap();
+    let r = render_text(
+        &d,
+        &small_scene(""),
+        &["--passes", "0..2", "--checkpoint", ck_s],
+        GIB,
+    );
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    let before = std::fs::read(&ck).unwrap();
+    let r = render_text(
+        &d,
+        &small_scene(""),
+        &["--passes", "0..1", "--checkpoint", ck_s],
+        GIB,
+    );
+    assert_error(&r, &["--checkpoint ", "ck.exr", "already", "--resume"]);
+    assert!(!r.stdout.contains("rendered in"), "{}", r.stdout);
+    assert_eq!(
+        std::fs::read(&ck).unwrap(),
+        before,
+        "the checkpoint is kept"
+    );
+    let r = render_text(
+        &d,
+        &small_scene(""),
+        &["--passes", "0..3", "--checkpoint", ck_s, "--resume", ck_s],
+        GIB,
+    );
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    let p = photon::integrator::passes::Partial::read(&ck).unwrap();
+    assert_eq!(p.passes, 0..3);
+}
+
+/// When `-o` could not be written at the end (disk full; its folder removed during the
+/// render) the finished image was discarded. It is saved to a fallback file, named in one line
+/// on stderr, and the exit code is 2.
+#[test]
+fn issue22_case_10_an_unwritable_destination_keeps_the_image_elsewhere() {
+    let d = tmp_dir("i22c10");
+    let scene = write(&d, "scene.pbrt", small_scene(""));
+    let mut args = render_args(&scene, &d, &[]);
+    let n = args.len();
+    args[n - 1] = "/dev/full".into();
+    let r = run_capped(&args, GIB, T);
+    assert_error(&r, &["-o /dev/full: ", "saved to "]);
+    let saved = saved_path(&r.stderr);
+    let image = photon::imageio::read_exr(&saved);
+    let _ = std::fs::remove_file(&saved);
+    assert_eq!(image.unwrap().width, 8);
+    // The folder of -o removed while the render writes its checkpoint into a FIFO (the test
+    // reads the FIFO only once the folder is gone; at 128x128 the checkpoint is far larger
+    // than a pipe's buffer, so the render waits for it).
+    let sub = d.join("sub");
+    std::fs::create_dir(&sub).unwrap();
+    let fifo = d.join("ck.fifo");
+    mkfifo(&fifo);
+    let (f, s) = (fifo.clone(), sub.clone());
+    let reader = std::thread::spawn(move || {
+        use std::io::Read;
+        let mut pipe = std::fs::File::open(f).unwrap();
+        std::fs::remove_dir_all(s).unwrap();
+        let mut bytes = Vec::new();
+        pipe.read_to_end(&mut bytes).unwrap();
+    });
+    let fifo_s = fifo.to_str().unwrap();
+    let extra = [
+        "--res",
+        "128x128",
+        "--passes",
+        "0..1",
+        "--checkpoint",
+        fifo_s,
+    ];
+    let args = render_args(&scene, &sub, &extra);
+    let r = run_capped(&args, GIB, T);
+    // Besides the "pass 0 done" progress line, one error line.
+    assert_eq!(r.code, Some(2), "{}", r.describe());
+    let lines: Vec<&str> = r
+        .stderr
+        .lines()
+        .filter(|l| !l.starts_with("pass "))
+        .collect();
+    assert_eq!(lines.len(), 1, "{}", r.describe());
+    assert!(lines[0].starts_with("photon: -o ") && lines[0].contains("sub/out.exr: "));
+    reader.join().unwrap();
+    let saved = saved_path(&r.stderr);
+    let part = photon::integrator::passes::Partial::read(&saved);
+    let _ = std::fs::remove_file(&saved);
+    assert_eq!(part.unwrap().passes, 0..1);
+}
+
+/// `merge -o`, `merge --png` and `compare --error-png` replaced a FIFO or a device with a
+/// regular file (as root, `-o /dev/null` replaced /dev/null): they are planned and written as
+/// `render`'s outputs, so a FIFO gets the bytes and stays a FIFO.
+#[test]
+fn issue22_case_11_merge_and_compare_write_into_fifos() {
+    let d = tmp_dir("i22c11");
+    let scene = write(&d, "scene.pbrt", small_scene(""));
+    let r = run_capped(render_args(&scene, &d, &["--passes", "0..1"]), GIB, T);
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    let part = d.join("out.exr");
+    let got = |rx: std::sync::mpsc::Receiver<Vec<u8>>, r: &Run| {
+        rx.recv_timeout(Duration::from_secs(30))
+            .unwrap_or_else(|_| panic!("nothing written into the FIFO: {}", r.describe()))
+    };
+    // merge -o FIFO.
+    let fifo = d.join("merged.fifo");
+    mkfifo(&fifo);
+    let rx = fifo_reader(&fifo);
+    let args: Vec<&std::ffi::OsStr> = vec![
+        "merge".as_ref(),
+        part.as_os_str(),
+        "--no-png".as_ref(),
+        "-o".as_ref(),
+        fifo.as_os_str(),
+    ];
+    let r = run_capped(&args, GIB, T);
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    assert!(is_fifo(&fifo), "merge -o replaced the FIFO");
+    assert_eq!(&got(rx, &r)[..4], &[0x76, 0x2f, 0x31, 0x01], "EXR magic");
+    // merge --png FIFO.
+    let png = d.join("png.fifo");
+    mkfifo(&png);
+    let rx = fifo_reader(&png);
+    let merged = d.join("merged.exr");
+    let args: Vec<&std::ffi::OsStr> = vec![
+        "merge".as_ref(),
+        part.as_os_str(),
+        "-o".as_ref(),
+        merged.as_os_str(),
+        "--png".as_ref(),
+        png.as_os_str(),
+    ];
+    let r = run_capped(&args, GIB, T);
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    assert!(is_fifo(&png), "merge --png replaced the FIFO");
+    assert_eq!(&got(rx, &r)[1..4], b"PNG");
+    // compare --error-png FIFO.
+    let err = d.join("error.fifo");
+    mkfifo(&err);
+    let rx = fifo_reader(&err);
+    let args: Vec<&std::ffi::OsStr> = vec![
+        "compare".as_ref(),
+        merged.as_os_str(),
+        part.as_os_str(),
+        "--error-png".as_ref(),
+        err.as_os_str(),
+    ];
+    let r = run_capped(&args, GIB, T);
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    assert!(is_fifo(&err), "compare --error-png replaced the FIFO");
+    assert_eq!(&got(rx, &r)[1..4], b"PNG");
+    // A directory for merge -o is refused before the parts are read, as for render.
+    let args: Vec<&std::ffi::OsStr> = vec![
+        "merge".as_ref(),
+        "missing.exr".as_ref(),
+        "-o".as_ref(),
+        d.as_os_str(),
+    ];
+    assert_error(&run_capped(&args, GIB, T), &["-o ", "is a directory"]);
+}
+
+/// An ordinary render stopped by SIGTERM exited 143 without a word and without its finished
+/// tiles. It says so in one line and saves the finished tiles (the others black) beside the
+/// other fallbacks, leaving `-o` as it was (a stopped render never replaces an output).
+#[test]
+fn issue22_case_12_an_interrupted_render_keeps_its_finished_tiles() {
+    let d = tmp_dir("i22c12");
+    let scene = write(&d, "scene.pbrt", small_scene(""));
+    let out = write(&d, "out.exr", "old");
+    let extra = ["--res", "256x256", "--spp", "1024", "--integrator", "path"];
+    let mut bg = Background::start(render_args(&scene, &d, &extra));
+    assert!(bg.wait_for_line("render:"));
+    // Not a timing assertion: long enough for some of the 256 tiles to finish, far from all.
+    std::thread::sleep(Duration::from_secs(3));
+    bg.signal("TERM");
+    let r = bg.finish(T);
+    assert_eq!(r.code, Some(143), "{}", r.describe());
+    let lines: Vec<&str> = r.stderr.lines().collect();
+    assert_eq!(lines.len(), 1, "{}", r.describe());
+    assert!(lines[0].contains("SIGTERM") && lines[0].contains(" of 256 tiles"));
+    assert_eq!(std::fs::read(&out).unwrap(), b"old");
+    let saved = saved_path(&r.stderr);
+    let image = photon::imageio::read_exr(&saved);
+    let _ = std::fs::remove_file(&saved);
+    let image = image.unwrap();
+    assert_eq!((image.width, image.height), (256, 256));
+    assert!(image.pixels.iter().any(|p| p[0] > 0.0), "finished tiles");
+}
+
+/// `--passes` with a pass number near 1e13 (or such a range forged in a `--resume` file) hung
+/// in the radius schedule and ignored SIGTERM: pass numbers are bounded (at most 2^20 passes)
+/// with a located error; and `-o` naming a FIFO nobody reads ignored SIGTERM and left its
+/// temporary EXR in the temporary directory.
+#[test]
+fn issue22_case_14_pass_ranges_are_bounded_and_fifo_writes_interruptible() {
+    let d = tmp_dir("i22c14");
+    let huge = ["--passes", "10000000000000..10000000000001"];
+    let r = render_text(&d, &small_scene(""), &huge, GIB);
+    assert_error(&r, &["--passes", "1048576"]);
+    // A partial image claiming passes 0..1e13, resumed: refused, naming the file.
+    let r = render_text(&d, &small_scene(""), &["--passes", "0..1"], GIB);
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    let mut p = photon::integrator::passes::Partial::read(&d.join("out.exr")).unwrap();
+    p.passes = 0..10_000_000_000_000;
+    let forged = d.join("forged.exr");
+    p.write(&forged).unwrap();
+    let extra = ["--progressive", "--resume", forged.to_str().unwrap()];
+    let r = render_text(&d, &small_scene(""), &extra, GIB);
+    assert_error(&r, &["--resume ", "forged.exr", "1048576"]);
+    // -o FIFO without a reader, then SIGTERM.
+    let fifo = d.join("pipe.exr");
+    mkfifo(&fifo);
+    let scene = d.join("scene.pbrt");
+    let mut args = render_args(&scene, &d, &[]);
+    let n = args.len();
+    args[n - 1] = fifo.clone().into();
+    let mut bg = Background::start(&args);
+    let prefix = format!("photon-{}-", bg.pid());
+    assert!(bg.wait_for_line("rendered in"));
+    bg.signal("TERM");
+    let r = bg.finish(Duration::from_secs(60));
+    assert_eq!(r.code, Some(143), "{}", r.describe());
+    assert!(r.stderr.contains("SIGTERM"), "{}", r.describe());
+    assert!(is_fifo(&fifo));
+    assert_eq!(temp_files_starting_with(&prefix), Vec::<PathBuf>::new());
+}
+
+/// A render blocked opening a FIFO (`--png` here) ignored SIGINT: the open is interruptible,
+/// the temporaries are removed, nothing is replaced (not `-o` either), exit 130.
+#[test]
+fn issue22_case_23_opening_a_fifo_is_interruptible() {
+    let d = tmp_dir("i22c23");
+    let scene = write(&d, "scene.pbrt", small_scene(""));
+    let out = write(&d, "out.exr", "old");
+    let fifo = d.join("preview.png");
+    mkfifo(&fifo);
+    let mut args = render_args(&scene, &d, &[]);
+    args.retain(|a| a != "--no-png");
+    args.extend(["--png".into(), fifo.clone().into()]);
+    let mut bg = Background::start(&args);
+    let prefix = format!("photon-{}-", bg.pid());
+    assert!(bg.wait_for_line("rendered in"));
+    bg.signal("INT");
+    let r = bg.finish(Duration::from_secs(60));
+    assert_eq!(r.code, Some(130), "{}", r.describe());
+    assert!(r.stderr.contains("SIGINT"), "{}", r.describe());
+    assert!(is_fifo(&fifo));
+    assert_eq!(std::fs::read(&out).unwrap(), b"old");
+    assert_eq!(temp_files_starting_with(&prefix), Vec::<PathBuf>::new());
+    let mut names: Vec<String> = std::fs::read_dir(&d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["out.exr", "preview.png", "scene.pbrt"]);
+}
+
+/// `bench --csv`/`--json` were written with `fs::write` after the whole benchmark, outside the
+/// output planner (a bad destination was found only at the end, a regular file was truncated
+/// in place): they are planned before the work like every other output, so a directory is
+/// refused at once.
+#[test]
+fn issue22_case_11_bench_outputs_are_planned_before_the_work() {
+    let d = tmp_dir("i22c11b");
+    let args: Vec<&std::ffi::OsStr> = vec!["bench".as_ref(), "--csv".as_ref(), d.as_os_str()];
+    let r = run_capped(&args, 4 * GIB, T);
+    assert_error(&r, &["--csv ", "is a directory"]);
+    assert!(!r.stdout.contains("plan:"), "{}", r.stdout);
+}
+
+/// `converge` wrote its CSV, plot and images with its own temporary-and-rename, outside the
+/// output planner (issue 22, case 11: every subcommand's outputs through one planner): a
+/// `converge.csv` that is a directory is now refused before the first render, naming it.
+#[test]
+fn issue22_case_11_converge_outputs_are_planned_before_the_work() {
+    let d = tmp_dir("i22c11conv");
+    let scene = write(&d, "scene.pbrt", small_scene(""));
+    let reference = d.join("ref.exr");
+    photon::imageio::write_exr(
+        &reference,
+        &photon::imageio::RgbImage::new(8, 8),
+        &[],
+        photon::imageio::ExrPixel::Float,
+    )
+    .unwrap();
+    let out = d.join("out");
+    std::fs::create_dir_all(out.join("converge.csv")).unwrap();
+    let args: Vec<&std::ffi::OsStr> = vec![
+        "converge".as_ref(),
+        scene.as_os_str(),
+        "--reference".as_ref(),
+        reference.as_os_str(),
+        "--budgets".as_ref(),
+        "0.2".as_ref(),
+        "--methods".as_ref(),
+        "path".as_ref(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ];
+    let r = run_capped(&args, 4 * GIB, T);
+    assert_error(&r, &["--out ", "converge.csv", "directory"]);
+    assert!(!r.stdout.contains("budget"), "rendered first: {}", r.stdout);
+}

@@ -423,6 +423,10 @@ pub fn render_for_time(
         let t = Instant::now();
         s.seed = settings.seed.wrapping_add(pass);
         let out = render_prepared(scene, accel, &s, kind, photons.as_ref(), &|_, _| {});
+        let stopping = crate::interrupt::requested().is_some();
+        if stopping && total.is_some() {
+            break; // cut short by a signal: not added
+        }
         // The latest pass's rate: the smallest one seen undercounts when the machine gets
         // busier (a 30 s budget took 60 s on a loaded machine).
         per_spp = t.elapsed().as_secs_f64() / s.spp as f64;
@@ -433,7 +437,7 @@ pub fn render_for_time(
         spp_done += s.spp;
         pass += 1;
         let left = budget_s - start.elapsed().as_secs_f64();
-        if left < per_spp {
+        if left < per_spp || stopping {
             break;
         }
         // Fill most of the remaining time, growing at most 4x per pass.

@@ -31,6 +31,7 @@ use super::photonmap::PhotonPass;
 use super::{IntegratorKind, RenderOutput, RenderSettings};
 use crate::accel::Accel;
 use crate::imageio::RgbImage;
+use crate::resources::MAX_PASSES;
 use crate::sampling::hash;
 use crate::scene::Scene;
 use std::ops::Range;
@@ -47,9 +48,10 @@ pub fn pass_seed(seed: u64, k: u64) -> u64 {
 }
 
 /// Factor on the squared radii of pass `k` (pass 0: 1): the product of
-/// `(i + alpha) / (i + 1)` for `i = 1..=k`.
+/// `(i + alpha) / (i + 1)` for `i = 1..=k` (`k` at most [`MAX_PASSES`], which the command
+/// line and partial files are held to: the product stops there).
 pub fn radius_scale2(alpha: f64, k: u64) -> f64 {
-    (1..=k).fold(1.0, |s, i| s * (i as f64 + alpha) / (i as f64 + 1.0))
+    (1..=k.min(MAX_PASSES)).fold(1.0, |s, i| s * (i as f64 + alpha) / (i as f64 + 1.0))
 }
 
 /// The settings of pass `k`: its seed, its sample count and (progressive) its radii.
@@ -297,6 +299,12 @@ impl Partial {
                 size.0, size.1
             ));
         }
+        if passes.end > MAX_PASSES {
+            return Err(format!(
+                "{shown}: pass range {}..{} goes beyond the limit of {MAX_PASSES} passes",
+                passes.start, passes.end
+            ));
+        }
         let header = PartialHeader {
             scene: get("photon.scene")?,
             seed: get("photon.seed")?
@@ -515,7 +523,8 @@ pub fn render_for_time(
         pass_spp = (want.ceil() as u32).clamp(pass_spp, pass_spp.saturating_mul(4));
         let next_s = photon_s + per_spp * pass_spp as f64;
         let elapsed = start.elapsed().as_secs_f64();
-        if elapsed + next_s > budget_s || crate::interrupt::requested().is_some() {
+        let stop = elapsed + next_s > budget_s || k >= MAX_PASSES;
+        if stop || crate::interrupt::requested().is_some() {
             break;
         }
     }

@@ -325,6 +325,9 @@ fn shoot(
     let parts: Vec<(Vec<Landing>, u64, u64)> = work
         .par_iter()
         .map(|&(light, lo, hi)| {
+            if crate::interrupt::requested().is_some() {
+                return (Vec::new(), 0, 0); // stopping: the caller's render is discarded
+            }
             let mut out = Vec::new();
             let (mut first_specular, mut rays) = (0u64, 0u64);
             let map = &maps[light];

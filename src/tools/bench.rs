@@ -553,6 +553,13 @@ pub fn run_with(
     opts: &BenchOptions,
     mut baseline: Option<&mut dyn KnnBaseline>,
 ) -> Result<Vec<Row>, ToolError> {
+    // --csv and --json are planned before the work and written as render's outputs are
+    // (`super::output`: a FIFO or device is written into, never replaced).
+    let files: Vec<(&str, &std::path::Path)> = [("--csv", &opts.csv), ("--json", &opts.json)]
+        .into_iter()
+        .filter_map(|(flag, p)| p.as_deref().map(|p| (flag, p)))
+        .collect();
+    let outputs = super::output::Outputs::plan_files(&files).map_err(ToolError)?;
     let plan = opts.plan();
     println!("{}", machine());
     println!(
@@ -584,13 +591,18 @@ pub fn run_with(
         print!("{}", table(&rows[start..]));
         println!("({:.1} s)\n", t.elapsed().as_secs_f64());
     }
-    if let Some(p) = &opts.csv {
-        std::fs::write(p, to_csv(&rows)).map_err(|e| ToolError(format!("{}: {e}", p.display())))?;
-    }
-    if let Some(p) = &opts.json {
-        std::fs::write(p, to_json(&rows))
-            .map_err(|e| ToolError(format!("{}: {e}", p.display())))?;
-    }
+    let texts: Vec<String> = (outputs.files.iter())
+        .map(|f| match f.flag.as_str() {
+            "--csv" => to_csv(&rows),
+            _ => to_json(&rows),
+        })
+        .collect();
+    let writers: Vec<super::output::Writer> = (texts.iter())
+        .map(|t| -> super::output::Writer {
+            Box::new(move |tmp: &std::path::Path| std::fs::write(tmp, t).map_err(|e| e.to_string()))
+        })
+        .collect();
+    outputs.commit(writers)?;
     Ok(rows)
 }
 

@@ -1,8 +1,9 @@
 //! `photon compare IMAGE.exr REFERENCE.exr`: error metrics of a render against a reference.
+use super::output::{Outputs, Writer};
 use super::ToolError;
 use crate::imageio::metrics::{self, MaskOptions, Metrics};
 use crate::imageio::{read_exr, write_png};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Options of `photon compare`.
 #[derive(clap::Args, Clone, Debug)]
@@ -17,7 +18,9 @@ pub struct CompareOptions {
     /// Also leave out pixels next to reference pixels brighter than this (visible emitters).
     #[arg(long)]
     pub mask_above: Option<f32>,
-    /// Write a false-colour relative-error image (log scale 1e-4 .. 1).
+    /// Write a false-colour relative-error image (log scale 1e-4 .. 1); planned before the
+    /// images are read and written as `render`'s outputs are (a FIFO or device is written
+    /// into, never replaced).
     #[arg(long)]
     pub error_png: Option<PathBuf>,
     /// Print the metrics as JSON instead of text.
@@ -30,6 +33,10 @@ pub struct CompareOptions {
 
 /// Runs the comparison; `Ok(false)` when `--max-relmse` is exceeded.
 pub fn run(opts: &CompareOptions) -> Result<bool, ToolError> {
+    let error_png = match &opts.error_png {
+        Some(p) => Some(Outputs::plan_files(&[("--error-png", p)]).map_err(ToolError)?),
+        None => None,
+    };
     let image = read_exr(&opts.image)?;
     let reference = read_exr(&opts.reference)?;
     let (image, reference) = if opts.downsample {
@@ -41,8 +48,12 @@ pub fn run(opts: &CompareOptions) -> Result<bool, ToolError> {
         mask_above: opts.mask_above,
     };
     let m = metrics::compare(&image, &reference, mask).map_err(ToolError)?;
-    if let Some(path) = &opts.error_png {
-        write_png(path, &metrics::error_image(&image, &reference, mask), 0.0)?;
+    if let Some(out) = &error_png {
+        let errors = metrics::error_image(&image, &reference, mask);
+        let writer: Writer = Box::new(|tmp: &Path| {
+            write_png(tmp, &errors, 0.0).map_err(|e| super::output::kind_only(&e))
+        });
+        out.commit(vec![writer])?;
     }
     if opts.json {
         println!("{}", to_json(&m));

@@ -3,6 +3,7 @@
 //! included, see `integrator::render_for_time`); the result is a CSV (integrator, settings,
 //! budget, seconds, spp, rays, photons, relMSE, RMSE) and a log-log PNG plot of relMSE against
 //! seconds, one curve per method.
+use super::output::{kind_only, Outputs, Writer};
 use super::{parse_resolution, thread_pool, ToolError};
 use crate::accel::{Accel, AccelOptions, BackendKind};
 use crate::imageio::metrics::{compare, match_sizes, MaskOptions};
@@ -136,6 +137,17 @@ pub fn run(opts: &ConvergeOptions) -> Result<bool, ToolError> {
             names.join(", ")
         )));
     }
+    // Every output is planned (and refused: a directory, another user's link in a sticky
+    // folder...) before any render; devices and FIFOs are written into, never replaced.
+    let csv = opts.out.join("converge.csv");
+    let png = opts.out.join("converge.png");
+    let exrs: Vec<PathBuf> = chosen
+        .iter()
+        .map(|m| opts.out.join(format!("{}.exr", m.name)))
+        .collect();
+    let mut files: Vec<(&str, &Path)> = vec![("--out", &csv), ("--out", &png)];
+    files.extend(exrs.iter().map(|p| ("--out", p.as_path())));
+    Outputs::plan_files(&files).map_err(ToolError)?;
     let mask = MaskOptions {
         mask_above: opts.mask_above,
     };
@@ -155,12 +167,14 @@ pub fn run(opts: &ConvergeOptions) -> Result<bool, ToolError> {
     for line in trend_lines(&rows) {
         println!("{line}");
     }
-    let csv = opts.out.join("converge.csv");
-    crate::imageio::write_atomically(&csv, |tmp| {
-        std::fs::write(tmp, to_csv(&rows)).map_err(|e| crate::imageio::ImageError::io(tmp, e))
-    })?;
-    let png = opts.out.join("converge.png");
-    plot(&rows, &png, &scene_title(&opts.scene))?;
+    let title = scene_title(&opts.scene);
+    let writers: Vec<Writer> = vec![
+        Box::new(|tmp: &Path| std::fs::write(tmp, to_csv(&rows)).map_err(|e| e.to_string())),
+        Box::new(|tmp: &Path| plot(&rows, tmp, &title).map_err(|e| e.to_string())),
+    ];
+    Outputs::plan_files(&[("--out", &csv), ("--out", &png)])
+        .map_err(ToolError)?
+        .commit(writers)?;
     println!("wrote {} and {}", csv.display(), png.display());
     Ok(true)
 }
@@ -183,12 +197,13 @@ fn measure(
     let (img, spp) = pool.install(|| render_for_time(scene, accel, &s, m.kind, budget));
     let (a, r) = match_sizes(img.image.clone(), reference.clone()).map_err(ToolError)?;
     let metrics = compare(&a, &r, mask).map_err(ToolError)?;
-    write_exr(
-        &out.join(format!("{}.exr", m.name)),
-        &img.image,
-        &[],
-        ExrPixel::Half,
-    )?;
+    let exr = out.join(format!("{}.exr", m.name));
+    let writer: Writer = Box::new(|tmp: &Path| {
+        write_exr(tmp, &img.image, &[], ExrPixel::Half).map_err(|e| kind_only(&e))
+    });
+    Outputs::plan_files(&[("--out", &exr)])
+        .map_err(ToolError)?
+        .commit(vec![writer])?;
     let photons = img.photons_emitted;
     let settings = match m.kind {
         IntegratorKind::Photonmap => format!(

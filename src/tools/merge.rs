@@ -3,10 +3,13 @@
 //! and settings: the error names the field that differs) and their pass ranges must tile
 //! `[0, N)` (the error lists overlaps and missing ranges). The sums are exact, so any split of
 //! the passes merges to the same file, bit for bit; the output is itself a partial image of
-//! passes `0..N` (it can be merged further or resumed).
+//! passes `0..N` (it can be merged further or resumed). The outputs are planned before the
+//! parts are read and written as `render`'s are (`super::output`: a FIFO or device is written
+//! into, never replaced).
+use super::output::{Outputs, Writer};
 use super::ToolError;
 use crate::integrator::passes::{merge, Partial};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Options of `photon merge`.
 #[derive(clap::Args, Clone, Debug)]
@@ -29,13 +32,28 @@ pub struct MergeOptions {
 }
 
 pub fn run(opts: &MergeOptions) -> Result<(), ToolError> {
+    let png = match opts.no_png {
+        true => None,
+        false => (opts.png.clone()).or_else(|| super::output::default_png(&opts.output)),
+    };
+    let outputs = Outputs::plan(&opts.output, png.as_deref()).map_err(ToolError)?;
     let parts = opts
         .parts
         .iter()
         .map(|p| Ok((p.clone(), Partial::read(p).map_err(ToolError)?)))
         .collect::<Result<Vec<_>, ToolError>>()?;
     let merged = merge(&parts).map_err(ToolError)?;
-    merged.write(&opts.output)?;
+    let mean = merged.mean().0;
+    let mut writers: Vec<Writer> = vec![Box::new(|tmp: &Path| {
+        merged.write(tmp).map_err(|e| super::output::kind_only(&e))
+    })];
+    if png.is_some() {
+        writers.push(Box::new(|tmp: &Path| {
+            crate::imageio::write_png(tmp, &mean, opts.exposure)
+                .map_err(|e| super::output::kind_only(&e))
+        }));
+    }
+    outputs.commit(writers)?;
     println!(
         "merged {} parts: passes {}..{} -> {}",
         parts.len(),
@@ -43,12 +61,7 @@ pub fn run(opts: &MergeOptions) -> Result<(), ToolError> {
         merged.passes.end,
         opts.output.display()
     );
-    if !opts.no_png {
-        let png = opts
-            .png
-            .clone()
-            .unwrap_or_else(|| opts.output.with_extension("png"));
-        crate::imageio::write_png(&png, &merged.mean().0, opts.exposure)?;
+    if let Some(png) = &png {
         println!("wrote {}", png.display());
     }
     Ok(())

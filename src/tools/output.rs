@@ -8,16 +8,30 @@
 //! ```
 //!
 //! [`Outputs::plan`] (or [`Outputs::plan_files`] for any set of files) resolves symlinks to
-//! the file they name, refuses directories, sockets and block devices, refuses two outputs that
+//! the file they name (photon follows the last component's links itself, so it applies the
+//! kernel's `fs.protected_symlinks` rule itself: a link in a sticky directory such as /tmp that
+//! is owned by another user than the process's effective uid is refused, not followed; links
+//! elsewhere, and one's own, are followed), refuses directories, sockets and block devices,
+//! refuses two outputs that
 //! are the same file (and `-o` with a `.png` extension, which the preview would overwrite), and
 //! proves each regular destination's directory writable by creating and removing a probe file.
 //! [`Outputs::commit`] (or [`Outputs::write`] for a render's EXR and PNG) writes every file to
 //! a hidden temporary beside its destination (`.NAME.<pid>.photon-tmp.EXT`) and renames them
 //! all only when every one is complete; a character device or a FIFO gets the finished bytes
-//! copied in, never a rename, so `/dev/null` stays a device. It installs the SIGINT/SIGTERM
-//! flag ([`crate::interrupt`]) for the writing phase and polls it after each file: on a signal
-//! the temporaries are removed, nothing is renamed, and [`OutputError::Interrupted`] tells the
-//! caller which exit code to use (130/143).
+//! copied in, never a rename, so `/dev/null` stays a device (devices and FIFOs are written
+//! first, then the renames: a FIFO nobody reads cannot leave the other outputs replaced). It
+//! installs the SIGINT/SIGTERM flag ([`crate::interrupt`]) for the writing phase and polls it
+//! after each file, and while a FIFO or device is opened and written (in a thread: opening a
+//! FIFO blocks until a reader comes): on a signal the temporaries are removed, nothing is
+//! renamed, and [`OutputError::Interrupted`] tells the caller which exit code to use (130/143).
+//!
+//! When a destination cannot take its finished file at the end (its folder removed or made
+//! read-only during the render, the disk full, `-o /dev/full`), the work is not thrown away:
+//! every file not yet in place is written again to a fallback, `photon-<pid>-NAME` in the
+//! system's temporary directory (else in the working directory), created exclusively, and the
+//! error says where ("... saved to PATH instead"); the exit code stays 2.
+//! [`Outputs::keep_elsewhere`] writes there directly (a render stopped by a signal keeps its
+//! finished tiles so, leaving its outputs as they were).
 use crate::imageio::{self, ExrPixel, RgbImage};
 use crate::interrupt::{self, Signal};
 use std::fs;
@@ -79,8 +93,9 @@ pub struct Outputs {
     pub files: Vec<OutputFile>,
 }
 
-/// A writer of one output into the path it is given.
-pub type Writer<'a> = Box<dyn FnOnce(&Path) -> Result<(), String> + 'a>;
+/// A writer of one output into the path it is given (called again for the fallback file when
+/// the destination fails).
+pub type Writer<'a> = Box<dyn Fn(&Path) -> Result<(), String> + 'a>;
 
 /// The PNG preview's default path beside the EXR `exr` (its `.png` sibling), or `None` when
 /// `exr` is a device or a FIFO (`-o /dev/null` must not create `/dev/null.png`).
@@ -96,13 +111,42 @@ pub fn default_png(exr: &Path) -> Option<PathBuf> {
 /// Symlinks followed before giving up (the kernel's own limit).
 const MAX_LINKS: usize = 40;
 
+/// The process's effective uid, from `/proc/self/status` (`None` where it cannot be read).
+fn effective_uid() -> Option<u32> {
+    let status = fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("Uid:"))?;
+    line.split_whitespace().nth(2)?.parse().ok()
+}
+
+/// `S_ISVTX`: the sticky bit of a directory's mode.
+const STICKY: u32 = 0o1000;
+
+/// Refuses to follow the symlink `link` (metadata `m`) when it lives in a sticky directory and
+/// is owned by another user than this process's effective uid (an unknown uid counts as
+/// another): Linux's `fs.protected_symlinks` rule, which the kernel cannot apply here because
+/// photon reads the link itself.
+fn check_link_owner(link: &Path, m: &fs::Metadata) -> Result<(), String> {
+    use std::os::unix::fs::MetadataExt;
+    let sticky = fs::metadata(dir_of(link)).is_ok_and(|d| d.mode() & STICKY != 0);
+    let me = effective_uid();
+    if sticky && me != Some(m.uid()) {
+        return Err(format!(
+            "a symlink owned by uid {} in a sticky directory is not followed (photon runs as uid {})",
+            m.uid(),
+            me.map_or("unknown".to_string(), |u| u.to_string())
+        ));
+    }
+    Ok(())
+}
+
 /// `path` with every symlink in its last component followed (a dangling link names the file
-/// to create).
+/// to create); another user's link in a sticky directory is refused ([`check_link_owner`]).
 fn follow_links(path: &Path) -> Result<PathBuf, String> {
     let mut p = path.to_path_buf();
     for _ in 0..MAX_LINKS {
         match fs::symlink_metadata(&p) {
             Ok(m) if m.file_type().is_symlink() => {
+                check_link_owner(&p, &m)?;
                 let target = fs::read_link(&p).map_err(|e| format!("{e}"))?;
                 p = match p.parent() {
                     Some(dir) => dir.join(target),
@@ -242,9 +286,20 @@ impl Outputs {
     }
 
     /// Writes each file with its writer (one per planned file, in order) to a temporary, then
-    /// puts them all in place. On an error or a signal the temporaries are removed and no
-    /// destination is touched.
+    /// puts them all in place. On a signal the temporaries are removed and no destination is
+    /// touched. On an error the files not yet in place are written to fallbacks (see the
+    /// module) and the error says where.
     pub fn commit(&self, writers: Vec<Writer>) -> Result<(), OutputError> {
+        self.commit_with(writers, true)
+    }
+
+    /// [`Self::commit`] without fallbacks: for a file that is written again later anyway (a
+    /// checkpoint).
+    pub fn commit_without_fallback(&self, writers: Vec<Writer>) -> Result<(), OutputError> {
+        self.commit_with(writers, false)
+    }
+
+    fn commit_with(&self, writers: Vec<Writer>, fallback: bool) -> Result<(), OutputError> {
         assert_eq!(writers.len(), self.files.len(), "one writer per output");
         interrupt::install();
         let temps: Vec<PathBuf> = self
@@ -256,18 +311,25 @@ impl Outputs {
                 Kind::Special => temp_elsewhere(&f.dest, i),
             })
             .collect();
-        let result = self.write_temps(writers, &temps).and_then(|()| {
+        let mut placed = vec![false; self.files.len()];
+        let result = self.write_temps(&writers, &temps).and_then(|()| {
             check_signal()?;
-            self.place(&temps)
+            self.place(&temps, &mut placed)
         });
         for t in &temps {
             let _ = fs::remove_file(t);
         }
-        result
+        match result {
+            Err(OutputError::Bad(m)) if fallback => {
+                let left: Vec<usize> = (0..placed.len()).filter(|&i| !placed[i]).collect();
+                Err(OutputError::Bad(self.fall_back(&writers, &left, &m)))
+            }
+            r => r,
+        }
     }
 
     /// Runs the writers into the temporaries, polling for a signal after each.
-    fn write_temps(&self, writers: Vec<Writer>, temps: &[PathBuf]) -> Result<(), OutputError> {
+    fn write_temps(&self, writers: &[Writer], temps: &[PathBuf]) -> Result<(), OutputError> {
         for ((f, w), tmp) in self.files.iter().zip(writers).zip(temps) {
             check_signal()?;
             w(tmp)
@@ -276,16 +338,96 @@ impl Outputs {
         check_signal()
     }
 
-    /// Renames (or copies, for special files) every temporary into place.
-    fn place(&self, temps: &[PathBuf]) -> Result<(), OutputError> {
-        for (f, tmp) in self.files.iter().zip(temps) {
+    /// Copies the temporaries of devices and FIFOs into them (interruptible: a FIFO nobody
+    /// reads blocks), then renames every other temporary into place; `placed` records which
+    /// destinations hold their new file.
+    fn place(&self, temps: &[PathBuf], placed: &mut [bool]) -> Result<(), OutputError> {
+        let order = (self.files.iter().enumerate())
+            .filter(|(_, f)| f.kind == Kind::Special)
+            .chain((self.files.iter().enumerate()).filter(|(_, f)| f.kind == Kind::Regular));
+        for (i, f) in order {
             let done = match f.kind {
-                Kind::Regular => fs::rename(tmp, &f.dest),
-                Kind::Special => copy_into(tmp, &f.dest),
+                Kind::Regular => fs::rename(&temps[i], &f.dest),
+                Kind::Special => copy_into(&temps[i], &f.dest).map_err(OutputError::Interrupted)?,
             };
             done.map_err(|e| OutputError::Bad(format!("{} {}: {e}", f.flag, f.shown.display())))?;
+            placed[i] = true;
         }
         Ok(())
+    }
+
+    /// `error` followed by where the files `which` were saved instead (or why they could not
+    /// be).
+    fn fall_back(&self, writers: &[Writer], which: &[usize], error: &str) -> String {
+        if which.is_empty() {
+            return error.to_string();
+        }
+        let (mut saved, mut failed) = (Vec::new(), String::new());
+        for &i in which {
+            match self.keep_one(&writers[i], &self.files[i]) {
+                Ok(p) => saved.push(p.display().to_string()),
+                Err(e) => {
+                    let f = &self.files[i];
+                    failed += &format!("; {} could not be saved elsewhere either: {e}", f.flag);
+                }
+            }
+        }
+        let what = if saved.len() == 1 {
+            "it was"
+        } else {
+            "they were"
+        };
+        match saved.is_empty() {
+            true => format!("{error}{failed}"),
+            false => format!(
+                "{error}; {what} saved to {} instead{failed}",
+                saved.join(" and ")
+            ),
+        }
+    }
+
+    /// Writes each planned file with its writer to a fallback (see the module) instead of its
+    /// destination; returns the paths written, in order.
+    pub fn keep_elsewhere(&self, writers: Vec<Writer>) -> Result<Vec<PathBuf>, String> {
+        assert_eq!(writers.len(), self.files.len(), "one writer per output");
+        (self.files.iter().zip(&writers))
+            .map(|(f, w)| self.keep_one(w, f))
+            .collect()
+    }
+
+    /// Writes `f`'s content with `w` to a fresh fallback file.
+    fn keep_one(&self, w: &Writer, f: &OutputFile) -> Result<PathBuf, String> {
+        let name = f.shown.file_name().unwrap_or_default().to_string_lossy();
+        let pid = std::process::id();
+        let mut last = String::from("no fallback directory");
+        let dirs = [std::env::temp_dir(), PathBuf::from(".")];
+        for dir in &dirs {
+            for k in 0..100 {
+                let file = match k {
+                    0 => format!("photon-{pid}-{name}"),
+                    _ => format!("photon-{pid}-{k}-{name}"),
+                };
+                let p = dir.join(file);
+                // Created exclusively: an existing file (or a link planted there) is skipped.
+                match fs::OpenOptions::new().write(true).create_new(true).open(&p) {
+                    Ok(_) => {}
+                    Err(e) if e.kind() == io::ErrorKind::AlreadyExists => continue,
+                    Err(e) => {
+                        last = format!("{}: {e}", p.display());
+                        break;
+                    }
+                }
+                match w(&p) {
+                    Ok(()) => return Ok(fs::canonicalize(&p).unwrap_or(p)),
+                    Err(e) => {
+                        let _ = fs::remove_file(&p);
+                        last = format!("{}: {e}", p.display());
+                        break;
+                    }
+                }
+            }
+        }
+        Err(last)
     }
 
     /// A render's EXR (with its component layers) and PNG preview, as planned by [`Self::plan`].
@@ -296,6 +438,18 @@ impl Outputs {
         pixel: ExrPixel,
         exposure: f32,
     ) -> Result<(), OutputError> {
+        self.commit(self.render_writers(image, layers, pixel, exposure))
+    }
+
+    /// The writers of a render's EXR and PNG preview (for [`Self::commit`] or
+    /// [`Self::keep_elsewhere`]).
+    pub fn render_writers<'a>(
+        &self,
+        image: &'a RgbImage,
+        layers: &'a [(&'a str, &'a RgbImage)],
+        pixel: ExrPixel,
+        exposure: f32,
+    ) -> Vec<Writer<'a>> {
         let mut writers: Vec<Writer> = vec![Box::new(move |tmp: &Path| {
             imageio::write_exr(tmp, image, layers, pixel).map_err(|e| kind_only(&e))
         })];
@@ -304,12 +458,12 @@ impl Outputs {
                 imageio::write_png(tmp, image, exposure).map_err(|e| kind_only(&e))
             }));
         }
-        self.commit(writers)
+        writers
     }
 }
 
 /// An image error without its (temporary) path: the caller names the destination.
-fn kind_only(e: &imageio::ImageError) -> String {
+pub fn kind_only(e: &imageio::ImageError) -> String {
     let full = e.to_string();
     let prefix = format!("{}: ", e.path.display());
     full.strip_prefix(&prefix).unwrap_or(&full).to_string()
@@ -324,11 +478,38 @@ fn check_signal() -> Result<(), OutputError> {
 }
 
 /// Copies the finished file `tmp` into the existing device or FIFO `dest` (never created,
-/// truncated or replaced).
-fn copy_into(tmp: &Path, dest: &Path) -> io::Result<()> {
-    let mut src = fs::File::open(tmp)?;
-    let mut out = fs::OpenOptions::new().write(true).open(dest)?;
-    io::copy(&mut src, &mut out).map(|_| ())
+/// truncated or replaced). Opening a FIFO blocks until a reader comes and writing blocks while
+/// it does not read, so both run in a thread while this one polls for a signal: on one it
+/// returns `Err(signal)` and leaves the thread behind (the process is about to exit; the
+/// temporary it reads may be removed meanwhile, as it is already open).
+fn copy_into(tmp: &Path, dest: &Path) -> Result<io::Result<()>, Signal> {
+    use std::sync::mpsc::{channel, RecvTimeoutError};
+    let mut src = match fs::File::open(tmp) {
+        Ok(f) => f,
+        Err(e) => return Ok(Err(e)),
+    };
+    let dest = dest.to_path_buf();
+    let (tx, rx) = channel();
+    std::thread::spawn(move || {
+        let done = fs::OpenOptions::new()
+            .write(true)
+            .open(&dest)
+            .and_then(|mut out| io::copy(&mut src, &mut out).map(|_| ()));
+        let _ = tx.send(done);
+    });
+    loop {
+        match rx.recv_timeout(std::time::Duration::from_millis(20)) {
+            Ok(done) => return Ok(done),
+            Err(RecvTimeoutError::Timeout) => {
+                if let Some(s) = interrupt::requested() {
+                    return Err(s);
+                }
+            }
+            Err(RecvTimeoutError::Disconnected) => {
+                return Ok(Err(io::Error::other("the writing thread stopped")))
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -432,11 +613,18 @@ mod tests {
             fs::write(p, "half").unwrap();
             Err("disk full".to_string())
         });
-        let e = o.commit(vec![text("new a"), failing]).unwrap_err();
-        assert_eq!(
-            e,
-            OutputError::Bad(format!("--png {}: disk full", b.display()))
-        );
+        let e = o
+            .commit(vec![text("new a"), failing])
+            .unwrap_err()
+            .to_string();
+        // The EXR's content is kept in a fallback; the failing writer fails there too.
+        let prefix = format!("--png {}: disk full; it was saved to ", b.display());
+        assert!(e.starts_with(&prefix), "{e}");
+        let saved = e[prefix.len()..].split(" instead").next().unwrap();
+        assert_eq!(fs::read_to_string(saved).unwrap(), "new a");
+        fs::remove_file(saved).unwrap();
+        let failed = "; --png could not be saved elsewhere either: ";
+        assert!(e.contains(failed) && e.ends_with(": disk full"), "{e}");
         assert_eq!(fs::read_to_string(&a).unwrap(), "old a");
         assert_eq!(fs::read_to_string(&b).unwrap(), "old b");
         assert_eq!(names(&d), ["a.exr", "b.png"]);

@@ -8,6 +8,7 @@ use super::ToolError;
 use crate::accel::Accel;
 use crate::integrator::passes::{progress_note, render_passes, Partial, PartialHeader};
 use crate::integrator::{RenderOutput, RenderSettings};
+use crate::resources::MAX_PASSES;
 use crate::scene::Scene;
 use std::path::Path;
 use std::time::Instant;
@@ -63,17 +64,16 @@ pub fn run(
     accel: &Accel,
     settings: &RenderSettings,
     pool: &rayon::ThreadPool,
-    outputs: &Outputs,
+    (outputs, checkpoint): (&Outputs, Option<&Outputs>),
 ) -> Result<(), ToolError> {
     crate::interrupt::install();
     let po = &opts.passes;
-    let checkpoint = plan_checkpoint(po.checkpoint.as_deref(), outputs)?;
     let kind = opts.integrator;
     let header = PartialHeader::new(scene, settings, kind, &backend_name(opts));
     let start_pass = po.passes.as_ref().map_or(0, |r| r.start);
     let mut acc = match &po.resume {
         Some(file) => {
-            let p = Partial::read(file).map_err(ToolError)?;
+            let p = Partial::read(file).map_err(|e| ToolError(format!("--resume {e}")))?;
             check_same_render(file, &p.header, &header)?;
             if p.passes.start != start_pass {
                 return Err(ToolError(format!(
@@ -96,15 +96,16 @@ pub fn run(
     // Where to stop: the range's end, else the file's samples per pixel in passes, else
     // (with --time) when the budget is spent.
     let pass_spp = settings.pass_spp.max(1);
+    let until_budget = po.passes.is_none() && opts.time.is_some();
     let end = match (&po.passes, opts.time) {
         (Some(r), _) => r.end,
-        (None, Some(_)) => u64::MAX,
+        (None, Some(_)) => MAX_PASSES,
         (None, None) => start_pass + settings.spp.div_ceil(pass_spp).max(1) as u64,
     };
     println!(
         "passes: {}..{} of {} spp each, {} photon maps{}",
         acc.passes.end,
-        if end == u64::MAX {
+        if until_budget {
             "(until the time budget)".to_string()
         } else {
             end.to_string()
@@ -125,7 +126,7 @@ pub fn run(
     let t0 = Instant::now();
     let mut totals = RenderOutput::empty();
     let mut last_checkpoint = Instant::now();
-    let mut checkpoint_error = None;
+    let mut warned = String::new();
     let (mut longest, mut last) = (0f64, 0f64);
     if acc.passes.end < end {
         let first = acc.passes.end;
@@ -149,11 +150,13 @@ pub fn run(
                     100.0 * out.photon_seconds / out.seconds.max(1e-9),
                     100.0 * out.map_build_seconds / out.seconds.max(1e-9)
                 );
-                    if let Some(c) = &checkpoint {
+                    if let Some(c) = checkpoint {
                         if last_checkpoint.elapsed().as_secs_f64() >= po.every {
-                            if let Err(e) = write_partial(c, acc) {
-                                checkpoint_error = Some(e);
-                                return false;
+                            match write_partial(c, acc) {
+                                // Stop; the finished passes are saved below.
+                                Err(OutputError::Interrupted(_)) => return false,
+                                Err(OutputError::Bad(e)) => warn_once(&mut warned, &e),
+                                Ok(()) => warned.clear(),
                             }
                             last_checkpoint = Instant::now();
                         }
@@ -163,9 +166,6 @@ pub fn run(
                 },
             )
         });
-    }
-    if let Some(e) = checkpoint_error {
-        return Err(e.into());
     }
     report(settings, &acc, &totals, t0.elapsed().as_secs_f64());
 
@@ -180,16 +180,23 @@ pub fn run(
             acc.passes.end
         );
     }
-    let saved = save(&acc, checkpoint.as_ref(), outputs, opts.exposure);
+    let saved = save(&acc, checkpoint, outputs, opts.exposure, &mut warned);
     if let Some(sig) = signal {
         crate::interrupt::raise(sig);
     }
     saved
 }
 
-/// The checkpoint's plan, refusing a checkpoint that is one of the other outputs.
-fn plan_checkpoint(c: Option<&Path>, outputs: &Outputs) -> Result<Option<Outputs>, ToolError> {
-    let Some(c) = c else { return Ok(None) };
+/// The checkpoint's plan (checked before any work): refused when it is one of the other
+/// outputs, or when it already holds a file and `--resume` is not given (it would be replaced
+/// by a render that starts over; an empty file, a device or a FIFO is no checkpoint).
+pub fn plan_checkpoint(
+    po: &super::render::PassOptions,
+    outputs: &Outputs,
+) -> Result<Option<Outputs>, ToolError> {
+    let Some(c) = po.checkpoint.as_deref() else {
+        return Ok(None);
+    };
     let mut all: Vec<(&str, &Path)> = outputs
         .files
         .iter()
@@ -197,9 +204,24 @@ fn plan_checkpoint(c: Option<&Path>, outputs: &Outputs) -> Result<Option<Outputs
         .collect();
     all.push(("--checkpoint", c));
     Outputs::plan_files(&all).map_err(ToolError)?;
-    Ok(Some(
-        Outputs::plan_files(&[("--checkpoint", c)]).map_err(ToolError)?,
-    ))
+    let plan = Outputs::plan_files(&[("--checkpoint", c)]).map_err(ToolError)?;
+    let held = std::fs::metadata(&plan.files[0].dest).is_ok_and(|m| m.is_file() && m.len() > 0);
+    if held && po.resume.is_none() {
+        return Err(ToolError(format!(
+            "--checkpoint {}: a checkpoint already exists there: pass --resume {} to continue it, or remove it",
+            c.display(),
+            c.display()
+        )));
+    }
+    Ok(Some(plan))
+}
+
+/// Prints a failed checkpoint write as a one-line warning, unless it is the one printed last.
+fn warn_once(last: &mut String, e: &str) {
+    if last != e {
+        eprintln!("photon: warning: {e}; the render goes on without this checkpoint");
+        *last = e.to_string();
+    }
 }
 
 /// The statistics lines of a render in passes.
@@ -224,22 +246,28 @@ fn save(
     checkpoint: Option<&Outputs>,
     outputs: &Outputs,
     exposure: f32,
+    warned: &mut String,
 ) -> Result<(), ToolError> {
     if acc.passes.is_empty() {
         eprintln!("photon: no pass finished: nothing written");
         return Ok(());
     }
     if let Some(c) = checkpoint {
-        write_partial(c, acc)?;
-        println!("wrote checkpoint {}", c.files[0].shown.display());
+        // A failure is a warning: the outputs below hold the same passes.
+        match write_partial(c, acc) {
+            Err(OutputError::Bad(e)) => warn_once(warned, &e),
+            Err(e) => return Err(e.into()),
+            Ok(()) => println!("wrote checkpoint {}", c.files[0].shown.display()),
+        }
     }
     let mean = acc.mean().0;
     let mut writers: Vec<Writer> = vec![Box::new(|tmp: &Path| {
-        acc.write(tmp).map_err(|e| e.to_string())
+        acc.write(tmp).map_err(|e| super::output::kind_only(&e))
     })];
     if outputs.files.len() > 1 {
         writers.push(Box::new(|tmp: &Path| {
-            crate::imageio::write_png(tmp, &mean, exposure).map_err(|e| e.to_string())
+            crate::imageio::write_png(tmp, &mean, exposure)
+                .map_err(|e| super::output::kind_only(&e))
         }));
     }
     outputs.commit(writers)?;
@@ -254,9 +282,9 @@ fn save(
     Ok(())
 }
 
-/// Writes `acc` as the one planned file of `plan`.
+/// Writes `acc` as the one planned file of `plan` (a checkpoint: no fallback, see `output`).
 fn write_partial(plan: &Outputs, acc: &Partial) -> Result<(), OutputError> {
-    plan.commit(vec![Box::new(|tmp: &Path| {
-        acc.write(tmp).map_err(|e| e.to_string())
+    plan.commit_without_fallback(vec![Box::new(|tmp: &Path| {
+        acc.write(tmp).map_err(|e| super::output::kind_only(&e))
     })])
 }

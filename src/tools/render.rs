@@ -5,14 +5,15 @@ use crate::accel::{Accel, AccelOptions, BackendKind, RayKind};
 use crate::imageio::{self, ExrPixel};
 use crate::integrator::{self, IntegratorKind, RenderSettings};
 use crate::resources::{
-    MAX_DEPTH, MAX_EXPOSURE, MAX_GATHER_SAMPLES, MAX_LIGHT_SAMPLES, MAX_LOOKUP, MAX_PHOTONS,
-    MAX_RADIUS, MAX_SPP, MAX_THREADS,
+    MAX_DEPTH, MAX_EXPOSURE, MAX_GATHER_SAMPLES, MAX_LIGHT_SAMPLES, MAX_LOOKUP, MAX_PASSES,
+    MAX_PHOTONS, MAX_RADIUS, MAX_SPP, MAX_THREADS,
 };
 use crate::sampling::Pattern;
 use crate::scene::loader;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 use std::time::Instant;
 
 /// Options of `photon render`.
@@ -95,15 +96,16 @@ pub struct PassOptions {
     #[arg(long)]
     pub alpha: Option<f32>,
     /// Render only passes A..B (half-open, as in Rust) and write a partial image that
-    /// `photon merge` sums with the other parts; `N` means 0..N. Default with --progressive:
-    /// enough passes for the file's samples per pixel.
+    /// `photon merge` sums with the other parts; `N` means 0..N; B at most 2^20. Default
+    /// with --progressive: enough passes for the file's samples per pixel.
     #[arg(long, value_parser = parse_pass_range)]
     pub passes: Option<std::ops::Range<u64>>,
     /// Samples per pixel of each pass (default: `"integer passspp"`, else 4).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
     pub pass_spp: Option<u32>,
     /// Write the partial image to FILE as the render goes (atomically), at most every
-    /// --every; on SIGINT/SIGTERM it is written before exiting.
+    /// --every; on SIGINT/SIGTERM it is written before exiting. A write that fails is a
+    /// warning (the render goes on). An existing FILE is refused unless --resume is given.
     #[arg(long)]
     pub checkpoint: Option<PathBuf>,
     /// Time between checkpoints (e.g. 30s, 5m).
@@ -140,6 +142,11 @@ pub fn parse_pass_range(s: &str) -> Result<std::ops::Range<u64>, String> {
     if r.start >= r.end {
         return Err(format!(
             "empty pass range {s:?} (A..B renders passes A to B-1)"
+        ));
+    }
+    if r.end > MAX_PASSES {
+        return Err(format!(
+            "pass range {s:?} goes beyond the limit of {MAX_PASSES} passes"
         ));
     }
     Ok(r)
@@ -281,6 +288,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
             .or_else(|| super::output::default_png(&exr)),
     };
     let outputs = Outputs::plan(&exr, png.as_deref()).map_err(ToolError)?;
+    let checkpoint = super::passes::plan_checkpoint(&opts.passes, &outputs)?;
     let cli = crate::resources::FromCli {
         res: opts.res.is_some(),
         photons: opts.photon.global_photons.is_some() || opts.photon.caustic_photons.is_some(),
@@ -362,11 +370,18 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
         settings.pass_spp = n;
     }
     if opts.passes.active(opts.time.is_some()) {
-        return super::passes::run(opts, &scene, &accel, &settings, &pool, &outputs);
+        let outs = (&outputs, checkpoint.as_ref());
+        return super::passes::run(opts, &scene, &accel, &settings, &pool, outs);
     }
 
+    // SIGINT/SIGTERM from here on stop the render: the tiles (or, with --time, the passes)
+    // finished are kept in a fallback file and -o is left as it was (see `stopped`).
+    crate::interrupt::install();
     let bar = progress_bar();
+    let tiles = [AtomicU64::new(0), AtomicU64::new(0)];
     let progress = |done: u64, total: u64| {
+        tiles[0].fetch_max(done, Relaxed);
+        tiles[1].store(total, Relaxed);
         if let Some(b) = &bar {
             b.set_length(total);
             b.set_position(done);
@@ -428,6 +443,23 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     if let Some(b) = bar {
         b.finish_and_clear();
     }
+    let pixel = if opts.half {
+        ExrPixel::Half
+    } else {
+        ExrPixel::Float
+    };
+    let layers: Vec<(&str, &imageio::RgbImage)> =
+        out.components.iter().map(|(n, i)| (*n, i)).collect();
+    if let Some(sig) = crate::interrupt::take() {
+        let done = match opts.time {
+            Some(_) => None,
+            None => Some((tiles[0].load(Relaxed), tiles[1].load(Relaxed))),
+        };
+        let writers = outputs.render_writers(&out.image, &layers, pixel, opts.exposure);
+        let message = stopped(sig, done, &outputs, writers);
+        crate::interrupt::raise(sig);
+        return Err(ToolError(message));
+    }
     for note in &out.notes {
         println!("{note}");
     }
@@ -457,19 +489,47 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     }
 
     // Outputs: written to temporary files and renamed together (see `output`).
-    let layers: Vec<(&str, &imageio::RgbImage)> =
-        out.components.iter().map(|(n, i)| (*n, i)).collect();
-    let pixel = if opts.half {
-        ExrPixel::Half
-    } else {
-        ExrPixel::Float
-    };
     outputs.write(&out.image, &layers, pixel, opts.exposure)?;
     for f in &outputs.files {
         println!("wrote {}", f.shown.display());
     }
     println!("{}", crate::resources::report(&estimate));
     Ok(())
+}
+
+/// What a render stopped by `sig` says (one line): the image of the work it finished (`done`:
+/// tiles finished of the total; `None`: the passes of a `--time` render) is saved to fallback
+/// files by `writers` (see [`Outputs::keep_elsewhere`]), not to its outputs: a stopped render
+/// never replaces an output (the unfinished tiles are black).
+fn stopped(
+    sig: crate::interrupt::Signal,
+    done: Option<(u64, u64)>,
+    outputs: &Outputs,
+    writers: Vec<super::output::Writer>,
+) -> String {
+    let what = match done {
+        Some((0, _)) => {
+            return format!(
+                "{} received before any tile was finished: nothing written",
+                sig.name()
+            )
+        }
+        Some((n, total)) => format!("the {n} of {total} tiles finished (the others black)"),
+        None => "the image of the passes finished".to_string(),
+    };
+    let shown = &outputs.files[0].shown;
+    match outputs.keep_elsewhere(writers) {
+        Ok(paths) => {
+            let paths: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+            format!(
+                "{} received: {what} saved to {} instead; -o {} not replaced",
+                sig.name(),
+                paths.join(" and "),
+                shown.display()
+            )
+        }
+        Err(e) => format!("{} received: {what} could not be saved: {e}", sig.name()),
+    }
 }
 
 /// A progress bar on stderr, only when stderr is a terminal.

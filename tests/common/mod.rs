@@ -416,3 +416,144 @@ pub fn render_file(
     let pixels = out.image.pixels.iter();
     pixels.map(|p| photon::math::Vec3::from_array(*p)).collect()
 }
+
+/// Makes a FIFO at `path` (with `mkfifo`).
+pub fn mkfifo(path: &Path) {
+    let ok = Command::new("mkfifo").arg(path).status().unwrap().success();
+    assert!(ok, "mkfifo {}", path.display());
+}
+
+/// Whether `path` is a FIFO (not followed if it is a symlink).
+pub fn is_fifo(path: &Path) -> bool {
+    use std::os::unix::fs::FileTypeExt;
+    std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_fifo())
+}
+
+/// Reads the FIFO `path` to its end in a thread; the bytes arrive on the channel. A test waits
+/// with `recv_timeout` (a writer that never comes leaves the thread blocked, not the test).
+pub fn fifo_reader(path: &Path) -> std::sync::mpsc::Receiver<Vec<u8>> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    let p = path.to_path_buf();
+    std::thread::spawn(move || {
+        if let Ok(bytes) = std::fs::read(p) {
+            let _ = tx.send(bytes);
+        }
+    });
+    rx
+}
+
+/// The files in the system's temporary directory whose names start with `prefix`.
+pub fn temp_files_starting_with(prefix: &str) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(std::env::temp_dir())
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().starts_with(prefix))
+        .map(|e| e.path())
+        .collect();
+    v.sort();
+    v
+}
+
+/// A `photon` run in the background (stdin null, stdout and stderr piped), for tests that act
+/// while it runs: wait for a line on stdout, send a signal, then collect the [`Run`].
+pub struct Background {
+    child: std::process::Child,
+    lines: std::io::Lines<std::io::BufReader<std::process::ChildStdout>>,
+    stdout: String,
+    stderr: std::thread::JoinHandle<Vec<u8>>,
+    start: Instant,
+}
+
+impl Background {
+    /// Starts `photon ARGS`.
+    pub fn start<I, S>(args: I) -> Background
+    where
+        I: IntoIterator<Item = S>,
+        S: Into<OsString>,
+    {
+        use std::io::BufRead;
+        let mut child = photon()
+            .args(args.into_iter().map(Into::into))
+            .env("RUST_BACKTRACE", "0")
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("photon runs");
+        let lines = std::io::BufReader::new(child.stdout.take().unwrap()).lines();
+        let mut err_pipe = child.stderr.take().unwrap();
+        let stderr = std::thread::spawn(move || {
+            let mut s = Vec::new();
+            let _ = err_pipe.read_to_end(&mut s);
+            s
+        });
+        Background {
+            child,
+            lines,
+            stdout: String::new(),
+            stderr,
+            start: Instant::now(),
+        }
+    }
+
+    pub fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// Reads stdout until a line starting with `prefix`; false when stdout ends first.
+    pub fn wait_for_line(&mut self, prefix: &str) -> bool {
+        for line in self.lines.by_ref() {
+            let Ok(line) = line else { return false };
+            self.stdout += &line;
+            self.stdout.push('\n');
+            if line.starts_with(prefix) {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// Sends signal `name` (`TERM`, `INT`) with `kill`.
+    pub fn signal(&self, name: &str) {
+        let ok = Command::new("kill")
+            .arg(format!("-{name}"))
+            .arg(self.pid().to_string())
+            .status()
+            .unwrap()
+            .success();
+        assert!(ok, "kill -{name}");
+    }
+
+    /// Waits for the process (killed after `timeout`) and collects what it printed.
+    pub fn finish(mut self, timeout: Duration) -> Run {
+        let mut lines = self.lines;
+        let rest = std::thread::spawn(move || {
+            let mut s = String::new();
+            for l in lines.by_ref().map_while(Result::ok) {
+                s += &l;
+                s.push('\n');
+            }
+            s
+        });
+        let mut timed_out = false;
+        let status = loop {
+            if let Some(st) = self.child.try_wait().unwrap() {
+                break st;
+            }
+            if self.start.elapsed() > timeout {
+                timed_out = true;
+                let _ = self.child.kill();
+                break self.child.wait().unwrap();
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        };
+        Run {
+            code: status.code(),
+            signal: status.signal(),
+            stdout: self.stdout + &rest.join().unwrap(),
+            stderr: String::from_utf8_lossy(&self.stderr.join().unwrap()).into_owned(),
+            timed_out,
+            seconds: self.start.elapsed().as_secs_f64(),
+        }
+    }
+}
