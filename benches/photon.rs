@@ -20,7 +20,7 @@ struct Args {
 
 fn main() -> ExitCode {
     let args = Args::parse();
-    photon::accel::embree::enable_flush_denormals();
+    photon::accel::cpu::enable_flush_denormals();
     let mut baseline = kiddo::Kiddo::default();
     match bench::run_with(&args.opts, Some(&mut baseline)) {
         Ok(_) => ExitCode::SUCCESS,

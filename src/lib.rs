@@ -8,7 +8,8 @@
 //!   [`bsdf`] and [`light`] do the shading, [`film`] accumulates pixels;
 //! - [`imageio`] writes EXR (OpenEXRCore) and PNG.
 //!
-//! [`texture`] holds the textures the loader parses (not yet used by the integrators).
+//! [`texture`] holds the textures the loader parses (image maps, checkerboards, scale and mix),
+//! which materials and shape alpha evaluate per hit.
 pub mod accel;
 pub mod bsdf;
 pub mod camera;

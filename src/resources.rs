@@ -18,7 +18,7 @@
 //! structure over the loaded triangles. [`check`] turns an estimate above the budget into one
 //! line: `--res: needs ~116 GB (film 116 GB) for 32768x32768 ..., over the limit of 20.2 GB
 //! (80% of physical 25.3 GB; --max-memory)`. A render prints its estimate and its peak
-//! resident memory (VmHWM) at the end, which `tests/hostile.rs` compares.
+//! resident memory (VmHWM) at the end, which `tests/it/hostile.rs` compares.
 use crate::accel::BackendKind;
 use crate::integrator::{IntegratorKind, RenderSettings};
 use crate::math::Vec3;

@@ -1,5 +1,5 @@
 //! `kiddo` as the k-nearest baseline of `photon bench` (shared by `benches/photon.rs` and
-//! `tests/bench.rs`; kiddo is a dev-dependency, so the library cannot name it).
+//! `tests/it/bench.rs`; kiddo is a dev-dependency, so the library cannot name it).
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use photon::math::Vec3;
 use photon::tools::bench::KnnBaseline;

@@ -22,7 +22,7 @@
 //!
 //! ## Build preset
 //! [`BvhAccel::build`] uses [`BvhBuildParams::slow_build`]. Measured on this (shared, noisy)
-//! 2-core machine by `tests/backends.rs` (`obvhs_presets`): a 131k-triangle bumpy sphere plus
+//! 2-core machine by `tests/it/backends.rs` (`obvhs_presets`): a 131k-triangle bumpy sphere plus
 //! 300 long slivers crossing it, 100k random rays, one thread, best of three:
 //!
 //! | preset | build | closest hit | occlusion |

@@ -29,6 +29,7 @@
 //! constant alpha `a` passes both or neither (probability `a` of being stopped by the pair,
 //! not `1 - (1-a)^2`); a new ray (another sample, bounce or shadow ray) draws anew.
 pub mod bvh;
+pub mod cpu;
 pub mod embree;
 pub mod record;
 

@@ -40,8 +40,8 @@
 //!     "float thickness" [ 0.01 ] "rgb albedo" [ 0 0 0 ] "float g" [ 0 ] ...
 //! ```
 use super::{BsdfSample, BxdfFlags, Conductor, Dielectric, Diffuse, Lobes, TransportMode};
-use crate::integrator::power_heuristic;
 use crate::math::{Frame, Vec2, Vec3};
+use crate::sampling::power_heuristic;
 use crate::sampling::{hash, mix64, to_unit};
 use std::f32::consts::PI;
 

@@ -15,7 +15,7 @@ use super::photonmap::{self, Gather};
 use super::wavefront::{
     self, add, Component, Covered, PathState, Shade, Shadow, Wave, CAMERA_DIMS,
 };
-use super::{charge, power_heuristic, RenderContext};
+use super::{charge, RenderContext};
 use crate::accel::{Hit, RayKind};
 use crate::bsdf::TransportMode;
 use crate::film::Radiance;
@@ -24,6 +24,7 @@ use crate::math::{Ray, Vec3};
 use crate::photon::guide::GuideSlot;
 use crate::photon::trace;
 use crate::photon::KnnResult;
+use crate::sampling::power_heuristic;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 

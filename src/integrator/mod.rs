@@ -5,8 +5,9 @@
 //! Integrator "path" "integer maxdepth" [ 5 ]
 //! ```
 //! Whatever integrator a file names, it is rendered by the one given on the command line
-//! (default: the direct-lighting + specular ray tracer until the photon mapper lands); the
-//! statistics say which. Parameters the chosen integrator does not read are errors.
+//! (`--integrator`, default the photon mapper); the statistics say which. The parameters of
+//! every integrator photon has (`maxdepth`, `passspp`, the photon mapper's) are read whatever
+//! the file's integrator name; any other parameter is an error.
 pub mod direct;
 pub mod passes;
 pub mod path;
@@ -382,19 +383,6 @@ pub fn camera_sample(ctx: &RenderContext, x: u32, y: u32, sample: u32) -> (Ray, 
 /// Pixels of a tile in row-major order: `(x, y)` for `x0..x1`, `y0..y1`.
 pub fn tile_pixels(x0: u32, y0: u32, x1: u32, y1: u32) -> impl Iterator<Item = (u32, u32)> {
     (y0..y1).flat_map(move |y| (x0..x1).map(move |x| (x, y)))
-}
-
-/// Power heuristic (beta = 2) weight of a strategy with density `a` against one with `b`.
-pub fn power_heuristic(a: f32, b: f32) -> f32 {
-    let (a2, b2) = (a * a, b * b);
-    if a2.is_infinite() {
-        return 1.0;
-    }
-    if a2 + b2 > 0.0 {
-        a2 / (a2 + b2)
-    } else {
-        0.0
-    }
 }
 
 /// Renders passes of increasing sample counts over one pass 1 until `budget_s` seconds (pass 1

@@ -466,12 +466,6 @@ pub fn render_passes(
     }
 }
 
-/// `photon render --time` switches to progressive photon mapping from this budget on: the
-/// budget from which it reached a lower error than Jensen's fixed maps in the measured
-/// `converge` runs (BENCHMARKS.md). Up to 256 s (the longest measured) the fixed maps won on
-/// cornell-spheres and cornell-glass, so the switch is off; `--progressive` asks for it.
-pub const PROGRESSIVE_FROM_SECONDS: f64 = f64::INFINITY;
-
 /// Photon work (tracing and building) is kept to at most this share of a pass in
 /// [`render_for_time`] by raising the pass's samples per pixel.
 pub const PHOTON_SHARE: f64 = 0.25;

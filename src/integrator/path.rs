@@ -40,12 +40,13 @@
 //! scene, seed and settings, never on thread scheduling. The path tracer always takes one light
 //! sample per vertex (it ignores `RenderSettings::light_samples`).
 use super::wavefront::{self, add, Component, PathState, Shade, Shadow, Wave, CAMERA_DIMS};
-use super::{power_heuristic, RenderContext};
+use super::RenderContext;
 use crate::accel::Hit;
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::film::Radiance;
 use crate::interaction::SurfaceInteraction;
 use crate::math::{max_component, Vec3};
+use crate::sampling::power_heuristic;
 
 /// Dimensions each vertex reads: light choice (1), light point (2), BSDF lobe (1), BSDF
 /// direction (2), Russian roulette (1).

@@ -19,7 +19,7 @@
 //!     "string kernel" [ "epanechnikov" ]   # box | cone | biweight | epanechnikov
 //!     "integer gathersamples" [ 2 ]       "bool finalgather" [ true ]
 //!     "bool irradiancecache" [ true ]      "bool projectionmaps" [ true ]
-//!     "integer maxdepth" [ 5 ]             "integer maxphotonbounces" [ 32 ]
+//!     "integer maxdepth" [ 5 ]             "integer maxphotonbounces" [ 4 ]  # maxdepth - 1
 //!     "float glossyalpha" [ 0.1 ]          # rough glossy surfaces receive caustic photons
 //! ```
 //! Radii are fractions of the scene's bounding-sphere radius. Gathering is stratified over the
@@ -531,8 +531,9 @@ pub fn gather_radiance(
     };
     let n_g = pass.settings.gather_samples.max(1) as f32;
     // The gather's weight holds 1/n_g; the heuristic's sample counts do the rest.
-    let mis =
-        |light_pdf: f32| super::power_heuristic(n_g * g.pdf, g.light_samples as f32 * light_pdf);
+    let mis = |light_pdf: f32| {
+        crate::sampling::power_heuristic(n_g * g.pdf, g.light_samples as f32 * light_pdf)
+    };
     let mut direct = Vec3::ZERO;
     if hit.is_none() {
         direct = ctx.lights.escaped(g.ray.o, g.ray.d, mis);

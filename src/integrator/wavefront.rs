@@ -288,7 +288,7 @@ pub fn escaped(ctx: &RenderContext, path: &PathState) -> Vec3 {
     let d = path.ray.d.normalize_or_zero();
     let le = ctx.lights.escaped(path.ray.o, d, |light_pdf| {
         if path.prev_pdf > 0.0 {
-            super::power_heuristic(path.prev_pdf, light_pdf)
+            crate::sampling::power_heuristic(path.prev_pdf, light_pdf)
         } else {
             1.0
         }

@@ -66,10 +66,6 @@ impl ProjectionMap {
         self.marked.len() as f32 / (self.res * self.res) as f32
     }
 
-    pub fn marked_cells(&self) -> usize {
-        self.marked.len()
-    }
-
     /// Maps a uniform `u` in [0,1)^2 to a uniform point of the marked cells (keeps `u`'s
     /// stratification: `u.x` picks the cell and is re-stretched inside it).
     pub fn sample(&self, u: Vec2) -> Option<Vec2> {

@@ -68,12 +68,6 @@ impl Photon {
         Vec3::from_array(self.pos)
     }
 
-    /// Position as a plain array.
-    #[inline]
-    pub fn pos_array(&self) -> [f32; 3] {
-        self.pos
-    }
-
     /// Decoded RGB power.
     #[inline]
     pub fn power(&self) -> Vec3 {

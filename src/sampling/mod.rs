@@ -185,6 +185,19 @@ pub fn strata(n: u32) -> (u32, u32) {
     (nx, n / nx)
 }
 
+/// Power heuristic (beta = 2) weight of a strategy with density `a` against one with `b`.
+pub fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2.is_infinite() {
+        return 1.0;
+    }
+    if a2 + b2 > 0.0 {
+        a2 / (a2 + b2)
+    } else {
+        0.0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -764,16 +764,24 @@ pub fn to_csv(rows: &[Row]) -> String {
     s
 }
 
-/// Every row as a JSON array of objects.
+/// Every row as a JSON array of objects, one per line (non-finite numbers as `null`).
 pub fn to_json(rows: &[Row]) -> String {
-    let esc = |s: &str| s.replace('\\', "\\\\").replace('"', "\\\"");
     let items: Vec<String> = rows
         .iter()
         .map(|r| {
-            format!(
-                "{{\"scene\":\"{}\",\"triangles\":{},\"metric\":\"{}\",\"implementation\":\"{}\",\"threads\":{},\"median\":{},\"min\":{},\"max\":{},\"unit\":\"{}\",\"runs\":{}}}",
-                esc(&r.scene), r.triangles, esc(&r.metric), esc(&r.imp), r.threads, r.median, r.min, r.max, r.unit, r.runs
-            )
+            serde_json::json!({
+                "scene": r.scene,
+                "triangles": r.triangles,
+                "metric": r.metric,
+                "implementation": r.imp,
+                "threads": r.threads,
+                "median": r.median,
+                "min": r.min,
+                "max": r.max,
+                "unit": r.unit,
+                "runs": r.runs,
+            })
+            .to_string()
         })
         .collect();
     format!("[\n{}\n]\n", items.join(",\n"))

@@ -83,28 +83,27 @@ pub fn summary(m: &Metrics) -> String {
     )
 }
 
-fn channel_json(c: &metrics::ChannelError) -> String {
-    let psnr = if c.psnr.is_finite() {
-        format!("{}", c.psnr)
-    } else {
-        "null".into()
-    };
-    format!(
-        "{{\"relmse\":{},\"rmse\":{},\"mae\":{},\"max_abs\":{},\"psnr\":{}}}",
-        c.relmse, c.rmse, c.mae, c.max_abs, psnr
-    )
+fn channel_json(c: &metrics::ChannelError) -> serde_json::Value {
+    serde_json::json!({
+        "relmse": c.relmse,
+        "rmse": c.rmse,
+        "mae": c.mae,
+        "max_abs": c.max_abs,
+        "psnr": c.psnr,
+    })
 }
 
+/// The metrics as one line of JSON (non-finite numbers, such as an infinite PSNR, as `null`).
 pub fn to_json(m: &Metrics) -> String {
-    format!(
-        "{{\"overall\":{},\"r\":{},\"g\":{},\"b\":{},\"pixels\":{},\"masked_nonfinite\":{},\"masked_emitter\":{},\"image_nonfinite\":{}}}",
-        channel_json(&m.overall),
-        channel_json(&m.channels[0]),
-        channel_json(&m.channels[1]),
-        channel_json(&m.channels[2]),
-        m.pixels,
-        m.masked_nonfinite,
-        m.masked_emitter,
-        m.image_nonfinite
-    )
+    serde_json::json!({
+        "overall": channel_json(&m.overall),
+        "r": channel_json(&m.channels[0]),
+        "g": channel_json(&m.channels[1]),
+        "b": channel_json(&m.channels[2]),
+        "pixels": m.pixels,
+        "masked_nonfinite": m.masked_nonfinite,
+        "masked_emitter": m.masked_emitter,
+        "image_nonfinite": m.image_nonfinite,
+    })
+    .to_string()
 }

@@ -488,45 +488,42 @@ pub fn table(reports: &[KindReport]) -> String {
     s
 }
 
-/// The report as JSON.
+/// The report as one line of JSON (non-finite numbers as `null`).
 pub fn to_json(reports: &[KindReport], relmse: Option<f64>, failures: &[String]) -> String {
-    let num = |x: f64| {
-        if x.is_finite() {
-            format!("{x:e}")
-        } else {
-            "null".into()
-        }
-    };
-    let kinds: Vec<String> = reports
+    let kinds: Vec<serde_json::Value> = reports
         .iter()
         .map(|r| {
-            let classes: Vec<String> = Class::ALL
+            let classes: serde_json::Map<String, serde_json::Value> = Class::ALL
                 .iter()
                 .zip(r.classes)
-                .map(|(c, n)| format!("\"{}\":{n}", c.name()))
+                .map(|(c, n)| (c.name().to_string(), n.into()))
                 .collect();
-            format!(
-                "{{\"kind\":\"{}\",\"query\":\"{}\",\"cast\":{},\"rays\":{},\"hits\":[{},{}],\"hit_miss\":{},\"other_triangle\":{},\"occlusion\":{},\"same_triangle\":{},\"t_abs_max\":{},\"t_abs_p999\":{},\"t_rel_max\":{},\"t_rel_p999\":{},\"disagreeing\":{},\"classes\":{{{}}}}}",
-                r.kind.map_or("?", |k| k.name()),
-                r.query.map_or("?", |q| q.name()),
-                r.cast,
-                r.rays, r.hits[0], r.hits[1], r.hit_miss, r.other_triangle, r.occlusion,
-                r.same_triangle, num(r.t_abs.max), num(r.t_abs.p999), num(r.t_rel.max),
-                num(r.t_rel.p999), r.disagreeing, classes.join(",")
-            )
+            serde_json::json!({
+                "kind": r.kind.map_or("?", |k| k.name()),
+                "query": r.query.map_or("?", |q| q.name()),
+                "cast": r.cast,
+                "rays": r.rays,
+                "hits": [r.hits[0], r.hits[1]],
+                "hit_miss": r.hit_miss,
+                "other_triangle": r.other_triangle,
+                "occlusion": r.occlusion,
+                "same_triangle": r.same_triangle,
+                "t_abs_max": r.t_abs.max,
+                "t_abs_p999": r.t_abs.p999,
+                "t_rel_max": r.t_rel.max,
+                "t_rel_p999": r.t_rel.p999,
+                "disagreeing": r.disagreeing,
+                "classes": classes,
+            })
         })
         .collect();
-    let fails: Vec<String> = failures
-        .iter()
-        .map(|f| format!("\"{}\"", f.replace('\\', "\\\\").replace('"', "\\\"")))
-        .collect();
-    format!(
-        "{{\"kinds\":[{}],\"image_relmse\":{},\"pass\":{},\"failures\":[{}]}}",
-        kinds.join(","),
-        relmse.map_or("null".into(), num),
-        failures.is_empty(),
-        fails.join(",")
-    )
+    serde_json::json!({
+        "kinds": kinds,
+        "image_relmse": relmse,
+        "pass": failures.is_empty(),
+        "failures": failures,
+    })
+    .to_string()
 }
 
 /// The comparison renders' resolution: `--image-res`, else the Film's scaled to at most 128

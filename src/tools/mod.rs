@@ -84,7 +84,7 @@ pub fn float_in(lo: f32, hi: f32, open: bool) -> impl Fn(&str) -> Result<f32, St
 pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, ToolError> {
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
-        .start_handler(|_| crate::accel::embree::enable_flush_denormals())
+        .start_handler(|_| crate::accel::cpu::enable_flush_denormals())
         .build()
         .map_err(|e| ToolError(format!("cannot start {threads} threads: {e}")))
 }

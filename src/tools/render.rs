@@ -389,16 +389,6 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     };
     let out = match opts.time {
         Some(budget) => {
-            if opts.integrator == IntegratorKind::Photonmap
-                && budget >= integrator::passes::PROGRESSIVE_FROM_SECONDS
-                && !settings.photon.progressive
-            {
-                settings.photon.progressive = true;
-                println!(
-                    "time budget {budget:.0} s >= {:.0} s: progressive photon mapping (it reaches a lower error there)",
-                    integrator::passes::PROGRESSIVE_FROM_SECONDS
-                );
-            }
             // Fixed maps grow with the budget; progressive passes keep the file's counts.
             let given =
                 opts.photon.global_photons.is_some() || opts.photon.caustic_photons.is_some();

@@ -10,7 +10,7 @@
 //! Ray origins are offset by error bounds relative to the vertices, photon radii are fractions
 //! of the scene radius and every quantity is an f32, so the image does not depend on the
 //! scene's scale within this range (the Cornell box at 1e-8 and 1e8 renders within relMSE
-//! 3e-4 of scale 1; `tests/hostile.rs`). Outside it squared distances and areas leave f32's
+//! 3e-4 of scale 1; `tests/it/hostile.rs`). Outside it squared distances and areas leave f32's
 //! normal range (at 1e-10 the box renders black, at 1e10 loses its indirect light, at 1e12 its
 //! emitter's area overflows), so a scene there is an error naming the shape that goes furthest
 //! (or the first shape, for a scene too small), rather than a wrong image.

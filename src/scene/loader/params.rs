@@ -148,11 +148,6 @@ impl Param {
         format!("\"{} {}\"", self.ty_name, self.name)
     }
 
-    /// Whether a getter has read it.
-    pub fn is_used(&self) -> bool {
-        self.used
-    }
-
     /// An error at this parameter.
     pub fn err(&self, msg: impl std::fmt::Display) -> SceneError {
         SceneError::at(&self.loc, format!("parameter {}: {msg}", self.decl()))
@@ -387,13 +382,6 @@ impl ParamSet {
             .map_or(default, |v| Vec3::new(v[0], v[1], v[2])))
     }
 
-    /// `"vector3 name" [x y z]`, or `default` when absent.
-    pub fn get_vector3(&mut self, name: &str, default: Vec3) -> Result<Vec3, SceneError> {
-        Ok(self
-            .exactly(name, &[ParamType::Vector3], 3)?
-            .map_or(default, |v| Vec3::new(v[0], v[1], v[2])))
-    }
-
     /// All numbers of `"float name" [...]`, or `None` when absent.
     pub fn get_floats(&mut self, name: &str) -> Result<Option<Vec<f32>>, SceneError> {
         Ok(self
@@ -428,11 +416,6 @@ impl ParamSet {
     /// All points of `"point3 name" [...]`, or `None` when absent.
     pub fn get_point3s(&mut self, name: &str) -> Result<Option<Vec<Vec3>>, SceneError> {
         self.triples(name, &[ParamType::Point3])
-    }
-
-    /// All vectors of `"vector3 name" [...]`, or `None` when absent.
-    pub fn get_vector3s(&mut self, name: &str) -> Result<Option<Vec<Vec3>>, SceneError> {
-        self.triples(name, &[ParamType::Vector3])
     }
 
     /// All normals of `"normal name" [...]`, or `None` when absent.

@@ -6,7 +6,7 @@
 //! - caustic focus: a glass ball (n = 1.5, radius R) under a distant light focuses at
 //!   f = n R / (2 (n - 1)) from its centre;
 //! - the shared Cornell box against its Tungsten reference.
-mod common;
+use crate::support as common;
 
 use common::CUBE;
 use photon::accel::{Accel, AccelOptions, BackendKind};

@@ -10,7 +10,7 @@
 //!   rays on both backends; rejected hits let traversal reach the next surface;
 //! - bad `alpha` parameters are errors at their `file:line:column`; alpha enters the scene hash
 //!   and the memory estimate.
-mod common;
+use crate::support as common;
 
 use common::TempDir;
 use photon::accel::{alpha_keeps, ray_hash, Accel, AccelOptions, BackendKind, Hit, RayKind};

@@ -1,7 +1,7 @@
 //! End-to-end renders of the shared scenes: they load, render at reduced resolution with both
 //! backends, and every pixel is finite; the image does not depend on the thread count; the two
 //! backends give the same image up to noise.
-mod common;
+use crate::support as common;
 
 use common::render_with;
 use photon::accel::BackendKind;

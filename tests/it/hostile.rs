@@ -2,7 +2,7 @@
 //! run through the `photon` binary under an address-space cap (`prlimit --as`) so that a
 //! regression aborts or fails here instead of taking the machine's memory. Nothing here
 //! asserts on timing: timeouts only catch hangs.
-mod common;
+use crate::support as common;
 
 use common::*;
 use std::path::{Path, PathBuf};

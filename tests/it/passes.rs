@@ -2,7 +2,7 @@
 //! refuses parts of other renders and bad ranges, a render killed with -9 resumes from its
 //! checkpoint to the uninterrupted image, SIGTERM keeps what was finished, and progressive
 //! photon mapping falls below the fixed-map error floor.
-mod common;
+use crate::support as common;
 use common::photon;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

@@ -9,7 +9,7 @@
 //!   (path tracer, direct integrator and photon mapper), an empty scene shows `L`, photons
 //!   deliver the power `4 pi^2 r^2 L` onto the sphere, and a uniform image equals a constant;
 //! - light selection by power, and bad input located at `file:line:column`.
-mod common;
+use crate::support as common;
 
 use common::TempDir;
 use photon::accel::{Accel, AccelOptions, BackendKind};

@@ -9,7 +9,7 @@ use photon::scene::{FilterDesc, Light, Material, MaterialKind, Metal, Scene, Sce
 use std::f32::consts::PI;
 use std::path::{Path, PathBuf};
 
-mod common;
+use crate::support as common;
 use common::TempDir;
 
 // ---------------------------------------------------------------------------------------------

@@ -1,6 +1,6 @@
 //! The `photon` binary: outputs, exit codes, one-line errors, and that a failed render never
 //! replaces a good image.
-mod common;
+use crate::support as common;
 use common::photon;
 use std::path::{Path, PathBuf};
 

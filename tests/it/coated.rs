@@ -14,7 +14,7 @@ use photon::math::{Vec2, Vec3};
 use photon::scene::loader;
 use std::path::Path;
 
-mod common;
+use crate::support as common;
 use common::TempDir;
 
 /// Renders `path` with `kind` at the file's settings; pixels in row-major order.

@@ -6,7 +6,7 @@ use photon::scene::generate;
 use photon::tools::bench::{run_with, BenchOptions, Row};
 use std::path::{Path, PathBuf};
 
-#[path = "../benches/common/kiddo.rs"]
+#[path = "../../benches/common/kiddo.rs"]
 mod kiddo;
 
 const CORNELL: &str = "../shared/scenes/cornell-box/scene-v4.pbrt";

@@ -2,13 +2,13 @@
 //! packet paths against the single-ray paths, and both against hand-computed hits.
 //! Also prints build times and ray rates (information only; nothing asserts on speed).
 //!
-//! Run with `cargo test --release --test backends -- --nocapture --test-threads=1` to see the
+//! Run with `cargo test --release --test it backends:: -- --nocapture --test-threads=1` to see the
 //! numbers undisturbed.
-mod common;
+use crate::support as common;
 
 use common::Rng;
 use photon::accel::bvh::BvhAccel;
-use photon::accel::embree::{self, Device, EmbreeAccel, Geometry, SceneBuilder, SceneConfig};
+use photon::accel::embree::{Device, EmbreeAccel, Geometry, SceneBuilder, SceneConfig};
 use photon::accel::{AccelOptions, Hit, RayQuery};
 use photon::math::{Ray, Vec3};
 use photon::scene::generate::bumpy_sphere;
@@ -117,7 +117,7 @@ fn mrays(n: usize, f: impl FnOnce()) -> f64 {
 /// Builds both backends over `scene`, prints their build times (Embree's device creation
 /// apart, and its robust mode too), and returns them.
 fn build_both(name: &str, scene: &Scene) -> (EmbreeAccel, BvhAccel) {
-    embree::enable_flush_denormals();
+    photon::accel::cpu::enable_flush_denormals();
     let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
     let t0 = Instant::now();
     let dev = Device::new("").expect("embree device");
@@ -493,7 +493,7 @@ fn flush_denormals_sets_ftz_daz() {
     std::thread::spawn(|| {
         let tiny = std::hint::black_box(1e-39f32);
         assert!(tiny * std::hint::black_box(1.0f32) != 0.0);
-        embree::enable_flush_denormals();
+        photon::accel::cpu::enable_flush_denormals();
         if cfg!(target_arch = "x86_64") {
             assert_eq!(tiny * std::hint::black_box(1.0f32), 0.0);
         }

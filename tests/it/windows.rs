@@ -9,7 +9,7 @@
 //! by a shadow ray and the photons only for the rest.
 use photon::integrator::IntegratorKind;
 
-mod common;
+use crate::support as common;
 use common::TempDir;
 
 fn scene(integrator: &str, spp: u32) -> String {

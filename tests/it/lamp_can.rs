@@ -19,7 +19,7 @@
 //!   underside or the room, and those leaked photons were what filled them.
 use photon::integrator::IntegratorKind;
 
-mod common;
+use crate::support as common;
 use common::TempDir;
 
 fn scene(integrator: &str, spp: u32) -> String {

@@ -31,7 +31,7 @@ use photon::imageio::metrics::{relmse_map, MaskOptions};
 use photon::imageio::{read_exr, RgbImage};
 use std::path::Path;
 
-mod common;
+use crate::support as common;
 use common::TempDir;
 
 /// Block means (RGB averaged) of `img` on a `n x n` grid.

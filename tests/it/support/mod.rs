@@ -1,4 +1,5 @@
-//! Helpers shared by the integration tests (each test file that needs them says `mod common;`).
+//! Helpers shared by the integration tests (a module that needs them says
+//! `use crate::support as common;`).
 //!
 //! A seeded generator for test inputs ([`Rng`]), a render of a scene at a given size and seed
 //! ([`render_with`]), the cube that several scenes are built around ([`CUBE`]), and
@@ -6,7 +7,6 @@
 //! address-space cap (`prlimit --as`) and a timeout, and the checks every such run must pass
 //! (exit 0 or 2; on 2 exactly one stderr line that says where the problem is; no panic, no
 //! signal death).
-#![allow(dead_code)]
 use std::ffi::OsString;
 use std::io::Read;
 use std::os::unix::process::ExitStatusExt;

@@ -8,7 +8,7 @@
 //! - its `direct` component against the direct-lighting integrator (a different estimator:
 //!   no MIS on diffuse surfaces);
 //! - bit-identical images on 1 and 2 threads.
-mod common;
+use crate::support as common;
 
 use common::render_with;
 use photon::accel::BackendKind;

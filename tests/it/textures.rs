@@ -14,7 +14,7 @@ use photon::scene::{loader, Scene};
 use std::f32::consts::PI;
 use std::path::Path;
 
-mod common;
+use crate::support as common;
 use common::TempDir;
 
 /// Irradiance of the distant light (radiance `L` arriving straight down).

@@ -24,8 +24,8 @@
 //! Every rendered image has its NaN/Inf pixels counted, printed and asserted zero. Each case
 //! prints one `summary |` line with its measured answer (also appended to
 //! `$CARGO_TARGET_TMPDIR/hard_cases/summary.txt`): run with
-//! `cargo test --release --test hard_cases -- --nocapture | grep '^summary'`.
-mod common;
+//! `cargo test --release --test it hard_cases:: -- --nocapture | grep '^summary'`.
+use crate::support as common;
 
 use common::CUBE;
 use photon::accel::{Accel, AccelOptions, BackendKind, Hit};

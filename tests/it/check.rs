@@ -6,7 +6,7 @@ use photon::scene::loader::{load, load_collecting};
 use photon::tools::check::{check_scene, MemoryEstimate};
 use std::process::Command;
 
-mod common;
+use crate::support as common;
 use common::TempDir;
 
 const TRI: &str =

@@ -14,7 +14,7 @@
 //! - `maxcomponentvalue` scales each camera sample so its largest XYZ component is the maximum:
 //!   with one emitter colour, every pixel (edge pixels included, whose mean is far below the
 //!   maximum) is the unclamped pixel times `max / max(XYZ(L))`.
-mod common;
+use crate::support as common;
 
 use common::{render_with, TempDir};
 use photon::accel::BackendKind;

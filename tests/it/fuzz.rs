@@ -12,10 +12,10 @@
 //! exactly one stderr line that says where the problem is; never a panic (101), an abort or
 //! another signal, or a hang. Failing inputs are kept in `target/tmp/fuzz/failures/`.
 //!
-//! `cargo test --release --test fuzz` runs [`CASES`] cases; the long run,
-//! `PHOTON_FUZZ_SECONDS=3600 cargo test --release --test fuzz -- --ignored`, keeps going with
+//! `cargo test --release --test it fuzz::` runs [`CASES`] cases; the long run,
+//! `PHOTON_FUZZ_SECONDS=3600 cargo test --release --test it fuzz::long -- --ignored`, keeps going with
 //! new case numbers for that many seconds (default one hour).
-mod common;
+use crate::support as common;
 
 use common::*;
 use std::path::{Path, PathBuf};

@@ -1,0 +1,32 @@
+//! The integration tests: one binary (`cargo test --release --test it`), one module per area,
+//! helpers in [`support`]. `tests/output_signal.rs` stays a binary of its own: it raises the
+//! process-wide SIGINT/SIGTERM flag, which every other test's render would then see.
+//!
+//! Run one area with a filter: `cargo test --release --test it hostile::`.
+mod support;
+
+mod alpha;
+mod backends;
+mod bench;
+mod camera_film;
+mod check;
+mod cli;
+mod coated;
+mod crosscheck;
+mod direct_light;
+mod envlight;
+mod exr;
+mod fuzz;
+mod glossy_paths;
+mod hard_cases;
+mod hostile;
+mod kdtree;
+mod lamp_can;
+mod parser;
+mod passes;
+mod path_tracer;
+mod photonmap;
+mod regression;
+mod render_scenes;
+mod textures;
+mod windows;
