@@ -327,14 +327,18 @@ pub fn estimate(
     if kind == IntegratorKind::Photonmap {
         let t = &settings.photon.trace;
         let per = landings_per_photon(scene, t.max_bounces);
+        // Only the maps the scene needs are built (as pass 1 decides: no global map without
+        // a diffuse surface, no caustic map without a specular one and a receiver).
+        let (global, caustic, _) =
+            crate::integrator::photonmap::needed_maps(scene, t.receiver_alpha);
+        let global = if global { t.global_photons } else { 0 };
+        let caustic = if caustic { t.caustic_photons } else { 0 };
         // The caustic map is built after the global one and kept with it.
-        let stored = (t.global_photons as f64 + t.caustic_photons as f64) * per;
+        let stored = (global as f64 + caustic as f64) * per;
         let bytes = (stored * PHOTON_PEAK_BYTES as f64).min(u64::MAX as f64) as u64;
         e.parts.push(("photon maps", bytes));
-        e.what += &format!(
-            ", {} + {} photons x{per:.1} stored x {PHOTON_PEAK_BYTES} B",
-            t.global_photons, t.caustic_photons
-        );
+        e.what +=
+            &format!(", {global} + {caustic} photons x{per:.1} stored x {PHOTON_PEAK_BYTES} B");
     }
     let tris = scene.triangle_count() as u64;
     let meshes = scene.meshes.len() as u64;
@@ -441,6 +445,18 @@ pub fn peak_resident() -> Option<u64> {
         &std::fs::read_to_string("/proc/self/status").ok()?,
         "VmHWM:",
     )
+}
+
+/// The estimate in one short phrase: `~12.3 MB (film 0.0, photon maps 8.1, ...)`, megabytes.
+pub fn summary(e: &Estimate) -> String {
+    let mb = |b: u64| b as f64 / 1e6;
+    let parts: Vec<String> = e
+        .parts
+        .iter()
+        .filter(|(_, b)| *b > 0)
+        .map(|(n, b)| format!("{n} {:.1}", mb(*b)))
+        .collect();
+    format!("~{:.1} MB ({})", mb(e.total()), parts.join(", "))
 }
 
 /// The line a render prints at the end: its estimate and its measured peak.

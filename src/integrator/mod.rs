@@ -13,6 +13,7 @@ pub mod passes;
 pub mod path;
 pub mod photonmap;
 pub mod record;
+pub mod settings;
 pub mod wavefront;
 
 use crate::accel::Accel;

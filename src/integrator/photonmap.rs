@@ -129,65 +129,23 @@ impl PhotonSettings {
         self.trace.caustic_photons = n;
     }
 
-    /// Reads the `photonmap` parameters (each marked used); others stay for the caller.
+    /// Reads the `photonmap` parameters (each marked used; the table of
+    /// [`super::settings`] and the pass schedule's `progressive` and `alpha`); others stay
+    /// for the caller.
     pub fn from_params(params: &mut ParamSet) -> Result<PhotonSettings, SceneError> {
         let mut s = PhotonSettings::default();
-        use crate::resources as r;
-        let count = |params: &mut ParamSet, name: &str, default: u64, hi: u64| {
-            let v = params.get_int(name, default.min(i32::MAX as u64) as i32)? as i64;
-            r::check_range(v, 0, hi.min(i32::MAX as u64) as i64)
-                .map(|v| v as u64)
-                .map_err(|m| SceneError {
-                    loc: params.loc(name).cloned(),
-                    msg: format!("\"{name}\" {m}"),
-                })
-        };
-        let t = &mut s.trace;
-        t.global_photons = count(params, "globalphotons", t.global_photons, r::MAX_PHOTONS)?;
-        t.caustic_photons = count(params, "causticphotons", t.caustic_photons, r::MAX_PHOTONS)?;
-        let depth = r::MAX_DEPTH as u64;
-        s.bounces_given = params.peek("maxphotonbounces").is_some();
-        t.max_bounces = count(params, "maxphotonbounces", t.max_bounces as u64, depth)? as u32;
-        let lookup = r::MAX_LOOKUP as u64;
-        s.global_lookup = count(params, "globallookup", s.global_lookup as u64, lookup)? as usize;
-        s.caustic_lookup =
-            count(params, "causticlookup", s.caustic_lookup as u64, lookup)? as usize;
-        let gathers = r::MAX_GATHER_SAMPLES as u64;
-        s.gather_samples = count(params, "gathersamples", s.gather_samples as u64, gathers)? as u32;
-        let radius = |params: &mut ParamSet, name: &str, default: f32| {
-            let v = params.get_float(name, default)?;
-            r::check_float(v, 0.0, r::MAX_RADIUS, true).map_err(|m| SceneError {
-                loc: params.loc(name).cloned(),
-                msg: format!("\"{name}\" (a fraction of the scene radius) {m}"),
-            })
-        };
-        s.global_radius = radius(params, "globalradius", s.global_radius)?;
-        s.caustic_radius = radius(params, "causticradius", s.caustic_radius)?;
-        s.final_gather = params.get_bool("finalgather", s.final_gather)?;
-        s.guided_gather = params.get_bool("guidedgather", s.guided_gather)?;
-        s.irradiance_cache = params.get_bool("irradiancecache", s.irradiance_cache)?;
-        s.trace.projection_maps = params.get_bool("projectionmaps", s.trace.projection_maps)?;
-        let a = params.get_float("glossyalpha", s.trace.receiver_alpha)?;
-        if a.is_nan() || a < 0.0 {
-            return Err(SceneError {
-                loc: params.loc("glossyalpha").cloned(),
-                msg: format!("\"glossyalpha\" must be >= 0 (inf: no glossy receivers), got {a}"),
-            });
-        }
-        s.trace.receiver_alpha = a;
+        super::settings::read_params(&mut s, params)?;
         s.progressive = params.get_bool("progressive", s.progressive)?;
         s.alpha = params.get_float("alpha", s.alpha)?;
-        if !(s.alpha > 0.0 && s.alpha < 1.0) {
+        if !super::settings::ALPHA.contains(s.alpha as f64) {
             return Err(SceneError {
                 loc: params.loc("alpha").cloned(),
-                msg: format!("\"alpha\" must be in (0, 1), got {}", s.alpha),
+                msg: format!(
+                    "\"alpha\" must be in {}, got {}",
+                    super::settings::ALPHA.describe(),
+                    s.alpha
+                ),
             });
-        }
-        if let Some(k) = params.get_string_opt("kernel")? {
-            s.kernel = parse_kernel(&k).ok_or_else(|| SceneError {
-                loc: params.loc("kernel").cloned(),
-                msg: format!("unknown kernel \"{k}\" (box, cone, biweight, epanechnikov)"),
-            })?;
         }
         Ok(s)
     }

@@ -5,8 +5,7 @@ use crate::accel::{Accel, AccelOptions, BackendKind, RayKind};
 use crate::imageio::{self, ExrPixel};
 use crate::integrator::{self, IntegratorKind, RenderSettings};
 use crate::resources::{
-    MAX_DEPTH, MAX_EXPOSURE, MAX_GATHER_SAMPLES, MAX_LIGHT_SAMPLES, MAX_LOOKUP, MAX_PASSES,
-    MAX_PHOTONS, MAX_RADIUS, MAX_SPP, MAX_THREADS,
+    MAX_DEPTH, MAX_EXPOSURE, MAX_LIGHT_SAMPLES, MAX_PASSES, MAX_SPP, MAX_THREADS,
 };
 use crate::sampling::Pattern;
 use crate::scene::loader;
@@ -80,7 +79,7 @@ pub struct RenderOptions {
     #[arg(long, value_parser = crate::resources::parse_size)]
     pub max_memory: Option<u64>,
     #[command(flatten)]
-    pub photon: PhotonOverrides,
+    pub photon: crate::integrator::settings::PhotonOverrides,
     #[command(flatten)]
     pub passes: PassOptions,
 }
@@ -93,7 +92,8 @@ pub struct PassOptions {
     #[arg(long)]
     pub progressive: bool,
     /// The radius schedule's alpha, in (0, 1) (default 2/3).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::integrator::settings::parser::<f32>(
+        Some(crate::integrator::settings::ALPHA)))]
     pub alpha: Option<f32>,
     /// Render only passes A..B (half-open, as in Rust) and write a partial image that
     /// `photon merge` sums with the other parts; `N` means 0..N; B at most 2^20. Default
@@ -152,97 +152,6 @@ pub fn parse_pass_range(s: &str) -> Result<std::ops::Range<u64>, String> {
     Ok(r)
 }
 
-/// Command-line overrides of the photon mapper's `Integrator "photonmap"` parameters.
-#[derive(clap::Args, Clone, Debug, Default)]
-pub struct PhotonOverrides {
-    /// Photons emitted for the global map.
-    #[arg(long, value_parser = clap::value_parser!(u64).range(0..=MAX_PHOTONS))]
-    pub global_photons: Option<u64>,
-    /// Photons emitted for the caustic map.
-    #[arg(long, value_parser = clap::value_parser!(u64).range(0..=MAX_PHOTONS))]
-    pub caustic_photons: Option<u64>,
-    /// Photons per global-map lookup.
-    #[arg(long, value_parser = usize_in(1, MAX_LOOKUP))]
-    pub global_lookup: Option<usize>,
-    /// Photons per caustic-map lookup.
-    #[arg(long, value_parser = usize_in(1, MAX_LOOKUP))]
-    pub caustic_lookup: Option<usize>,
-    /// Largest global lookup radius, as a fraction of the scene's bounding radius.
-    #[arg(long, allow_negative_numbers = true, value_parser = float_in(0.0, MAX_RADIUS, true))]
-    pub global_radius: Option<f32>,
-    /// Largest caustic lookup radius, as a fraction of the scene's bounding radius.
-    #[arg(long, allow_negative_numbers = true, value_parser = float_in(0.0, MAX_RADIUS, true))]
-    pub caustic_radius: Option<f32>,
-    /// Radiance-estimate kernel: box, cone, biweight, epanechnikov.
-    #[arg(long)]
-    pub kernel: Option<String>,
-    /// Final-gather rays per visible diffuse point.
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_GATHER_SAMPLES as i64))]
-    pub gather_samples: Option<u32>,
-    /// Final gathering on or off (off shows the global map directly).
-    #[arg(long)]
-    pub final_gather: Option<bool>,
-    /// Final-gather directions guided by the nearest photons (Jensen 1995) or cosine only.
-    #[arg(long)]
-    pub guided_gather: Option<bool>,
-    /// Christensen's precomputed irradiance for the gather lookups.
-    #[arg(long)]
-    pub irradiance_cache: Option<bool>,
-    /// Caustic projection maps on or off.
-    #[arg(long)]
-    pub projection_maps: Option<bool>,
-}
-
-impl PhotonOverrides {
-    /// Applies the overrides that were given.
-    pub fn apply(
-        &self,
-        s: &mut crate::integrator::photonmap::PhotonSettings,
-    ) -> Result<(), ToolError> {
-        if let Some(v) = self.global_photons {
-            s.trace.global_photons = v;
-        }
-        if let Some(v) = self.caustic_photons {
-            s.trace.caustic_photons = v;
-        }
-        if let Some(v) = self.global_lookup {
-            s.global_lookup = v;
-        }
-        if let Some(v) = self.caustic_lookup {
-            s.caustic_lookup = v;
-        }
-        if let Some(v) = self.global_radius {
-            s.global_radius = v;
-        }
-        if let Some(v) = self.caustic_radius {
-            s.caustic_radius = v;
-        }
-        if let Some(k) = &self.kernel {
-            s.kernel = crate::integrator::photonmap::parse_kernel(k).ok_or_else(|| {
-                ToolError(format!(
-                    "unknown kernel {k:?} (box, cone, biweight, epanechnikov)"
-                ))
-            })?;
-        }
-        if let Some(v) = self.gather_samples {
-            s.gather_samples = v;
-        }
-        if let Some(v) = self.final_gather {
-            s.final_gather = v;
-        }
-        if let Some(v) = self.guided_gather {
-            s.guided_gather = v;
-        }
-        if let Some(v) = self.irradiance_cache {
-            s.irradiance_cache = v;
-        }
-        if let Some(v) = self.projection_maps {
-            s.trace.projection_maps = v;
-        }
-        Ok(())
-    }
-}
-
 /// Where the EXR goes when `-o` is not given.
 fn default_output(film_filename: Option<&str>, scene: &Path) -> PathBuf {
     let stem = film_filename
@@ -274,7 +183,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     settings.seed = opts.seed;
     settings.pattern = opts.pattern;
     settings.light_samples = opts.light_samples.max(1);
-    opts.photon.apply(&mut settings.photon)?;
+    opts.photon.apply(&mut settings.photon);
     settings.photon.follow_depth(settings.max_depth);
     let exr = opts
         .output
@@ -354,13 +263,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     );
 
     if let Some(a) = opts.passes.alpha {
-        settings.photon.alpha = a;
-    }
-    if !(settings.photon.alpha > 0.0 && settings.photon.alpha < 1.0) {
-        return Err(ToolError(format!(
-            "--alpha must be in (0, 1), got {}",
-            settings.photon.alpha
-        )));
+        settings.photon.alpha = a; // in range: checked by its parser
     }
     settings.photon.progressive |= opts.passes.progressive;
     if let Some(n) = opts.passes.pass_spp {

@@ -3,7 +3,7 @@
 //! the command's output and exit codes. Scenes are written by the tests.
 
 use photon::scene::loader::{load, load_collecting};
-use photon::tools::check::{check_scene, MemoryEstimate};
+use photon::tools::check::check_scene;
 use std::process::Command;
 
 use crate::support as common;
@@ -110,34 +110,46 @@ Texture "c" "spectrum" "imagemap" "string filename" "t.png" "float uscale" 2
         (r.triangles, r.lights, r.materials, r.textures),
         (2, 2, 2, 3)
     );
-    // By hand from the documented sizes: 2 meshes of 3 vertices (32 B each) and 1 triangle
-    // (12 B); 20 x 10 pixels of 5 RGB f32 images; 1500 photons at 37 B; the 4x3 image decoded
-    // twice (sRGB for "a" and "c", linear for "b") at 12 B per texel.
-    assert_eq!(
-        r.memory,
-        MemoryEstimate {
-            geometry: 2 * (3 * 32 + 12),
-            film: 200 * 60,
-            photons: 1500 * 37,
-            textures: 2 * 12 * 12,
-        }
-    );
+    // The model render checks its budget with, by hand from its documented sizes: 2 meshes
+    // of 1 triangle (160 B each with Embree, 768 B a mesh); 20 x 10 pixels at 108 B; 1000 +
+    // 500 photons (a diffuse 0.5 and a mirror: both maps), each landing at most 1 / (1 - 0.5)
+    // times, at 104 B; the 4x3 image decoded twice (sRGB for "a" and "c", linear for "b") at
+    // 12 B per texel; 16 MB a thread.
+    let part = |name: &str| {
+        r.memory
+            .parts
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map_or(0, |(_, b)| *b)
+    };
+    assert_eq!(part("geometry"), 2 * 160 + 2 * 768);
+    assert_eq!(part("film"), 200 * 108);
+    assert_eq!(part("photon maps"), 1500 * 2 * 104);
+    assert_eq!(part("textures"), 2 * 12 * 12);
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()) as u64;
+    assert_eq!(part("threads"), threads * (16 << 20));
     let line = r.to_string();
     assert!(
-        line.ends_with(
-            "ok.pbrt: ok | 2 triangles, 2 lights, 2 materials, 3 textures | \
-             ~0.1 MB (geometry 0.0, film 0.0, photon maps 0.1, textures 0.0)"
-        ),
+        line.contains("ok.pbrt: ok | 2 triangles, 2 lights, 2 materials, 3 textures | ~")
+            && line.contains("(film 0.0, photon maps 0.3, geometry 0.0, textures 0.0, threads"),
         "{line}"
     );
+    // The same estimate as a render of the file checks against its budget.
+    let scene = photon::scene::loader::load(&path).unwrap();
+    let settings = photon::integrator::RenderSettings::from_scene(&scene).unwrap();
+    let kind = photon::integrator::IntegratorKind::Photonmap;
+    let backend = photon::accel::BackendKind::Embree;
+    let e = photon::resources::estimate(&scene, &settings, kind, backend, threads as usize);
+    assert_eq!(e.total(), r.memory.total());
     // An integrator parameter photon does not read is found as a render would find it.
     let path = dir.write(
         "bad.pbrt",
         "Integrator \"photonmap\" \"float radius\" 1\nWorldBegin\n",
     );
     let r = check_scene(&path);
-    // Nothing specular: no caustic map, the default 200k global photons only.
-    assert_eq!(r.memory.photons, 200_000 * 37);
+    // No surface at all: neither map is built, so none is counted.
+    let photons = r.memory.parts.iter().find(|(n, _)| *n == "photon maps");
+    assert_eq!(photons.map(|(_, b)| *b), Some(0));
     assert_eq!(r.problems.len(), 1);
     assert!(r.problems[0]
         .to_string()

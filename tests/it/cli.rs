@@ -144,3 +144,61 @@ fn failed_render_keeps_the_good_image() {
     assert_eq!(std::fs::read(&exr).unwrap(), b"precious");
     assert!(Path::new(&exr).exists());
 }
+
+/// Each photon-map setting is declared once (issue 16): the README's table is the generated
+/// one, and the file and the command line refuse the same out-of-range values (the file:
+/// located at the parameter; the flag: named) before anything is loaded beyond the file.
+#[test]
+fn photon_settings_have_one_range_in_the_file_and_on_the_command_line() {
+    let readme = std::fs::read_to_string("README.md").unwrap();
+    let table = photon::integrator::settings::markdown_table();
+    assert!(
+        readme.contains(&table),
+        "README.md's photon-mapper table differs from settings::markdown_table():\n{table}"
+    );
+    let dir = tmp("settings");
+    let cases = [
+        (
+            "globallookup",
+            "integer",
+            "0",
+            "global-lookup",
+            "[1, 100000]",
+        ),
+        (
+            "gathersamples",
+            "integer",
+            "0",
+            "gather-samples",
+            "[1, 4096]",
+        ),
+        ("globalradius", "float", "0", "global-radius", "(0, 4]"),
+        ("glossyalpha", "float", "-1", "glossy-alpha", "[0, inf]"),
+        (
+            "maxphotonbounces",
+            "integer",
+            "1001",
+            "max-photon-bounces",
+            "[0, 1000]",
+        ),
+    ];
+    for (key, ty, value, flag, range) in cases {
+        let scene = dir.join(format!("{key}.pbrt"));
+        std::fs::write(
+            &scene,
+            format!("Integrator \"photonmap\" \"{ty} {key}\" [ {value} ]\nWorldBegin\n"),
+        )
+        .unwrap();
+        let err = expect_error(&["render", scene.to_str().unwrap()], range);
+        assert!(err.contains(&format!("{key}.pbrt:1:")), "{err}");
+        let flag = format!("--{flag}");
+        expect_error(
+            &["render", "scenes/cornell-glass.pbrt", &flag, value],
+            range,
+        );
+    }
+    expect_error(
+        &["render", "scenes/cornell-glass.pbrt", "--alpha", "2"],
+        "(0, 1)",
+    );
+}
