@@ -321,18 +321,7 @@ fn mutate_ply_header(b: &mut Vec<u8>, rng: &mut Rng) {
 /// A forged copy of partial image `src` at `dst`: a `photon.*` attribute's value mutated as
 /// text, or sum words set to extremes, or a layer left out.
 fn forge_partial(src: &Path, dst: &Path, rng: &mut Rng) {
-    use photon::imageio::{read_exr, read_exr_attributes, read_exr_uint_layer, write_exr_with};
-    let rgb = read_exr(src).unwrap();
-    let mut attrs = read_exr_attributes(src).unwrap();
-    attrs.retain(|(k, _)| k.starts_with("photon."));
-    let mut layers: Vec<(String, Vec<[u32; 3]>)> = Vec::new();
-    for c in photon::integrator::passes::COMPONENTS {
-        for half in ["hi", "lo"] {
-            let name = format!("sum.{c}.{half}");
-            layers.push((name.clone(), read_exr_uint_layer(src, &name).unwrap().2));
-        }
-    }
-    match rng.below(3) {
+    let forged = common::forge_partial(src, dst, |(attrs, layers)| match rng.below(3) {
         0 => {
             let k = rng.below(attrs.len());
             let mut v = attrs[k].1.clone().into_bytes();
@@ -348,18 +337,9 @@ fn forge_partial(src: &Path, dst: &Path, rng: &mut Rng) {
         _ => {
             layers.remove(rng.below(layers.len()));
         }
-    }
-    let uint: Vec<(&str, &[[u32; 3]])> = layers.iter().map(|(n, w)| (n.as_str(), &w[..])).collect();
-    let attributes: Vec<(&str, &str)> = attrs
-        .iter()
-        .map(|(k, v)| (k.as_str(), v.as_str()))
-        .collect();
-    let extra = photon::imageio::ExrExtra {
-        uint_layers: &uint,
-        attributes: &attributes,
-    };
+    });
     // A forged value the writer refuses leaves the copy unforged.
-    if write_exr_with(dst, &rgb, &[], photon::imageio::ExrPixel::Float, extra).is_err() {
+    if forged.is_err() {
         std::fs::copy(src, dst).unwrap();
     }
 }

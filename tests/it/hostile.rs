@@ -487,7 +487,10 @@ fn case_15_radii_and_exposure_must_be_finite_and_positive() {
         assert_error(&r, &["scene.pbrt:4:", "(0, 4]"]);
     }
     for (p, msg) in [
-        ("\"float glossyalpha\" -0.5", "\"glossyalpha\" must be in [0, inf]"),
+        (
+            "\"float glossyalpha\" -0.5",
+            "\"glossyalpha\" must be in [0, inf]",
+        ),
         ("\"float glossyalpha\" NaN", "expected a number"),
     ] {
         let text = small_scene("").replace(

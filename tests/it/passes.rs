@@ -345,34 +345,17 @@ fn progressive_time_budget_renders_an_ordinary_image() {
 /// Writes a copy of partial image `src` to `dst` with attribute `key` set to `value` and each
 /// sum word passed through `word` (layer name, word): a forged part.
 fn forge(src: &Path, dst: &Path, key: &str, value: &str, word: &dyn Fn(&str, u32) -> u32) {
-    use photon::imageio::{read_exr, read_exr_attributes, read_exr_uint_layer, write_exr_with};
-    let rgb = read_exr(src).unwrap();
-    let mut attrs = read_exr_attributes(src).unwrap();
-    attrs.retain(|(k, _)| k.starts_with("photon."));
-    for (k, v) in attrs.iter_mut() {
-        if k == key {
+    common::forge_partial(src, dst, |(attrs, layers)| {
+        for (_, v) in attrs.iter_mut().filter(|(k, _)| k == key) {
             *v = value.to_string();
         }
-    }
-    let mut layers: Vec<(String, Vec<[u32; 3]>)> = Vec::new();
-    for c in photon::integrator::passes::COMPONENTS {
-        for half in ["hi", "lo"] {
-            let name = format!("sum.{c}.{half}");
-            let (_, _, words) = read_exr_uint_layer(src, &name).unwrap();
-            let words = words.iter().map(|p| p.map(|x| word(&name, x))).collect();
-            layers.push((name, words));
+        for (name, words) in layers.iter_mut() {
+            for p in words.iter_mut() {
+                *p = p.map(|x| word(name, x));
+            }
         }
-    }
-    let uint: Vec<(&str, &[[u32; 3]])> = layers.iter().map(|(n, w)| (n.as_str(), &w[..])).collect();
-    let attributes: Vec<(&str, &str)> = attrs
-        .iter()
-        .map(|(k, v)| (k.as_str(), v.as_str()))
-        .collect();
-    let extra = photon::imageio::ExrExtra {
-        uint_layers: &uint,
-        attributes: &attributes,
-    };
-    write_exr_with(dst, &rgb, &[], photon::imageio::ExrPixel::Float, extra).unwrap();
+    })
+    .unwrap();
 }
 
 /// Forged parts (issue 22, cases 3 and 21): a `photon.resolution` of 400000x600000 made

@@ -557,3 +557,41 @@ impl Background {
         }
     }
 }
+
+/// The `photon.*` attributes and the `sum.<component>.hi/lo` layers of a partial image.
+pub type PartialParts = (Vec<(String, String)>, Vec<(String, Vec<[u32; 3]>)>);
+
+/// Writes a forged copy of partial image `src` to `dst`: its attributes and sum layers passed
+/// through `edit` (which may change, add or drop any); the RGB image is copied. The writer's
+/// error (a NUL in a value, say) is returned.
+pub fn forge_partial(
+    src: &Path,
+    dst: &Path,
+    edit: impl FnOnce(&mut PartialParts),
+) -> Result<(), photon::imageio::ImageError> {
+    use photon::imageio::{read_exr, read_exr_attributes, read_exr_uint_layer, write_exr_with};
+    let rgb = read_exr(src)?;
+    let mut attrs = read_exr_attributes(src)?;
+    attrs.retain(|(k, _)| k.starts_with("photon."));
+    let mut layers = Vec::new();
+    for c in photon::integrator::passes::COMPONENTS {
+        for half in ["hi", "lo"] {
+            let name = format!("sum.{c}.{half}");
+            let words = read_exr_uint_layer(src, &name)?.2;
+            layers.push((name, words));
+        }
+    }
+    let mut parts = (attrs, layers);
+    edit(&mut parts);
+    let (attrs, layers) = parts;
+    let uint: Vec<(&str, &[[u32; 3]])> = layers.iter().map(|(n, w)| (n.as_str(), &w[..])).collect();
+    let attributes: Vec<(&str, &str)> = attrs
+        .iter()
+        .map(|(k, v)| (k.as_str(), v.as_str()))
+        .collect();
+    let extra = photon::imageio::ExrExtra {
+        uint_layers: &uint,
+        attributes: &attributes,
+    };
+    write_exr_with(dst, &rgb, &[], photon::imageio::ExrPixel::Float, extra)
+}
