@@ -114,6 +114,25 @@ fn screen_window(desc: &CameraDesc, width: u32, height: u32) -> (Vec2, Vec2) {
     (Vec2::ZERO, window)
 }
 
+/// The image a texture footprint is one pixel of: the render's resolution (the whole film, a
+/// crop window included) and samples per pixel, which `--res`, `--spp` and the pass settings
+/// may change from the file's.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Footprint {
+    pub res: (u32, u32),
+    pub spp: u32,
+}
+
+impl Footprint {
+    /// The file's own film and sampler (for lookups outside a render: tests, tools).
+    pub fn of_file(scene: &crate::scene::Scene) -> Footprint {
+        Footprint {
+            res: (scene.film.xres, scene.film.yres),
+            spp: scene.sampler.pixel_samples,
+        }
+    }
+}
+
 /// How far one pixel step moves a point `p` on a surface with normal `n` (pbrt-v4's
 /// `Camera::Approximate_dp_dxy`, which every hit uses for texture filtering and bump mapping):
 /// the camera rays one pixel right and down from the ray through `p` are approximated by

@@ -28,6 +28,7 @@
 //! shading normals).
 use crate::accel::Hit;
 use crate::bsdf::Bsdf;
+use crate::camera::Footprint;
 use crate::light::LightSample;
 use crate::math::{spawn_origin, Frame, Ray, Vec2, Vec3};
 use crate::scene::{Material, MaterialKind, Mesh, Scene};
@@ -85,10 +86,10 @@ impl<'s> SurfaceInteraction<'s> {
 
     /// The BSDF at this point, its textures looked up here. A bump-mapped material first
     /// moves the shading normal (and `frame`, `wo` with it).
-    pub fn bsdf(&mut self, scene: &Scene) -> Bsdf {
+    pub fn bsdf(&mut self, scene: &Scene, fp: Footprint) -> Bsdf {
         let m = self.material(scene);
         let tc = if material_needs_differentials(m) {
-            self.tex_coord(scene)
+            self.tex_coord(scene, fp)
         } else {
             TexCoord::point(self.uv)
         };
@@ -137,12 +138,11 @@ impl<'s> SurfaceInteraction<'s> {
         m
     }
 
-    /// The texture lookup at this point with its footprint (one pixel step in x and y).
-    pub fn tex_coord(&self, scene: &Scene) -> TexCoord {
-        let res = (scene.film.xres, scene.film.yres);
-        let spp = scene.sampler.pixel_samples;
+    /// The texture lookup at this point with its footprint (one pixel step in x and y of the
+    /// image `fp` describes).
+    pub fn tex_coord(&self, scene: &Scene, fp: Footprint) -> TexCoord {
         let (dpdx, dpdy) =
-            crate::camera::approximate_dp_dxy(&scene.camera, res, spp, self.p, self.ng);
+            crate::camera::approximate_dp_dxy(&scene.camera, fp.res, fp.spp, self.p, self.ng);
         let (dpdu, dpdv) = self.dpduv();
         TexCoord {
             uv: self.uv,

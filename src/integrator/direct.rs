@@ -105,7 +105,7 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<Ga
         return;
     }
 
-    let bsdf = si.bsdf(scene);
+    let bsdf = si.bsdf(scene, ctx.settings.footprint());
     let flags = bsdf.flags();
     let coated = bsdf.has_coat();
     let wo = si.wo;

@@ -53,6 +53,9 @@ pub struct RenderSettings {
     pub width: u32,
     pub height: u32,
     pub spp: u32,
+    /// Samples per pixel of the whole render when `spp` is one pass's (set by
+    /// [`passes::pass_settings`]): texture footprints shrink with the image's samples.
+    pub texture_spp: Option<u32>,
     pub seed: u64,
     pub pattern: Pattern,
     /// Maximum number of bounces (pbrt's `maxdepth`).
@@ -102,6 +105,7 @@ impl RenderSettings {
             width: scene.film.xres,
             height: scene.film.yres,
             spp: scene.sampler.pixel_samples.max(1),
+            texture_spp: None,
             seed: 0,
             pattern: Pattern::Stratified,
             max_depth: max_depth as u32,
@@ -117,6 +121,15 @@ impl RenderSettings {
     }
 
     /// The pixels `[x0, x1, y0, y1]` a render computes (the crop window's, at least one).
+    /// The image one texture-footprint pixel belongs to: this render's resolution and
+    /// samples per pixel (pbrt-v4 scales differentials by `max(1/8, 1/sqrt(spp))`).
+    pub fn footprint(&self) -> crate::camera::Footprint {
+        crate::camera::Footprint {
+            res: (self.width, self.height),
+            spp: self.texture_spp.unwrap_or(self.spp),
+        }
+    }
+
     pub fn pixel_bounds(&self) -> [u32; 4] {
         let [x0, x1, y0, y1] = film::pixel_bounds(self.crop, self.width, self.height);
         // A crop window that holds a pixel at the file's resolution may hold none at `--res`.
@@ -237,6 +250,7 @@ pub fn prepare(
         let mut ps = settings.photon.clone();
         ps.trace.seed = settings.seed;
         ps.trace.pattern = settings.pattern;
+        ps.trace.footprint = Some(settings.footprint());
         photonmap::prepare(scene, accel, &Lights::new(scene), &ps)
     })
 }

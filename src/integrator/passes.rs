@@ -58,6 +58,7 @@ pub fn radius_scale2(alpha: f64, k: u64) -> f64 {
 pub fn pass_settings(settings: &RenderSettings, k: u64) -> RenderSettings {
     let mut s = settings.clone();
     s.seed = pass_seed(settings.seed, k);
+    s.texture_spp = Some(settings.texture_spp.unwrap_or(settings.spp));
     s.spp = settings.pass_spp.max(1);
     if s.photon.progressive {
         s.photon.radius_scale2 = radius_scale2(s.photon.alpha as f64, k);

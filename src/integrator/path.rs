@@ -102,7 +102,7 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<()
     if path.depth >= ctx.settings.max_depth {
         return;
     }
-    let bsdf = si.bsdf(ctx.scene);
+    let bsdf = si.bsdf(ctx.scene, ctx.settings.footprint());
     let base = CAMERA_DIMS.wrapping_add(path.depth.wrapping_mul(DIMS_PER_VERTEX));
     path.sampler.set_dimension(base);
     if bsdf.flags().has_non_specular() {

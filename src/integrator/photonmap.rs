@@ -88,6 +88,7 @@ impl Default for PhotonSettings {
                 seed: 0,
                 pattern: Pattern::Stratified,
                 receiver_alpha: trace::RECEIVER_ALPHA,
+                footprint: None,
             },
             global_lookup: 100,
             global_radius: 0.1,
@@ -561,7 +562,7 @@ fn reflected(
     for _ in 0..=GATHER_SPECULAR_BOUNCES {
         let Some(h) = hit else { return Vec3::ZERO };
         let mut si = SurfaceInteraction::new(scene, &h, &ray);
-        let bsdf = si.bsdf(scene);
+        let bsdf = si.bsdf(scene, ctx.settings.footprint());
         let wo = si.wo;
         if bsdf.has_coat() {
             // A coated surface: its coat's reflection (followed, like a specular bounce) or its

@@ -64,6 +64,8 @@ pub struct TraceSettings {
     /// Rough glossy surfaces whose GGX alpha is at least this receive caustic photons
     /// ([`is_receiver`]; infinity: none do).
     pub receiver_alpha: f32,
+    /// The render's image for texture footprints (`None`: the file's film and sampler).
+    pub footprint: Option<crate::camera::Footprint>,
 }
 
 /// The default of [`TraceSettings::receiver_alpha`]: lobes at least this wide get caustic
@@ -424,7 +426,10 @@ fn trace_one(
             break;
         };
         let mut si = SurfaceInteraction::new(scene, &hit, &ray);
-        let bsdf = si.bsdf(scene);
+        let fp = s
+            .footprint
+            .unwrap_or_else(|| crate::camera::Footprint::of_file(scene));
+        let bsdf = si.bsdf(scene, fp);
         let flags = bsdf.flags();
         let caustic_surface = is_caustic_surface(flags);
         if bounce == 0 {

@@ -139,7 +139,7 @@ fn step(scene: &Scene, accel: &Accel, ray: &Ray, uc: f32) -> Option<Step> {
     let hit = accel.backend().intersect(ray)?;
     let mut si = SurfaceInteraction::new(scene, &hit, ray);
     let sample = si
-        .bsdf(scene)
+        .bsdf(scene, photon::camera::Footprint::of_file(scene))
         .sample(si.wo, uc, Vec2::splat(0.5), TransportMode::Radiance)?;
     Some(Step {
         hit,
@@ -333,6 +333,7 @@ fn lone_floor_case((s, y0, tilt): (f32, f32, f32)) -> Result<(), String> {
         seed: 3,
         pattern: Pattern::Stratified,
         receiver_alpha: photon::photon::trace::RECEIVER_ALPHA,
+        footprint: None,
     };
     let maps = trace::trace(&sc, &acc, &lights, &settings);
     let global = maps.global.expect("photons on the floor");
@@ -741,6 +742,7 @@ LightSource "point" "rgb I" [ 1 1 1 ] "point3 from" [ 0.01 0.02 0.03 ]
         seed: 11,
         pattern: Pattern::Stratified,
         receiver_alpha: photon::photon::trace::RECEIVER_ALPHA,
+        footprint: None,
     };
     let t = std::time::Instant::now();
     let maps = trace::trace(&sc, &acc, &lights, &settings);

@@ -51,6 +51,7 @@ fn trace_settings(global: u64, caustic: u64, projection_maps: bool) -> TraceSett
         seed: 7,
         pattern: Pattern::Stratified,
         receiver_alpha: photon::photon::trace::RECEIVER_ALPHA,
+        footprint: None,
     }
 }
 

@@ -286,7 +286,7 @@ fn linear_height_field_tilts_the_shading_normal() {
             (si.ns - Vec3::Y).length() < 1e-6,
             "unbumped before the BSDF"
         );
-        let _ = si.bsdf(&scene);
+        let _ = si.bsdf(&scene, photon::camera::Footprint::of_file(&scene));
         assert!((si.ns - want).length() < 1e-4, "x {x}: {} != {want}", si.ns);
         assert!((si.frame.n - want).length() < 1e-4);
         assert!((si.wo - si.frame.to_local(Vec3::Y)).length() < 1e-6);
@@ -295,7 +295,7 @@ fn linear_height_field_tilts_the_shading_normal() {
     let ray = Ray::new(Vec3::new(4.0, 3.0, 0.0), Vec3::new(0.0, -1.0, 0.0));
     let hit = accel.backend().intersect(&ray).unwrap();
     let mut si = SurfaceInteraction::new(&scene, &hit, &ray);
-    let _ = si.bsdf(&scene);
+    let _ = si.bsdf(&scene, photon::camera::Footprint::of_file(&scene));
     assert!((si.ns - Vec3::Y).length() < 1e-6, "{}", si.ns);
 }
 
@@ -499,4 +499,55 @@ MakeNamedMaterial "white" "string type" "diffuse" "rgb reflectance" [ 0.8 0.8 0.
         n += 1;
     }
     assert!(n > 800, "{n}");
+}
+
+/// Texture footprints follow the render's image, not the file's: `--res 64x64 --spp 4` on
+/// the textured Cornell box (its file: 256x256, 16 spp; a checkerboard floor, filtered over
+/// the footprint) gives the same bytes as a copy of the file that
+/// asks for 64x64 and 2x2 samples itself. The footprint used the file's film and sampler
+/// whatever the command line said, so every `--res` render filtered textures for the wrong
+/// pixel size (4x too small here).
+#[test]
+fn texture_footprints_follow_the_command_lines_resolution_and_samples() {
+    let dir = TempDir::new("photon-footprint");
+    let text = std::fs::read_to_string("scenes/cornell-textured.pbrt").unwrap();
+    let small = text
+        .replace(
+            "\"integer xresolution\" [ 256 ]",
+            "\"integer xresolution\" [ 64 ]",
+        )
+        .replace(
+            "\"integer yresolution\" [ 256 ]",
+            "\"integer yresolution\" [ 64 ]",
+        )
+        .replace("\"integer xsamples\" [ 4 ]", "\"integer xsamples\" [ 2 ]")
+        .replace("\"integer ysamples\" [ 4 ]", "\"integer ysamples\" [ 2 ]");
+    assert_ne!(small, text, "the file's Film and Sampler lines changed");
+    let local = dir.0.join("scene.pbrt");
+    let base = Path::new("scenes").canonicalize().unwrap();
+    // Textures are named relative to the scene file: point them at the repository's folder.
+    let small = small.replace("\"textures/", &format!("\"{}/textures/", base.display()));
+    std::fs::write(&local, small).unwrap();
+    let run = |scene: &Path, extra: &[&str], out: &str| {
+        let o = common::photon()
+            .arg("render")
+            .arg(scene)
+            .args(["--seed", "3", "--threads", "2", "--no-png", "-o"])
+            .arg(dir.0.join(out))
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        std::fs::read(dir.0.join(out)).unwrap()
+    };
+    let by_flags = run(
+        Path::new("scenes/cornell-textured.pbrt"),
+        &["--res", "64x64", "--spp", "4"],
+        "flags.exr",
+    );
+    let by_file = run(&local, &[], "file.exr");
+    assert!(
+        by_flags == by_file,
+        "--res/--spp and the file's own 64x64, 4 spp differ"
+    );
 }
