@@ -2745,3 +2745,49 @@ fn portal_blackbody_is_not_normalised() {
     assert!(close(with, 7.5 * 0.885_888_6, 2e-3), "{with}");
     assert!(close(lum(""), 7.5, 1e-3));
 }
+
+/// The loader's memory budget gives back what a failed read reserved, keeps what a loaded
+/// mesh or image holds, and refuses what passes its limit (issue 22).
+#[test]
+fn load_budget_accounts_for_failed_and_finished_reads() {
+    use photon::scene::loader::{ply::read_ply, textures::read_image, LoadBudget};
+    use photon::texture::Encoding;
+    let dir = TempDir::new("photon-budget");
+    let budget = LoadBudget::new(1 << 30);
+    // A truncated PLY (its counts need more data than it holds) and a corrupt PNG.
+    dir.write(
+        "short.ply",
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+         property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n",
+    );
+    assert!(read_ply(&dir.0.join("short.ply"), &budget).is_err());
+    assert_eq!(budget.held(), 0, "a failed PLY read keeps nothing");
+    let mut png = Vec::new();
+    image::RgbImage::new(4, 4)
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    png.truncate(png.len() - 20);
+    std::fs::write(dir.0.join("bad.png"), &png).unwrap();
+    assert!(read_image(&dir.0.join("bad.png"), Encoding::Srgb, &budget).is_err());
+    assert_eq!(budget.held(), 0, "a failed decode keeps nothing");
+    // A good mesh keeps 32 B a vertex and 24 B a face; a good 4x4 image 12 B a texel.
+    dir.write(
+        "tri.ply",
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+         property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+         0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+    );
+    read_ply(&dir.0.join("tri.ply"), &budget).unwrap();
+    assert_eq!(budget.held(), 3 * 32 + 24);
+    let good = dir.0.join("good.png");
+    image::RgbImage::new(4, 4).save(&good).unwrap();
+    let fresh = LoadBudget::new(1 << 30);
+    read_image(&good, Encoding::Srgb, &fresh).unwrap();
+    assert_eq!(fresh.held(), 16 * 12);
+    // The decode's peak was reserved first: 16 texels x (3 + 12 + 12) B.
+    assert_eq!(fresh.peak(), 16 * 27);
+    let tight = LoadBudget::new(100);
+    let err = read_image(&good, Encoding::Srgb, &tight).unwrap_err();
+    assert!(err.contains("decoding it needs 432 B"), "{err}");
+    assert_eq!(tight.held(), 0);
+}

@@ -152,10 +152,18 @@ pub fn read_ply(path: &Path, budget: &super::LoadBudget) -> Result<ObjMesh, Stri
         raw
     };
     let held = bytes.len() as u64;
-    let declared = strict::check_header(&bytes)?;
-    let payload = held.saturating_sub(declared.offset as u64);
+    let result = parse_within(&bytes, budget);
+    // The file's bytes are dropped on return; the mesh (reserved by parse_within) stays.
+    budget.release(held);
+    result
+}
+
+/// Checks the header's counts against the data and the budget, then parses `bytes`. What it
+/// reserves for parsing is given back; the mesh's share stays reserved when it succeeds.
+fn parse_within(bytes: &[u8], budget: &super::LoadBudget) -> Result<ObjMesh, String> {
+    let declared = strict::check_header(bytes)?;
+    let payload = (bytes.len() as u64).saturating_sub(declared.offset as u64);
     if payload < declared.least() {
-        budget.release(held);
         return Err(format!(
             "truncated file: its element counts need at least {} bytes of data, it holds {payload}",
             declared.least()
@@ -163,8 +171,8 @@ pub fn read_ply(path: &Path, budget: &super::LoadBudget) -> Result<ObjMesh, Stri
     }
     let (parsing, kept) = declared.memory();
     budget.reserve(parsing + kept, "parsing it")?;
-    let result = read_bytes(&bytes, &declared);
-    budget.release(parsing + held);
+    let result = read_bytes(bytes, &declared);
+    budget.release(parsing);
     if result.is_err() {
         budget.release(kept);
     }

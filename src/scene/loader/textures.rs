@@ -350,9 +350,11 @@ pub fn read_image(path: &Path, encoding: Encoding, budget: &LoadBudget) -> Resul
         let cap = crate::resources::MAX_IMAGE_PIXELS * 12 + 4096;
         let len = std::fs::metadata(path).map_or(0, |m| m.len().min(cap));
         budget.reserve(2 * len, "decoding it")?;
-        let bytes = super::read_capped(path, cap).map_err(|e| e.to_string())?;
-        let image = read_pfm(&bytes);
-        budget.release(len);
+        let image = super::read_capped(path, cap)
+            .map_err(|e| e.to_string())
+            .and_then(|bytes| read_pfm(&bytes));
+        // The file's bytes are gone; on an error the texels' share too.
+        budget.release(if image.is_ok() { len } else { 2 * len });
         return image;
     }
     if ext("exr") {
@@ -360,7 +362,10 @@ pub fn read_image(path: &Path, encoding: Encoding, budget: &LoadBudget) -> Resul
         let (w, h) = (w as u64, h as u64);
         // The decoded image, then the texels copied from it.
         budget.reserve(w * h * 24, "decoding it")?;
-        let im = crate::imageio::read_exr(path).map_err(|e| e.to_string())?;
+        let im = crate::imageio::read_exr(path).map_err(|e| {
+            budget.release(w * h * 24);
+            e.to_string()
+        })?;
         budget.release(w * h * 12);
         return Ok(Image {
             width: im.width,
@@ -382,7 +387,10 @@ pub fn read_image(path: &Path, encoding: Encoding, budget: &LoadBudget) -> Resul
     let native = decoder.color_type().bytes_per_pixel() as u64;
     let peak = w * h * (native + 12 + 12);
     budget.reserve(peak, "decoding it")?;
-    let dynamic = image::DynamicImage::from_decoder(decoder).map_err(|e| e.to_string())?;
+    let dynamic = image::DynamicImage::from_decoder(decoder).map_err(|e| {
+        budget.release(peak);
+        e.to_string()
+    })?;
     let linear = matches!(
         dynamic,
         image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_)
