@@ -1402,3 +1402,18 @@ fn issue22_case_11_converge_outputs_are_planned_before_the_work() {
     assert_error(&r, &["--out ", "converge.csv", "directory"]);
     assert!(!r.stdout.contains("budget"), "rendered first: {}", r.stdout);
 }
+
+/// `--pass-spp` took up to 2^32-1 and `--time 1e300s` was accepted while `--spp` is capped at
+/// 2^20 (issue 22, case 18): both are refused by their parsers, naming the flag and the range.
+#[test]
+fn issue22_case_18_pass_spp_and_durations_are_capped() {
+    let d = tmp_dir("i22c18");
+    for (flag, value, range) in [
+        ("--pass-spp", "4294967295", "1..=1048576"),
+        ("--time", "1e300s", "at most 31536000 s"),
+        ("--every", "1e300s", "at most 31536000 s"),
+    ] {
+        let r = render_text(&d, &small_scene(""), &["--progressive", flag, value], GIB);
+        assert_error(&r, &[flag, range]);
+    }
+}
