@@ -1,11 +1,10 @@
 //! Direct lighting against analytic irradiance: a Lambertian floor of reflectance rho lit by a
 //! point, spot or distant light (E = I cos(theta) / r^2, E = L cos(theta)) and by a small
 //! square area light (the exact form factor of a parallel rectangle). Radiance L = rho / pi E.
-use photon::accel::{Accel, AccelOptions, BackendKind};
-use photon::camera::Camera;
-use photon::integrator::{self, IntegratorKind, RenderSettings};
+use crate::support as common;
+use photon::accel::BackendKind;
 use photon::math::{Vec2, Vec3};
-use photon::scene::{loader, Scene};
+use photon::scene::Scene;
 use std::f32::consts::PI;
 use std::path::PathBuf;
 
@@ -35,27 +34,7 @@ Shape "trianglemesh" "point3 P" [ -5 0 -5  5 0 -5  5 0 5  -5 0 5 ] "integer indi
 
 /// Renders `path` and returns, per pixel, (rendered, floor point seen through the centre).
 fn render(path: &std::path::Path, backend: BackendKind) -> (Scene, Vec<(Vec3, Vec3)>) {
-    let scene = loader::load(path).expect("scene loads");
-    let accel = Accel::build(&scene, backend, AccelOptions::default()).expect("accel");
-    let settings = RenderSettings::from_scene(&scene).expect("settings");
-    let out = integrator::render(
-        &scene,
-        &accel,
-        &settings,
-        IntegratorKind::Direct,
-        &|_, _| {},
-    );
-    let cam = Camera::new(&scene.camera, settings.width, settings.height);
-    let mut px = Vec::new();
-    for y in 0..settings.height {
-        for x in 0..settings.width {
-            let ray = cam.generate_ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
-            let t = -ray.o.y / ray.d.y;
-            let v = out.image.pixels[(y * settings.width + x) as usize];
-            px.push((Vec3::from_array(v), ray.at(t)));
-        }
-    }
-    (scene, px)
+    common::render_floor(path, backend)
 }
 
 fn rho() -> Vec3 {

@@ -6,8 +6,6 @@
 //! shading normal to normalize(-g, 1, 0) (per world unit), so the radiance there is
 //! albedo E cos / pi with cos = 1 / sqrt(1 + g^2).
 use photon::accel::{Accel, AccelOptions, BackendKind};
-use photon::camera::Camera;
-use photon::integrator::{self, IntegratorKind, RenderSettings};
 use photon::interaction::SurfaceInteraction;
 use photon::math::{Ray, Vec2, Vec3};
 use photon::scene::{loader, Scene};
@@ -43,28 +41,9 @@ Shape "trianglemesh" "point3 P" [ -5 0 -5  5 0 -5  5 0 5  -5 0 5 ]
 /// Renders `path` with the direct integrator; per pixel (rendered radiance, floor uv seen
 /// through the pixel centre).
 fn render(path: &Path) -> (Scene, Vec<(Vec3, Vec2)>) {
-    let scene = loader::load(path).unwrap_or_else(|e| panic!("{e}"));
-    let accel = Accel::build(&scene, BackendKind::Embree, AccelOptions::default()).expect("accel");
-    let settings = RenderSettings::from_scene(&scene).expect("settings");
-    let out = integrator::render(
-        &scene,
-        &accel,
-        &settings,
-        IntegratorKind::Direct,
-        &|_, _| {},
-    );
-    let cam = Camera::new(&scene.camera, settings.width, settings.height);
-    let mut px = Vec::new();
-    for y in 0..settings.height {
-        for x in 0..settings.width {
-            let ray = cam.generate_ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
-            let p = ray.at(-ray.o.y / ray.d.y);
-            let uv = Vec2::new((p.x + 5.0) / 10.0, (p.z + 5.0) / 10.0);
-            let v = out.image.pixels[(y * settings.width + x) as usize];
-            px.push((Vec3::from_array(v), uv));
-        }
-    }
-    (scene, px)
+    let (scene, px) = common::render_floor(path, BackendKind::Embree);
+    let uv = |p: Vec3| Vec2::new((p.x + 5.0) / 10.0, (p.z + 5.0) / 10.0);
+    (scene, px.into_iter().map(|(v, p)| (v, uv(p))).collect())
 }
 
 /// sRGB-encoded 8-bit value to linear (IEC 61966-2-1), computed here independently.

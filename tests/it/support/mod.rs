@@ -595,3 +595,33 @@ pub fn forge_partial(
     };
     write_exr_with(dst, &rgb, &[], photon::imageio::ExrPixel::Float, extra)
 }
+
+/// Renders `path` with the direct-lighting integrator on `backend` and returns, per pixel in
+/// row-major order, the rendered value and the point of the plane y = 0 that the ray through
+/// the pixel's centre meets (scenes that look at a floor).
+pub fn render_floor(
+    path: &Path,
+    backend: photon::accel::BackendKind,
+) -> (
+    photon::scene::Scene,
+    Vec<(photon::math::Vec3, photon::math::Vec3)>,
+) {
+    use photon::accel::{Accel, AccelOptions};
+    use photon::math::{Vec2, Vec3};
+    let scene = photon::scene::loader::load(path).unwrap_or_else(|e| panic!("{e}"));
+    let accel = Accel::build(&scene, backend, AccelOptions::default()).expect("accel");
+    let settings = photon::integrator::RenderSettings::from_scene(&scene).expect("settings");
+    let kind = photon::integrator::IntegratorKind::Direct;
+    let out = photon::integrator::render(&scene, &accel, &settings, kind, &|_, _| {});
+    let cam = photon::camera::Camera::new(&scene.camera, settings.width, settings.height);
+    let mut px = Vec::new();
+    for y in 0..settings.height {
+        for x in 0..settings.width {
+            let ray = cam.generate_ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
+            let p = ray.at(-ray.o.y / ray.d.y);
+            let v = out.image.pixels[(y * settings.width + x) as usize];
+            px.push((Vec3::from_array(v), p));
+        }
+    }
+    (scene, px)
+}
