@@ -420,16 +420,16 @@ fn trace_one(
     let mut caustic_chain = true;
     let mut sharp_chain = true;
     let mut first_specular = false;
+    let footprint = s
+        .footprint
+        .unwrap_or_else(|| crate::camera::Footprint::of_file(scene));
     for bounce in 0..s.max_bounces {
         rays += 1;
         let Some(hit) = accel.intersect(RayKind::Photon, &ray) else {
             break;
         };
         let mut si = SurfaceInteraction::new(scene, &hit, &ray);
-        let fp = s
-            .footprint
-            .unwrap_or_else(|| crate::camera::Footprint::of_file(scene));
-        let bsdf = si.bsdf(scene, fp);
+        let bsdf = si.bsdf(scene, footprint);
         let flags = bsdf.flags();
         let caustic_surface = is_caustic_surface(flags);
         if bounce == 0 {

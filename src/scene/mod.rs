@@ -94,17 +94,8 @@ pub const MAX_LINE: usize = 200;
 /// start (two thirds: where the error is) and its end (the last third: what is wrong) joined
 /// by " … ".
 pub fn one_line(s: &str, max: usize) -> String {
-    let escaped: String = s
-        .chars()
-        .flat_map(|c| {
-            let e: Vec<char> = if c.is_control() {
-                c.escape_default().collect()
-            } else {
-                vec![c]
-            };
-            e
-        })
-        .collect();
+    // Control characters escaped, nothing clipped.
+    let escaped = clip_for_message(s, usize::MAX);
     if escaped.len() <= max {
         return escaped;
     }
