@@ -6,7 +6,7 @@
 //! Two-sided like pbrt: a `wo` below the surface sees the mirror image of the lobe.
 use super::fresnel::{fr_complex, reflect};
 use super::microfacet::TrowbridgeReitz;
-use super::{same_hemisphere, BsdfSample};
+use super::{same_hemisphere, BsdfSample, Bxdf, BxdfFlags, Lobes, TransportMode};
 use crate::math::{Vec2, Vec3};
 
 /// A smooth or rough conductor.
@@ -50,9 +50,19 @@ impl Conductor {
     fn fresnel(&self, cos: f32) -> Vec3 {
         fr_complex(cos.abs(), self.eta, self.k)
     }
+}
+
+impl Bxdf for Conductor {
+    fn flags(&self) -> BxdfFlags {
+        if self.is_smooth() {
+            BxdfFlags::REFLECTION | BxdfFlags::SPECULAR
+        } else {
+            BxdfFlags::REFLECTION | BxdfFlags::GLOSSY
+        }
+    }
 
     /// The microfacet BRDF value; 0 for the mirror and across the surface.
-    pub fn f(&self, wo: Vec3, wi: Vec3) -> Vec3 {
+    fn f(&self, wo: Vec3, wi: Vec3, _: TransportMode) -> Vec3 {
         if self.is_smooth() || !same_hemisphere(wo, wi) {
             return Vec3::ZERO;
         }
@@ -70,8 +80,8 @@ impl Conductor {
     }
 
     /// Density of [`Self::sample`] for `wi` (solid angle); 0 for the mirror.
-    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        if self.is_smooth() || !same_hemisphere(wo, wi) {
+    fn pdf(&self, wo: Vec3, wi: Vec3, _: TransportMode, lobes: Lobes) -> f32 {
+        if self.is_smooth() || !same_hemisphere(wo, wi) || lobes == Lobes::Transmission {
             return 0.0;
         }
         let wm = wo + wi;
@@ -88,8 +98,19 @@ impl Conductor {
     }
 
     /// Samples the mirror direction, or a visible microfacet normal and the reflection about
-    /// it; `u` uniform in `[0,1)^2`. `None` when the reflection leaves through the surface.
-    pub fn sample(&self, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
+    /// it; `u` uniform in `[0,1)^2`. `None` when the reflection leaves through the surface
+    /// or only transmission may be chosen.
+    fn sample(
+        &self,
+        wo: Vec3,
+        _: f32,
+        u: Vec2,
+        _: TransportMode,
+        lobes: Lobes,
+    ) -> Option<BsdfSample> {
+        if lobes == Lobes::Transmission {
+            return None;
+        }
         if self.is_smooth() {
             let wi = Vec3::new(-wo.x, -wo.y, wo.z);
             let cos = wi.z.abs();
@@ -132,8 +153,12 @@ impl Conductor {
         })
     }
 
+    fn reflectance_estimate(&self) -> Vec3 {
+        self.normal_reflectance()
+    }
+
     /// Fresnel reflectance at normal incidence.
-    pub fn normal_reflectance(&self) -> Vec3 {
+    fn normal_reflectance(&self) -> Vec3 {
         self.fresnel(1.0)
     }
 }
@@ -164,7 +189,7 @@ mod tests {
             if wi.z <= 0.0 {
                 return 0.0;
             }
-            let f = c.f(wo, wi.normalize()).y as f64;
+            let f = c.f(wo, wi.normalize(), TransportMode::Radiance).y as f64;
             f * wi.z as f64 * 4.0 * wo.dot(wm).abs() as f64
         })
     }
@@ -175,13 +200,14 @@ mod tests {
         let mut max_weight = 0.0f64;
         let xs: Vec<f64> = (0..n)
             .map(|_| {
-                let Some(s) = c.sample(wo, rng.vec2()) else {
+                let Some(s) = c.sample(wo, 0.0, rng.vec2(), TransportMode::Radiance, Lobes::All)
+                else {
                     return 0.0;
                 };
                 assert!(s.wi.z * wo.z > 0.0 && !s.specular && s.pdf > 0.0);
-                let pdf = c.pdf(wo, s.wi);
+                let pdf = c.pdf(wo, s.wi, TransportMode::Radiance, Lobes::All);
                 assert!((pdf - s.pdf).abs() <= 1e-3 * s.pdf, "{pdf} vs {}", s.pdf);
-                let f = c.f(wo, s.wi);
+                let f = c.f(wo, s.wi, TransportMode::Radiance);
                 assert!((f - s.f).abs().max_element() <= 1e-3 * s.f.max_element());
                 let w = (s.f.y * s.wi.z.abs() / s.pdf) as f64;
                 max_weight = max_weight.max(w);
@@ -271,7 +297,13 @@ mod tests {
                     let jac = t.sin() * (PI / 2.0 / nt as f64) * (2.0 * PI / np as f64);
                     for j in 0..np {
                         let p = (j as f64 + 0.5) / np as f64 * 2.0 * PI;
-                        sum += c.pdf(wo, spherical(t as f32, p as f32)) as f64 * jac;
+                        sum += c.pdf(
+                            wo,
+                            spherical(t as f32, p as f32),
+                            TransportMode::Radiance,
+                            Lobes::All,
+                        ) as f64
+                            * jac;
                     }
                 }
                 // The same mass from the normals' side: visible normals whose reflection stays
@@ -293,8 +325,8 @@ mod tests {
             for _ in 0..1000 {
                 let wi = rng.sphere();
                 let wi = Vec3::new(wi.x, wi.y, -wi.z.abs());
-                assert_eq!(c.pdf(Vec3::Z, wi), 0.0);
-                assert_eq!(c.f(Vec3::Z, wi), Vec3::ZERO);
+                assert_eq!(c.pdf(Vec3::Z, wi, TransportMode::Radiance, Lobes::All), 0.0);
+                assert_eq!(c.f(Vec3::Z, wi, TransportMode::Radiance), Vec3::ZERO);
             }
         }
     }
@@ -307,24 +339,28 @@ mod tests {
             for _ in 0..5000 {
                 let wo = rng.hemisphere();
                 let wi = rng.hemisphere();
-                let a = c.f(wo, wi);
-                let b = c.f(wi, wo);
+                let a = c.f(wo, wi, TransportMode::Radiance);
+                let b = c.f(wi, wo, TransportMode::Radiance);
                 assert!(
                     (a - b).abs().max_element() <= 1e-4 * a.max_element().max(1e-3),
                     "{a:?} vs {b:?}"
                 );
                 // Seen from below, the lobe is the mirror image.
                 let flip = |v: Vec3| Vec3::new(v.x, v.y, -v.z);
-                let m = c.f(flip(wo), flip(wi));
+                let m = c.f(flip(wo), flip(wi), TransportMode::Radiance);
                 assert!((a - m).abs().max_element() <= 1e-5 * a.max_element().max(1e-3));
                 assert!(
-                    (c.pdf(wo, wi) - c.pdf(flip(wo), flip(wi))).abs()
-                        <= 1e-4 * c.pdf(wo, wi).max(1e-3)
+                    (c.pdf(wo, wi, TransportMode::Radiance, Lobes::All)
+                        - c.pdf(flip(wo), flip(wi), TransportMode::Radiance, Lobes::All))
+                    .abs()
+                        <= 1e-4 * c.pdf(wo, wi, TransportMode::Radiance, Lobes::All).max(1e-3)
                 );
             }
             let below = Vec3::new(0.3, -0.2, -0.9).normalize();
             for _ in 0..100 {
-                if let Some(s) = c.sample(below, rng.vec2()) {
+                if let Some(s) =
+                    c.sample(below, 0.0, rng.vec2(), TransportMode::Radiance, Lobes::All)
+                {
                     assert!(s.wi.z < 0.0);
                 }
             }
@@ -337,7 +373,7 @@ mod tests {
         let (ax, ay) = (0.2f32, 0.4f32);
         let c = Conductor::new(GOLD_ETA, GOLD_K, ax, ay);
         let want = fr_complex(1.0, GOLD_ETA, GOLD_K) / (4.0 * std::f32::consts::PI * ax * ay);
-        let got = c.f(Vec3::Z, Vec3::Z);
+        let got = c.f(Vec3::Z, Vec3::Z, TransportMode::Radiance);
         assert!((got - want).abs().max_element() < 1e-5 * want.max_element());
     }
 
@@ -366,7 +402,7 @@ mod tests {
             let (wo, wi) = (v3(&r["wo"]).normalize(), v3(&r["wi"]).normalize());
             let (g1o, g1i) = (num("g1_wo"), num("g1_wi"));
             let g_hc = 1.0 / (1.0 / g1o + 1.0 / g1i - 1.0);
-            let got = c.f(wo, wi) * wi.z;
+            let got = c.f(wo, wi, TransportMode::Radiance) * wi.z;
             for ch in 0..3 {
                 let want = r["f_cos"][ch].as_f64().unwrap() / (g1o * g1i) * g_hc;
                 let rel = (got[ch] as f64 - want).abs() / want.abs().max(1e-4);
@@ -377,7 +413,7 @@ mod tests {
                     got[ch]
                 );
             }
-            let pdf = c.pdf(wo, wi) as f64;
+            let pdf = c.pdf(wo, wi, TransportMode::Radiance, Lobes::All) as f64;
             let rel = (pdf - num("pdf")).abs() / num("pdf").max(1e-4);
             worst_pdf = worst_pdf.max(rel);
             assert!(rel < 2e-3, "{r}: pdf {pdf} vs Mitsuba {}", num("pdf"));

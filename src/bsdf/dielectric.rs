@@ -22,7 +22,7 @@
 //! ```
 use super::fresnel::{fr_dielectric, reflect, refract};
 use super::microfacet::TrowbridgeReitz;
-use super::{same_hemisphere, BsdfSample, BxdfFlags, Lobes, TransportMode};
+use super::{same_hemisphere, BsdfSample, Bxdf, BxdfFlags, Lobes, TransportMode};
 use crate::math::{Vec2, Vec3};
 
 /// A smooth or rough dielectric interface.
@@ -66,45 +66,6 @@ impl Dielectric {
     /// True when the lobes are deltas (effectively smooth, or no interface at all).
     pub fn is_smooth(&self) -> bool {
         self.eta == 1.0 || self.distrib.effectively_smooth()
-    }
-
-    /// pbrt-v4's flags: transmission only when `eta == 1`; specular or glossy.
-    pub fn flags(&self) -> BxdfFlags {
-        use BxdfFlags as F;
-        let sides = if self.eta == 1.0 {
-            F::TRANSMISSION
-        } else {
-            F::REFLECTION | F::TRANSMISSION
-        };
-        sides
-            | if self.is_smooth() {
-                F::SPECULAR
-            } else {
-                F::GLOSSY
-            }
-    }
-
-    /// Samples a direction for `wo` among `lobes`.
-    ///
-    /// - `uc`: uniform in `[0, 1)`, chooses reflection (probability `R`) or refraction;
-    /// - `u`: uniform in `[0, 1)^2`, chooses the visible microfacet normal (rough only);
-    /// - `mode`: `Radiance` divides refracted throughput by `eta'^2`, `Importance` does not.
-    ///
-    /// Smooth: `f` is `R / |cos wi|` or `T / |cos wi|` (times `1 / eta'^2` for radiance),
-    /// `pdf` the discrete lobe probability.
-    pub fn sample(
-        &self,
-        wo: Vec3,
-        uc: f32,
-        u: Vec2,
-        mode: TransportMode,
-        lobes: Lobes,
-    ) -> Option<BsdfSample> {
-        if self.is_smooth() {
-            self.sample_smooth(wo, uc, mode, lobes)
-        } else {
-            self.sample_rough(wo, uc, u, mode, lobes)
-        }
     }
 
     fn sample_smooth(
@@ -189,17 +150,6 @@ impl Dielectric {
         Some(Half { wm, etap, reflect })
     }
 
-    /// BSDF value for `(wo, wi)`: 0 for the smooth interface (delta lobes).
-    pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
-        if self.is_smooth() {
-            return Vec3::ZERO;
-        }
-        match self.half(wo, wi) {
-            Some(h) => Vec3::splat(self.f_given(wo, wi, &h, mode)),
-            None => Vec3::ZERO,
-        }
-    }
-
     fn f_given(&self, wo: Vec3, wi: Vec3, h: &Half, mode: TransportMode) -> f32 {
         let d = &self.distrib;
         let (wm, etap) = (h.wm, h.etap);
@@ -213,9 +163,71 @@ impl Dielectric {
         dg * (1.0 - fr) * (wi.dot(wm) * wo.dot(wm) / denom).abs() * radiance_scale(mode, etap)
     }
 
+    fn pdf_given(&self, wo: Vec3, wi: Vec3, h: &Half, pr: f32, pt: f32) -> f32 {
+        let d = &self.distrib;
+        let wm = h.wm;
+        if h.reflect {
+            return d.pdf(wo, wm) / (4.0 * wo.dot(wm).abs()) * pr;
+        }
+        let s = wi.dot(wm) + wo.dot(wm) / h.etap;
+        d.pdf(wo, wm) * wi.dot(wm).abs() / (s * s) * pt
+    }
+}
+
+impl Bxdf for Dielectric {
+    /// pbrt-v4's flags: transmission only when `eta == 1`; specular or glossy.
+    fn flags(&self) -> BxdfFlags {
+        use BxdfFlags as F;
+        let sides = if self.eta == 1.0 {
+            F::TRANSMISSION
+        } else {
+            F::REFLECTION | F::TRANSMISSION
+        };
+        sides
+            | if self.is_smooth() {
+                F::SPECULAR
+            } else {
+                F::GLOSSY
+            }
+    }
+
+    /// BSDF value for `(wo, wi)`: 0 for the smooth interface (delta lobes).
+    fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+        if self.is_smooth() {
+            return Vec3::ZERO;
+        }
+        match self.half(wo, wi) {
+            Some(h) => Vec3::splat(self.f_given(wo, wi, &h, mode)),
+            None => Vec3::ZERO,
+        }
+    }
+
+    /// Samples a direction for `wo` among `lobes`.
+    ///
+    /// - `uc`: uniform in `[0, 1)`, chooses reflection (probability `R`) or refraction;
+    /// - `u`: uniform in `[0, 1)^2`, chooses the visible microfacet normal (rough only);
+    /// - `mode`: `Radiance` divides refracted throughput by `eta'^2`, `Importance` does not.
+    ///
+    /// Smooth: `f` is `R / |cos wi|` or `T / |cos wi|` (times `1 / eta'^2` for radiance),
+    /// `pdf` the discrete lobe probability.
+    fn sample(
+        &self,
+        wo: Vec3,
+        uc: f32,
+        u: Vec2,
+        mode: TransportMode,
+        lobes: Lobes,
+    ) -> Option<BsdfSample> {
+        if self.is_smooth() {
+            self.sample_smooth(wo, uc, mode, lobes)
+        } else {
+            self.sample_rough(wo, uc, u, mode, lobes)
+        }
+    }
+
     /// Density with which [`Self::sample`] (restricted to `lobes`) picks `wi`; 0 for the
     /// smooth interface.
-    pub fn pdf(&self, wo: Vec3, wi: Vec3, lobes: Lobes) -> f32 {
+    fn pdf(&self, wo: Vec3, wi: Vec3, _: TransportMode, lobes: Lobes) -> f32 {
         if self.is_smooth() {
             return 0.0;
         }
@@ -229,14 +241,12 @@ impl Dielectric {
         }
     }
 
-    fn pdf_given(&self, wo: Vec3, wi: Vec3, h: &Half, pr: f32, pt: f32) -> f32 {
-        let d = &self.distrib;
-        let wm = h.wm;
-        if h.reflect {
-            return d.pdf(wo, wm) / (4.0 * wo.dot(wm).abs()) * pr;
-        }
-        let s = wi.dot(wm) + wo.dot(wm) / h.etap;
-        d.pdf(wo, wm) * wi.dot(wm).abs() / (s * s) * pt
+    fn reflectance_estimate(&self) -> Vec3 {
+        Vec3::ONE
+    }
+
+    fn normal_reflectance(&self) -> Vec3 {
+        Vec3::splat(fr_dielectric(1.0, self.eta))
     }
 }
 
@@ -455,7 +465,7 @@ mod tests {
                         n += 1;
                         assert!(!s.specular && s.transmission == (s.wi.z * wo.z < 0.0));
                         let f = b.f(wo, s.wi, mode).x;
-                        let pdf = b.pdf(wo, s.wi, Lobes::All);
+                        let pdf = b.pdf(wo, s.wi, TransportMode::Radiance, Lobes::All);
                         let close = |a: f32, b: f32| (a - b).abs() <= 2e-3 * b.abs().max(1e-3);
                         if !close(f, s.f.x) || !close(pdf, s.pdf) {
                             bad += 1;
@@ -496,7 +506,7 @@ mod tests {
                     )
                     .map(|s| s.wi)
                 },
-                |wi| b.pdf(wo, wi, Lobes::All) as f64,
+                |wi| b.pdf(wo, wi, TransportMode::Radiance, Lobes::All) as f64,
             );
             // 1% significance, Sidak-corrected for the number of tests.
             let alpha = 1.0 - 0.99f64.powf(1.0 / cases.len() as f64);
@@ -591,7 +601,7 @@ mod tests {
                     if let Some(s) = b.sample(wo, uc, u, m, Lobes::Transmission) {
                         assert!(s.transmission && s.wi.z * wo.z < 0.0);
                         if !b.is_smooth() {
-                            let p = b.pdf(wo, s.wi, Lobes::Transmission);
+                            let p = b.pdf(wo, s.wi, TransportMode::Radiance, Lobes::Transmission);
                             assert!((p - s.pdf).abs() <= 2e-3 * s.pdf, "{p} vs {}", s.pdf);
                         }
                     }
@@ -639,7 +649,7 @@ mod tests {
                 num("f_cos") // a back-facing microfacet: 0
             };
             let got = (b.f(wo, wi, mode).x * wi.z.abs()) as f64;
-            let pdf = b.pdf(wo, wi, Lobes::All) as f64;
+            let pdf = b.pdf(wo, wi, TransportMode::Radiance, Lobes::All) as f64;
             let rel = |a: f64, b: f64| (a - b).abs() / b.abs().max(1e-4);
             worst_f = worst_f.max(rel(got, want));
             worst_pdf = worst_pdf.max(rel(pdf, num("pdf")));

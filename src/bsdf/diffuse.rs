@@ -1,6 +1,6 @@
 //! Lambertian reflection, two-sided: it reflects on whichever side `wo` is (pbrt-v4's
 //! `DiffuseBxDF` with `SameHemisphere`), sampled by cosine-weighted hemisphere sampling.
-use super::{same_hemisphere, BsdfSample};
+use super::{same_hemisphere, BsdfSample, Bxdf, BxdfFlags, Lobes, TransportMode};
 use crate::math::{Vec2, Vec3};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
 use std::f32::consts::FRAC_1_PI;
@@ -20,9 +20,15 @@ impl Diffuse {
             reflectance: Vec3::new(clean(r.x), clean(r.y), clean(r.z)),
         }
     }
+}
+
+impl Bxdf for Diffuse {
+    fn flags(&self) -> BxdfFlags {
+        BxdfFlags::REFLECTION | BxdfFlags::DIFFUSE
+    }
 
     /// `R / pi` when `wo` and `wi` are on the same side, else 0.
-    pub fn f(&self, wo: Vec3, wi: Vec3) -> Vec3 {
+    fn f(&self, wo: Vec3, wi: Vec3, _: TransportMode) -> Vec3 {
         if same_hemisphere(wo, wi) {
             self.reflectance * FRAC_1_PI
         } else {
@@ -30,19 +36,17 @@ impl Diffuse {
         }
     }
 
-    /// `|cos(wi)| / pi` on the side of `wo`, else 0.
-    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        if same_hemisphere(wo, wi) {
-            cosine_hemisphere_pdf(wi.z.abs())
-        } else {
-            0.0
-        }
-    }
-
     /// Cosine-weighted direction on the side of `wo`; `u` uniform in `[0,1)^2`.
-    /// `None` for a black surface (nothing to sample).
-    pub fn sample(&self, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
-        if self.reflectance == Vec3::ZERO {
+    /// `None` for a black surface (nothing to sample) or when only transmission may be chosen.
+    fn sample(
+        &self,
+        wo: Vec3,
+        _: f32,
+        u: Vec2,
+        _: TransportMode,
+        lobes: Lobes,
+    ) -> Option<BsdfSample> {
+        if self.reflectance == Vec3::ZERO || lobes == Lobes::Transmission {
             return None;
         }
         let mut wi = square_to_cosine_hemisphere(u);
@@ -59,6 +63,23 @@ impl Diffuse {
             pdf_is_proportional: false,
             lobe_alpha: f32::INFINITY,
         })
+    }
+
+    /// `|cos(wi)| / pi` on the side of `wo`, else 0.
+    fn pdf(&self, wo: Vec3, wi: Vec3, _: TransportMode, lobes: Lobes) -> f32 {
+        if same_hemisphere(wo, wi) && lobes != Lobes::Transmission {
+            cosine_hemisphere_pdf(wi.z.abs())
+        } else {
+            0.0
+        }
+    }
+
+    fn reflectance_estimate(&self) -> Vec3 {
+        self.reflectance
+    }
+
+    fn normal_reflectance(&self) -> Vec3 {
+        self.reflectance
     }
 }
 
@@ -82,12 +103,18 @@ mod tests {
             let mut above_half = 0u32;
             let mut cos_sum = 0.0f64;
             for _ in 0..n {
-                let s = b.sample(wo, rng.vec2()).unwrap();
+                let s = b
+                    .sample(wo, 0.0, rng.vec2(), TransportMode::Radiance, Lobes::All)
+                    .unwrap();
                 assert!(s.wi.z * wo.z > 0.0, "sample on the wrong side");
                 assert!((s.wi.length() - 1.0).abs() < 1e-5);
                 let want = s.wi.z.abs() / PI;
-                assert!((s.pdf - want).abs() < 1e-6 && (b.pdf(wo, s.wi) - s.pdf).abs() < 1e-6);
-                assert_eq!(s.f, b.f(wo, s.wi));
+                assert!(
+                    (s.pdf - want).abs() < 1e-6
+                        && (b.pdf(wo, s.wi, TransportMode::Radiance, Lobes::All) - s.pdf).abs()
+                            < 1e-6
+                );
+                assert_eq!(s.f, b.f(wo, s.wi, TransportMode::Radiance));
                 above_half += (s.wi.z.abs() > 0.5) as u32;
                 cos_sum += s.wi.z.abs() as f64;
             }
@@ -113,7 +140,7 @@ mod tests {
         let xs: Vec<[f64; 3]> = (0..400_000)
             .map(|_| {
                 let wi = rng.hemisphere();
-                let v = b.f(wo, wi) * wi.z * (2.0 * PI);
+                let v = b.f(wo, wi, TransportMode::Radiance) * wi.z * (2.0 * PI);
                 [v.x as f64, v.y as f64, v.z as f64]
             })
             .collect();
@@ -131,14 +158,20 @@ mod tests {
             );
         }
         // Opposite sides never connect.
-        assert_eq!(b.f(wo, -wo), Vec3::ZERO);
-        assert_eq!(b.pdf(wo, -wo), 0.0);
+        assert_eq!(b.f(wo, -wo, TransportMode::Radiance), Vec3::ZERO);
+        assert_eq!(b.pdf(wo, -wo, TransportMode::Radiance, Lobes::All), 0.0);
     }
 
     #[test]
     fn black_and_bad_reflectance() {
         assert!(Diffuse::new(Vec3::ZERO)
-            .sample(Vec3::Z, Vec2::splat(0.5))
+            .sample(
+                Vec3::Z,
+                0.0,
+                Vec2::splat(0.5),
+                TransportMode::Radiance,
+                Lobes::All
+            )
             .is_none());
         let d = Diffuse::new(Vec3::new(f32::NAN, 2.0, -1.0));
         assert_eq!(d.reflectance, Vec3::new(0.0, 1.0, 0.0));

@@ -7,7 +7,7 @@
 //! Material "diffusetransmission" "rgb reflectance" [ 0.25 0.25 0.25 ]   # defaults 0.25
 //!     "rgb transmittance" [ 0.25 0.25 0.25 ] "float scale" [ 1 ]        # scales both
 //! ```
-use super::{same_hemisphere, BsdfSample, BxdfFlags, Lobes};
+use super::{same_hemisphere, BsdfSample, Bxdf, BxdfFlags, Lobes, TransportMode};
 use crate::math::{Vec2, Vec3};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
 use std::f32::consts::FRAC_1_PI;
@@ -33,7 +33,16 @@ impl DiffuseTransmission {
         }
     }
 
-    pub fn flags(&self) -> BxdfFlags {
+    fn probabilities(&self, lobes: Lobes) -> Option<(f32, f32)> {
+        lobes.choose(
+            self.reflectance.max_element(),
+            self.transmittance.max_element(),
+        )
+    }
+}
+
+impl Bxdf for DiffuseTransmission {
+    fn flags(&self) -> BxdfFlags {
         let mut f = BxdfFlags::default();
         if self.reflectance.max_element() > 0.0 {
             f = f | BxdfFlags::REFLECTION | BxdfFlags::DIFFUSE;
@@ -44,7 +53,8 @@ impl DiffuseTransmission {
         f
     }
 
-    pub fn f(&self, wo: Vec3, wi: Vec3) -> Vec3 {
+    /// `R / pi` on the side of `wo`, `T / pi` on the other side.
+    fn f(&self, wo: Vec3, wi: Vec3, _: TransportMode) -> Vec3 {
         if same_hemisphere(wo, wi) {
             self.reflectance * FRAC_1_PI
         } else if wo.z * wi.z < 0.0 {
@@ -54,23 +64,15 @@ impl DiffuseTransmission {
         }
     }
 
-    fn probabilities(&self, lobes: Lobes) -> Option<(f32, f32)> {
-        lobes.choose(
-            self.reflectance.max_element(),
-            self.transmittance.max_element(),
-        )
-    }
-
-    pub fn pdf(&self, wo: Vec3, wi: Vec3, lobes: Lobes) -> f32 {
-        let Some((pr, pt)) = self.probabilities(lobes) else {
-            return 0.0;
-        };
-        let side = if same_hemisphere(wo, wi) { pr } else { pt };
-        side * cosine_hemisphere_pdf(wi.z.abs())
-    }
-
     /// `uc` uniform in `[0, 1)` picks the side, `u` in `[0, 1)^2` the direction.
-    pub fn sample(&self, wo: Vec3, uc: f32, u: Vec2, lobes: Lobes) -> Option<BsdfSample> {
+    fn sample(
+        &self,
+        wo: Vec3,
+        uc: f32,
+        u: Vec2,
+        mode: TransportMode,
+        lobes: Lobes,
+    ) -> Option<BsdfSample> {
         let (pr, pt) = self.probabilities(lobes)?;
         let mut wi = square_to_cosine_hemisphere(u);
         let reflect = uc < pr;
@@ -82,12 +84,28 @@ impl DiffuseTransmission {
         let pdf = p * cosine_hemisphere_pdf(wi.z.abs());
         Some(BsdfSample::new(
             wi,
-            self.f(wo, wi),
+            self.f(wo, wi, mode),
             pdf,
             false,
             !reflect,
             1.0,
         ))
+    }
+
+    fn pdf(&self, wo: Vec3, wi: Vec3, _: TransportMode, lobes: Lobes) -> f32 {
+        let Some((pr, pt)) = self.probabilities(lobes) else {
+            return 0.0;
+        };
+        let side = if same_hemisphere(wo, wi) { pr } else { pt };
+        side * cosine_hemisphere_pdf(wi.z.abs())
+    }
+
+    fn reflectance_estimate(&self) -> Vec3 {
+        self.reflectance + self.transmittance
+    }
+
+    fn normal_reflectance(&self) -> Vec3 {
+        self.reflectance
     }
 }
 
@@ -111,7 +129,15 @@ mod tests {
             for c in 0..3 {
                 let (m, se, _) = sampled_albedo(
                     100_000,
-                    || b.sample(wo, rng.f32(), rng.vec2(), Lobes::All),
+                    || {
+                        b.sample(
+                            wo,
+                            rng.f32(),
+                            rng.vec2(),
+                            TransportMode::Radiance,
+                            Lobes::All,
+                        )
+                    },
                     c,
                 );
                 let want = (r[c] + t[c]) as f64;
@@ -123,7 +149,13 @@ mod tests {
         let lossless = DiffuseTransmission::new(Vec3::splat(0.3), Vec3::splat(0.7));
         for _ in 0..1000 {
             let s = lossless
-                .sample(wos()[1], rng.f32(), rng.vec2(), Lobes::All)
+                .sample(
+                    wos()[1],
+                    rng.f32(),
+                    rng.vec2(),
+                    TransportMode::Radiance,
+                    Lobes::All,
+                )
                 .unwrap();
             assert!((s.f.x * s.wi.z.abs() / s.pdf - 1.0).abs() < 1e-5);
         }
@@ -140,24 +172,46 @@ mod tests {
                 200_000,
                 bins,
                 || {
-                    b.sample(wo, rng.f32(), rng.vec2(), Lobes::All)
-                        .map(|s| s.wi)
+                    b.sample(
+                        wo,
+                        rng.f32(),
+                        rng.vec2(),
+                        TransportMode::Radiance,
+                        Lobes::All,
+                    )
+                    .map(|s| s.wi)
                 },
-                |wi| b.pdf(wo, wi, Lobes::All) as f64,
+                |wi| b.pdf(wo, wi, TransportMode::Radiance, Lobes::All) as f64,
             );
             assert!(p > 0.01 / 4.0, "p = {p}");
             for _ in 0..1000 {
-                let s = b.sample(wo, rng.f32(), rng.vec2(), Lobes::All).unwrap();
-                assert_eq!(s.f, b.f(wo, s.wi));
-                assert!((s.pdf - b.pdf(wo, s.wi, Lobes::All)).abs() < 1e-6);
+                let s = b
+                    .sample(
+                        wo,
+                        rng.f32(),
+                        rng.vec2(),
+                        TransportMode::Radiance,
+                        Lobes::All,
+                    )
+                    .unwrap();
+                assert_eq!(s.f, b.f(wo, s.wi, TransportMode::Radiance));
+                assert!(
+                    (s.pdf - b.pdf(wo, s.wi, TransportMode::Radiance, Lobes::All)).abs() < 1e-6
+                );
                 assert_eq!(s.transmission, s.wi.z * wo.z < 0.0);
-                assert_eq!(b.f(wo, s.wi), b.f(s.wi, wo));
+                assert_eq!(
+                    b.f(wo, s.wi, TransportMode::Radiance),
+                    b.f(s.wi, wo, TransportMode::Radiance)
+                );
             }
         }
         let up = spherical(0.5, 1.0);
         let down = -spherical(0.2, 3.0);
-        assert_eq!(b.f(up, down), b.transmittance / PI);
-        assert_eq!(b.f(up, spherical(1.0, 0.0)), b.reflectance / PI);
+        assert_eq!(b.f(up, down, TransportMode::Radiance), b.transmittance / PI);
+        assert_eq!(
+            b.f(up, spherical(1.0, 0.0), TransportMode::Radiance),
+            b.reflectance / PI
+        );
         let f = b.flags();
         assert!(f.has_diffuse() && f.contains(BxdfFlags::REFLECTION | BxdfFlags::TRANSMISSION));
         let t_only = DiffuseTransmission::new(Vec3::ZERO, Vec3::ONE).flags();

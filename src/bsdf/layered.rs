@@ -39,107 +39,15 @@
 //!     "float conductor.roughness" [ 0 ]          # or "rgb reflectance" instead of eta/k
 //!     "float thickness" [ 0.01 ] "rgb albedo" [ 0 0 0 ] "float g" [ 0 ] ...
 //! ```
-use super::{BsdfSample, BxdfFlags, Conductor, Dielectric, Diffuse, Lobes, TransportMode};
+use super::{BsdfSample, Bxdf, BxdfFlags, Conductor, Dielectric, Diffuse, Lobes, TransportMode};
 use crate::math::{Frame, Vec2, Vec3};
 use crate::sampling::power_heuristic;
 use crate::sampling::{hash, mix64, to_unit};
 use std::f32::consts::PI;
 
-/// One interface of the slab, as the random walk sees it.
-pub trait Layer {
-    fn flags(&self) -> BxdfFlags;
-    fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3;
-    /// A sample among `lobes`, only if it is usable ([`BsdfSample::is_valid`]). (Not named
-    /// `sample`: the interfaces' own `sample` methods would shadow it.)
-    fn sample_valid(
-        &self,
-        wo: Vec3,
-        uc: f32,
-        u: Vec2,
-        mode: TransportMode,
-        lobes: Lobes,
-    ) -> Option<BsdfSample>;
-    fn pdf(&self, wo: Vec3, wi: Vec3, lobes: Lobes) -> f32;
-}
-
-impl Layer for Dielectric {
-    fn flags(&self) -> BxdfFlags {
-        Dielectric::flags(self)
-    }
-    fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
-        Dielectric::f(self, wo, wi, mode)
-    }
-    fn sample_valid(
-        &self,
-        wo: Vec3,
-        uc: f32,
-        u: Vec2,
-        mode: TransportMode,
-        lobes: Lobes,
-    ) -> Option<BsdfSample> {
-        Dielectric::sample(self, wo, uc, u, mode, lobes).filter(BsdfSample::is_valid)
-    }
-    fn pdf(&self, wo: Vec3, wi: Vec3, lobes: Lobes) -> f32 {
-        Dielectric::pdf(self, wo, wi, lobes)
-    }
-}
-
-impl Layer for Diffuse {
-    fn flags(&self) -> BxdfFlags {
-        BxdfFlags::REFLECTION | BxdfFlags::DIFFUSE
-    }
-    fn f(&self, wo: Vec3, wi: Vec3, _: TransportMode) -> Vec3 {
-        Diffuse::f(self, wo, wi)
-    }
-    fn sample_valid(
-        &self,
-        wo: Vec3,
-        _: f32,
-        u: Vec2,
-        _: TransportMode,
-        l: Lobes,
-    ) -> Option<BsdfSample> {
-        (l != Lobes::Transmission)
-            .then(|| Diffuse::sample(self, wo, u))?
-            .filter(BsdfSample::is_valid)
-    }
-    fn pdf(&self, wo: Vec3, wi: Vec3, lobes: Lobes) -> f32 {
-        if lobes == Lobes::Transmission {
-            return 0.0;
-        }
-        Diffuse::pdf(self, wo, wi)
-    }
-}
-
-impl Layer for Conductor {
-    fn flags(&self) -> BxdfFlags {
-        if self.is_smooth() {
-            BxdfFlags::REFLECTION | BxdfFlags::SPECULAR
-        } else {
-            BxdfFlags::REFLECTION | BxdfFlags::GLOSSY
-        }
-    }
-    fn f(&self, wo: Vec3, wi: Vec3, _: TransportMode) -> Vec3 {
-        Conductor::f(self, wo, wi)
-    }
-    fn sample_valid(
-        &self,
-        wo: Vec3,
-        _: f32,
-        u: Vec2,
-        _: TransportMode,
-        l: Lobes,
-    ) -> Option<BsdfSample> {
-        (l != Lobes::Transmission)
-            .then(|| Conductor::sample(self, wo, u))?
-            .filter(BsdfSample::is_valid)
-    }
-    fn pdf(&self, wo: Vec3, wi: Vec3, lobes: Lobes) -> f32 {
-        if lobes == Lobes::Transmission {
-            return 0.0;
-        }
-        Conductor::pdf(self, wo, wi)
-    }
+/// A sample of `bxdf`, only if it is usable ([`BsdfSample::is_valid`]).
+fn valid(s: Option<BsdfSample>) -> Option<BsdfSample> {
+    s.filter(BsdfSample::is_valid)
 }
 
 /// The Henyey-Greenstein phase function in pbrt-v4's convention: both directions point away
@@ -211,11 +119,12 @@ fn tr(dz: f32, w: Vec3) -> f32 {
     (-(dz / w.z).abs()).exp()
 }
 
-/// A dielectric coat over the base `B` (see the module docs).
+/// A coat `Top` (in pbrt-v4, always a dielectric interface) over the base `Bottom`, both any
+/// [`Bxdf`] (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Layered<B> {
-    pub top: Dielectric,
-    pub bottom: B,
+pub struct Layered<Top, Bottom> {
+    pub top: Top,
+    pub bottom: Bottom,
     /// Slab thickness in units of the mean free path (> 0).
     pub thickness: f32,
     /// Single-scattering albedo of the slab medium, per channel in `[0, 1]`.
@@ -227,9 +136,9 @@ pub struct Layered<B> {
 }
 
 /// `coateddiffuse`.
-pub type CoatedDiffuse = Layered<Diffuse>;
+pub type CoatedDiffuse = Layered<Dielectric, Diffuse>;
 /// `coatedconductor`.
-pub type CoatedConductor = Layered<Conductor>;
+pub type CoatedConductor = Layered<Dielectric, Conductor>;
 
 /// The state of one random walk in `sample`: path throughput and density, direction, height
 /// and whether every event so far was a delta one.
@@ -248,13 +157,13 @@ struct Walk {
     z: f32,
 }
 
-impl<B: Layer + Copy> Layered<B> {
+impl<Top: Bxdf + Copy, Bottom: Bxdf + Copy> Layered<Top, Bottom> {
     /// A coat `top` over `bottom`. Parameters are sanitised as pbrt-v4 does: `thickness` at
     /// least the smallest normal float, `albedo` clamped to `[0, 1]`, `g` to `[-1, 1]`;
     /// non-finite values read as the defaults (0.01, 0, 0).
     pub fn new(
-        top: Dielectric,
-        bottom: B,
+        top: Top,
+        bottom: Bottom,
         thickness: f32,
         albedo: Vec3,
         g: f32,
@@ -280,37 +189,6 @@ impl<B: Layer + Copy> Layered<B> {
 
     fn phase(&self) -> HenyeyGreenstein {
         HenyeyGreenstein { g: self.g }
-    }
-
-    /// pbrt-v4's flags of a layered BSDF whose base is opaque.
-    pub fn flags(&self) -> BxdfFlags {
-        use BxdfFlags as F;
-        let (top, bottom) = (self.top.flags(), self.bottom.flags());
-        let mut flags = F::REFLECTION;
-        if top.has_specular() {
-            flags = flags | F::SPECULAR;
-        }
-        if top.has_diffuse() || bottom.has_diffuse() || self.has_medium() {
-            flags = flags | F::DIFFUSE;
-        } else if top.has_glossy() || bottom.has_glossy() {
-            flags = flags | F::GLOSSY;
-        }
-        flags
-    }
-
-    /// Stochastic estimate of the BSDF for `(wo, wi)` (deterministic for a given pair).
-    pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
-        let (wo, wi) = if wo.z < 0.0 { (-wo, -wi) } else { (wo, wi) };
-        if wi.z <= 0.0 {
-            return Vec3::ZERO; // the base is opaque: no transmission
-        }
-        let n = self.n_samples;
-        let mut f = self.top.f(wo, wi, mode) * n as f32;
-        let mut rng = WalkRng::new(wo, wi, 0.0, 0x4C41_5945_5246);
-        for _ in 0..n {
-            f += self.f_walk(wo, wi, mode, &mut rng);
-        }
-        f / n as f32
     }
 
     /// The coat's own reflection, the first term of [`Self::f`] (exact, deterministic):
@@ -351,7 +229,7 @@ impl<B: Layer + Copy> Layered<B> {
     ) -> Option<BsdfSample> {
         let flip = wo.z < 0.0;
         let wo = if flip { -wo } else { wo };
-        let bs = self.top.sample_valid(wo, uc, u, mode, Lobes::Reflection)?;
+        let bs = valid(self.top.sample(wo, uc, u, mode, Lobes::Reflection))?;
         Some(BsdfSample {
             wi: if flip { -bs.wi } else { bs.wi },
             ..bs
@@ -364,7 +242,8 @@ impl<B: Layer + Copy> Layered<B> {
         if wi.z <= 0.0 {
             return 0.0;
         }
-        self.top.pdf(wo, wi, Lobes::Reflection)
+        self.top
+            .pdf(wo, wi, TransportMode::Radiance, Lobes::Reflection)
     }
 
     /// One random walk of `f`: enter through the coat along `wo`, leave along `wi`, with
@@ -372,10 +251,10 @@ impl<B: Layer + Copy> Layered<B> {
     fn f_walk(&self, wo: Vec3, wi: Vec3, mode: TransportMode, rng: &mut WalkRng) -> Vec3 {
         let top = &self.top;
         let t = Lobes::Transmission;
-        let Some(wos) = top.sample_valid(wo, rng.next(), rng.next2(), mode, t) else {
+        let Some(wos) = valid(top.sample(wo, rng.next(), rng.next2(), mode, t)) else {
             return Vec3::ZERO;
         };
-        let Some(wis) = top.sample_valid(wi, rng.next(), rng.next2(), mode.flip(), t) else {
+        let Some(wis) = valid(top.sample(wi, rng.next(), rng.next2(), mode.flip(), t)) else {
             return Vec3::ZERO;
         };
         let mut walk = Walk {
@@ -459,7 +338,7 @@ impl<B: Layer + Copy> Layered<B> {
         if top_rough && w_new.z > 0.0 {
             let f_exit = self.top.f(-w_new, wi, mode);
             if f_exit.max_element() > 0.0 {
-                let exit_pdf = self.top.pdf(wi, -w_new, Lobes::Transmission);
+                let exit_pdf = self.top.pdf(wi, -w_new, mode, Lobes::Transmission);
                 let wt = power_heuristic(p, exit_pdf);
                 *f += walk.beta * tr(zp - exit_z, w_new) * f_exit * wt;
             }
@@ -470,10 +349,7 @@ impl<B: Layer + Copy> Layered<B> {
     /// Internal reflection at the coat (no NEE there: the NEE happened below).
     fn reflect_at_top(&self, walk: &mut Walk, mode: TransportMode, rng: &mut WalkRng) -> bool {
         let r = Lobes::Reflection;
-        let Some(bs) = self
-            .top
-            .sample_valid(-walk.w, rng.next(), rng.next2(), mode, r)
-        else {
+        let Some(bs) = valid(self.top.sample(-walk.w, rng.next(), rng.next2(), mode, r)) else {
             return false;
         };
         walk.beta *= bs.f * bs.wi.z.abs() / bs.pdf;
@@ -498,7 +374,7 @@ impl<B: Layer + Copy> Layered<B> {
         let w = walk.w;
         if bottom_rough {
             let wt = if top_rough {
-                power_heuristic(wis.pdf, bottom.pdf(-w, -wis.wi, Lobes::All))
+                power_heuristic(wis.pdf, bottom.pdf(-w, -wis.wi, mode, Lobes::All))
             } else {
                 1.0
             };
@@ -508,7 +384,7 @@ impl<B: Layer + Copy> Layered<B> {
                 * wis.f;
         }
         let r = Lobes::Reflection;
-        let Some(bs) = bottom.sample_valid(-w, rng.next(), rng.next2(), mode, r) else {
+        let Some(bs) = valid(bottom.sample(-w, rng.next(), rng.next2(), mode, r)) else {
             return false;
         };
         walk.beta *= bs.f * bs.wi.z.abs() / bs.pdf;
@@ -517,7 +393,7 @@ impl<B: Layer + Copy> Layered<B> {
             let f_exit = top.f(-bs.wi, wi, mode);
             if f_exit.max_element() > 0.0 {
                 let wt = if bottom_rough {
-                    power_heuristic(bs.pdf, top.pdf(wi, -bs.wi, Lobes::Transmission))
+                    power_heuristic(bs.pdf, top.pdf(wi, -bs.wi, mode, Lobes::Transmission))
                 } else {
                     1.0
                 };
@@ -527,13 +403,105 @@ impl<B: Layer + Copy> Layered<B> {
         true
     }
 
+    /// A free flight of `sample`'s walk in the slab medium: `Some(true)` after a scattering
+    /// event inside, `Some(false)` on reaching an interface (`z` set to it), `None` when the
+    /// path is lost.
+    fn sample_medium(&self, p: &mut PathWalk, rng: &mut WalkRng) -> Option<bool> {
+        let dz = -(1.0 - rng.next()).ln() * p.w.z.abs();
+        let zp = if p.w.z > 0.0 { p.z + dz } else { p.z - dz };
+        if zp == p.z {
+            return None;
+        }
+        if !(0.0 < zp && zp < self.thickness) {
+            p.z = zp.clamp(0.0, self.thickness);
+            return Some(false);
+        }
+        let (wi, phase) = self.phase().sample(-p.w, rng.next2());
+        if phase == 0.0 || wi.z == 0.0 {
+            return None;
+        }
+        p.f *= self.albedo * phase;
+        p.pdf *= phase;
+        p.specular = false;
+        p.w = wi;
+        p.z = zp;
+        Some(true)
+    }
+
+    /// One estimate of the density of a transmission-reflection-transmission path.
+    fn pdf_trt(&self, wo: Vec3, wi: Vec3, mode: TransportMode, rng: &mut WalkRng) -> f32 {
+        let (top, bottom) = (&self.top, &self.bottom);
+        let t = Lobes::Transmission;
+        let wos = valid(top.sample(wo, rng.next(), rng.next2(), mode, t));
+        let wis = valid(top.sample(wi, rng.next(), rng.next2(), mode.flip(), t));
+        let (Some(wos), Some(wis)) = (wos, wis) else {
+            return 0.0;
+        };
+        if !top.flags().has_non_specular() {
+            return bottom.pdf(-wos.wi, -wis.wi, mode, Lobes::All);
+        }
+        let Some(rs) = valid(bottom.sample(-wos.wi, rng.next(), rng.next2(), mode, Lobes::All))
+        else {
+            return 0.0;
+        };
+        if !bottom.flags().has_non_specular() {
+            return top.pdf(-rs.wi, wi, mode, Lobes::All);
+        }
+        let r_pdf = bottom.pdf(-wos.wi, -wis.wi, mode, Lobes::All);
+        let t_pdf = top.pdf(-rs.wi, wi, mode, Lobes::All);
+        power_heuristic(wis.pdf, r_pdf) * r_pdf + power_heuristic(rs.pdf, t_pdf) * t_pdf
+    }
+}
+
+impl<Top: Bxdf + Copy, Bottom: Bxdf + Copy> Bxdf for Layered<Top, Bottom> {
+    /// pbrt-v4's flags of a layered BSDF whose base is opaque.
+    fn flags(&self) -> BxdfFlags {
+        use BxdfFlags as F;
+        let (top, bottom) = (self.top.flags(), self.bottom.flags());
+        let mut flags = F::REFLECTION;
+        if top.has_specular() {
+            flags = flags | F::SPECULAR;
+        }
+        if top.has_diffuse() || bottom.has_diffuse() || self.has_medium() {
+            flags = flags | F::DIFFUSE;
+        } else if top.has_glossy() || bottom.has_glossy() {
+            flags = flags | F::GLOSSY;
+        }
+        flags
+    }
+
+    /// Stochastic estimate of the BSDF for `(wo, wi)` (deterministic for a given pair).
+    fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+        let (wo, wi) = if wo.z < 0.0 { (-wo, -wi) } else { (wo, wi) };
+        if wi.z <= 0.0 {
+            return Vec3::ZERO; // the base is opaque: no transmission
+        }
+        let n = self.n_samples;
+        let mut f = self.top.f(wo, wi, mode) * n as f32;
+        let mut rng = WalkRng::new(wo, wi, 0.0, 0x4C41_5945_5246);
+        for _ in 0..n {
+            f += self.f_walk(wo, wi, mode, &mut rng);
+        }
+        f / n as f32
+    }
+
     /// Samples one random walk: reflection at the coat, or a path through the slab that
     /// leaves through the coat. `f` and `pdf` are the path's throughput and density.
-    pub fn sample(&self, wo: Vec3, uc: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+    fn sample(
+        &self,
+        wo: Vec3,
+        uc: f32,
+        u: Vec2,
+        mode: TransportMode,
+        lobes: Lobes,
+    ) -> Option<BsdfSample> {
+        if lobes == Lobes::Transmission {
+            return None; // the base is opaque
+        }
         let flip = wo.z < 0.0;
         let wo = if flip { -wo } else { wo };
         let unflip = |w: Vec3| if flip { -w } else { w };
-        let bs = self.top.sample_valid(wo, uc, u, mode, Lobes::All)?;
+        let bs = valid(self.top.sample(wo, uc, u, mode, Lobes::All))?;
         if !bs.transmission {
             return Some(BsdfSample {
                 wi: unflip(bs.wi),
@@ -575,9 +543,9 @@ impl<B: Layer + Copy> Layered<B> {
             }
             let (uc, u) = (rng.next(), rng.next2());
             let bs = if p.z == 0.0 {
-                self.bottom.sample_valid(-p.w, uc, u, mode, Lobes::All)
+                valid(self.bottom.sample(-p.w, uc, u, mode, Lobes::All))
             } else {
-                self.top.sample_valid(-p.w, uc, u, mode, Lobes::All)
+                valid(self.top.sample(-p.w, uc, u, mode, Lobes::All))
             }?;
             p.f *= bs.f;
             p.pdf *= bs.pdf;
@@ -594,39 +562,17 @@ impl<B: Layer + Copy> Layered<B> {
         None
     }
 
-    /// A free flight of `sample`'s walk in the slab medium: `Some(true)` after a scattering
-    /// event inside, `Some(false)` on reaching an interface (`z` set to it), `None` when the
-    /// path is lost.
-    fn sample_medium(&self, p: &mut PathWalk, rng: &mut WalkRng) -> Option<bool> {
-        let dz = -(1.0 - rng.next()).ln() * p.w.z.abs();
-        let zp = if p.w.z > 0.0 { p.z + dz } else { p.z - dz };
-        if zp == p.z {
-            return None;
-        }
-        if !(0.0 < zp && zp < self.thickness) {
-            p.z = zp.clamp(0.0, self.thickness);
-            return Some(false);
-        }
-        let (wi, phase) = self.phase().sample(-p.w, rng.next2());
-        if phase == 0.0 || wi.z == 0.0 {
-            return None;
-        }
-        p.f *= self.albedo * phase;
-        p.pdf *= phase;
-        p.specular = false;
-        p.w = wi;
-        p.z = zp;
-        Some(true)
-    }
-
     /// Stochastic estimate of the density of `wi` (pbrt-v4's: the coat's reflection, the
     /// transmission-reflection-transmission paths by MIS, mixed 9:1 with a uniform density).
-    pub fn pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> f32 {
+    fn pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode, lobes: Lobes) -> f32 {
+        if lobes == Lobes::Transmission {
+            return 0.0;
+        }
         let (wo, wi) = if wo.z < 0.0 { (-wo, -wi) } else { (wo, wi) };
         let n = self.n_samples as f32;
         let mut sum = 0.0;
         if wi.z > 0.0 {
-            sum += n * self.top.pdf(wo, wi, Lobes::Reflection);
+            sum += n * self.top.pdf(wo, wi, mode, Lobes::Reflection);
             let mut rng = WalkRng::new(wi, wo, 0.0, 0x5044_4650_4446);
             for _ in 0..self.n_samples {
                 sum += self.pdf_trt(wo, wi, mode, &mut rng);
@@ -635,35 +581,14 @@ impl<B: Layer + Copy> Layered<B> {
         0.1 / (4.0 * PI) + 0.9 * sum / n
     }
 
-    /// One estimate of the density of a transmission-reflection-transmission path.
-    fn pdf_trt(&self, wo: Vec3, wi: Vec3, mode: TransportMode, rng: &mut WalkRng) -> f32 {
-        let (top, bottom) = (&self.top, &self.bottom);
-        let t = Lobes::Transmission;
-        let wos = top.sample_valid(wo, rng.next(), rng.next2(), mode, t);
-        let wis = top.sample_valid(wi, rng.next(), rng.next2(), mode.flip(), t);
-        let (Some(wos), Some(wis)) = (wos, wis) else {
-            return 0.0;
-        };
-        if !top.flags().has_non_specular() {
-            return bottom.pdf(-wos.wi, -wis.wi, Lobes::All);
-        }
-        let Some(rs) = bottom.sample_valid(-wos.wi, rng.next(), rng.next2(), mode, Lobes::All)
-        else {
-            return 0.0;
-        };
-        if !bottom.flags().has_non_specular() {
-            return top.pdf(-rs.wi, wi, Lobes::All);
-        }
-        let r_pdf = bottom.pdf(-wos.wi, -wis.wi, Lobes::All);
-        let t_pdf = top.pdf(-rs.wi, wi, Lobes::All);
-        power_heuristic(wis.pdf, r_pdf) * r_pdf + power_heuristic(rs.pdf, t_pdf) * t_pdf
+    fn reflectance_estimate(&self) -> Vec3 {
+        self.normal_reflectance()
     }
 
-    /// A rough albedo for Russian roulette: the coat's normal-incidence reflectance plus what
-    /// it transmits times the base's estimate.
-    pub fn reflectance_estimate(&self, base: Vec3) -> Vec3 {
-        let r0 = super::fresnel::fr_dielectric(1.0, self.top.eta);
-        Vec3::splat(r0) + (1.0 - r0) * base
+    /// The coat's normal-incidence reflectance plus what it transmits times the base's.
+    fn normal_reflectance(&self) -> Vec3 {
+        let r0 = self.top.normal_reflectance();
+        r0 + (Vec3::ONE - r0) * self.bottom.normal_reflectance()
     }
 }
 
@@ -729,11 +654,14 @@ mod tests {
         let b = coated_diffuse(0.6, 0.2, 0.1, 0.5, 0.3);
         let (wo, wi) = (spherical(0.4, 0.1), spherical(0.9, 2.0));
         assert_eq!(b.f(wo, wi, RAD), b.f(wo, wi, RAD));
-        assert_eq!(b.pdf(wo, wi, RAD), b.pdf(wo, wi, RAD));
+        assert_eq!(
+            b.pdf(wo, wi, RAD, Lobes::All),
+            b.pdf(wo, wi, RAD, Lobes::All)
+        );
         let wi2 = spherical(0.9, 2.001);
         assert_ne!(b.f(wo, wi, RAD), b.f(wo, wi2, RAD));
-        let s = b.sample(wo, 0.7, Vec2::new(0.2, 0.9), RAD);
-        assert_eq!(s, b.sample(wo, 0.7, Vec2::new(0.2, 0.9), RAD));
+        let s = b.sample(wo, 0.7, Vec2::new(0.2, 0.9), RAD, Lobes::All);
+        assert_eq!(s, b.sample(wo, 0.7, Vec2::new(0.2, 0.9), RAD, Lobes::All));
         // Opaque: nothing through the surface; two-sided.
         assert_eq!(b.f(wo, -wi, RAD), Vec3::ZERO);
         assert_eq!(b.f(-wo, -wi, RAD), b.f(wo, wi, RAD));
@@ -741,8 +669,8 @@ mod tests {
 
     /// `integral f(wo, wi) |cos wi| dwi` over the upper hemisphere by cosine-weighted `wi`
     /// (the stochastic f averaged over many directions), green channel.
-    fn albedo_from_f<B: Layer + Copy>(
-        b: &Layered<B>,
+    fn albedo_from_f<B: Bxdf + Copy>(
+        b: &Layered<Dielectric, B>,
         wo: Vec3,
         n: usize,
         rng: &mut Rng,
@@ -976,7 +904,7 @@ mod tests {
                 let (s_albedo, s_se, _) = sampled_albedo(
                     n,
                     || {
-                        b.sample(wo, rng.f32(), rng.vec2(), RAD)
+                        b.sample(wo, rng.f32(), rng.vec2(), RAD, Lobes::All)
                             .filter(|s| !s.specular)
                     },
                     1,
@@ -1309,7 +1237,7 @@ mod tests {
                 let n = 200_000;
                 let mut exits = Vec::with_capacity(n);
                 while exits.len() < n {
-                    let Some(s) = b.sample(wo, rng.f32(), rng.vec2(), RAD) else {
+                    let Some(s) = b.sample(wo, rng.f32(), rng.vec2(), RAD, Lobes::All) else {
                         continue;
                     };
                     if !s.specular {

@@ -30,6 +30,7 @@
 //! `|cos wi|` (and by `eta^2` for radiance through a refraction), `pdf` the discrete lobe
 //! probability, so `f |cos wi| / pdf` is the path throughput weight; `f()` and `pdf()` are 0
 //! for them.
+mod bxdf;
 pub mod conductor;
 pub mod dielectric;
 pub mod diffuse;
@@ -43,6 +44,7 @@ mod warp;
 #[cfg(test)]
 pub(crate) mod testutil;
 
+pub use bxdf::{BsdfSample, Bxdf, BxdfFlags, Lobes, TransportMode};
 pub use conductor::Conductor;
 pub use dielectric::Dielectric;
 pub use diffuse::Diffuse;
@@ -54,176 +56,6 @@ pub use thin_dielectric::ThinDielectric;
 use crate::math::{Vec2, Vec3};
 use crate::scene::{Coat, MaterialKind, Metal, Roughness};
 use crate::texture::TexCoord;
-
-/// What a path carries: radiance (camera paths) or importance (photons). Only refraction
-/// through a delta interface differs: radiance is scaled by `1 / eta^2`, importance is not.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum TransportMode {
-    Radiance,
-    Importance,
-}
-
-impl TransportMode {
-    /// The adjoint mode (pbrt-v4's `!mode`): what a path traced from the other end carries.
-    pub fn flip(self) -> TransportMode {
-        match self {
-            TransportMode::Radiance => TransportMode::Importance,
-            TransportMode::Importance => TransportMode::Radiance,
-        }
-    }
-}
-
-/// Which lobes a sampling routine may choose (pbrt-v4's `BxDFReflTransFlags`); the layered
-/// BSDF restricts its interfaces to one side. The pdf of a restricted sampler is the density
-/// of that restricted choice.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Lobes {
-    All,
-    Reflection,
-    Transmission,
-}
-
-impl Lobes {
-    /// Probabilities of choosing reflection and transmission, given their weights `r`, `t`;
-    /// `None` when nothing may be chosen.
-    pub(crate) fn choose(self, r: f32, t: f32) -> Option<(f32, f32)> {
-        let pr = if self == Lobes::Transmission { 0.0 } else { r };
-        let pt = if self == Lobes::Reflection { 0.0 } else { t };
-        let sum = pr + pt;
-        (sum > 0.0).then(|| (pr / sum, pt / sum))
-    }
-}
-
-/// One sampled scattering direction.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BsdfSample {
-    /// Sampled unit direction (local frame).
-    pub wi: Vec3,
-    /// BSDF value for `(wo, wi)` (for a delta lobe: Fresnel / |cos wi|, see the module docs).
-    pub f: Vec3,
-    /// Solid-angle density of `wi`, or the discrete lobe probability for a delta lobe.
-    pub pdf: f32,
-    /// A delta lobe (mirror reflection or refraction).
-    pub specular: bool,
-    /// `wi` is on the other side of the surface from `wo`.
-    pub transmission: bool,
-    /// Relative index of refraction crossed (`eta` entering, `1/eta` leaving); 1 for
-    /// reflection.
-    pub eta: f32,
-    /// `pdf` is only proportional to the density of `wi` (the layered BSDF returns the
-    /// density of one random-walk path; `f / pdf` is still the right throughput weight, and
-    /// [`Bsdf::pdf`] gives the density for multiple importance sampling).
-    pub pdf_is_proportional: bool,
-    /// The GGX alpha (the smaller of the two) of the lobe that produced the sample: 0 for a
-    /// delta lobe, infinity for a diffuse lobe or a walk through a coat's layer. The photon
-    /// tracer calls a bounce sharp below `glossyalpha` and glossy while finite.
-    pub lobe_alpha: f32,
-}
-
-impl BsdfSample {
-    /// A sample with `pdf_is_proportional` false.
-    /// `wi` is on the other side of the surface from `wo` when `wi.z * wo.z < 0`; the caller
-    /// says so in `transmission`.
-    pub(crate) fn new(
-        wi: Vec3,
-        f: Vec3,
-        pdf: f32,
-        specular: bool,
-        transmission: bool,
-        eta: f32,
-    ) -> BsdfSample {
-        BsdfSample {
-            wi,
-            f,
-            pdf,
-            specular,
-            transmission,
-            eta,
-            pdf_is_proportional: false,
-            lobe_alpha: if specular { 0.0 } else { f32::INFINITY },
-        }
-    }
-
-    /// The same sample, produced by a microfacet lobe of GGX alpha `a` (when not a delta one).
-    pub(crate) fn with_alpha(self, a: f32) -> BsdfSample {
-        BsdfSample {
-            lobe_alpha: if self.specular { 0.0 } else { a },
-            ..self
-        }
-    }
-
-    /// True for a usable sample: positive finite pdf, non-zero finite f, `wi` off the surface.
-    pub(crate) fn is_valid(&self) -> bool {
-        self.pdf > 0.0
-            && self.pdf.is_finite()
-            && self.wi.z != 0.0
-            && self.f.is_finite()
-            && self.f.max_element() > 0.0
-    }
-}
-
-/// What lobes a BSDF has, as pbrt-v4's `BxDFFlags`: reflection and/or transmission, each
-/// diffuse, glossy or specular (delta). Integrators and the photon tracer decide from these
-/// alone where photons are stored (diffuse lobes), where light is sampled (any non-delta
-/// lobe), and what is traced onwards (specular and glossy lobes), so a new material never
-/// touches them.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct BxdfFlags(u8);
-
-impl BxdfFlags {
-    pub const REFLECTION: BxdfFlags = BxdfFlags(1);
-    pub const TRANSMISSION: BxdfFlags = BxdfFlags(2);
-    pub const DIFFUSE: BxdfFlags = BxdfFlags(4);
-    pub const GLOSSY: BxdfFlags = BxdfFlags(8);
-    pub const SPECULAR: BxdfFlags = BxdfFlags(16);
-
-    pub const fn union(self, other: BxdfFlags) -> BxdfFlags {
-        BxdfFlags(self.0 | other.0)
-    }
-
-    pub fn contains(self, other: BxdfFlags) -> bool {
-        self.0 & other.0 == other.0
-    }
-
-    /// A Lambertian (diffuse) lobe: photons are stored and gathered here.
-    pub fn has_diffuse(self) -> bool {
-        self.contains(BxdfFlags::DIFFUSE)
-    }
-
-    /// A rough, non-Lambertian lobe: direct lighting uses MIS with BSDF sampling.
-    pub fn has_glossy(self) -> bool {
-        self.contains(BxdfFlags::GLOSSY)
-    }
-
-    /// A delta lobe (mirror, smooth glass).
-    pub fn has_specular(self) -> bool {
-        self.contains(BxdfFlags::SPECULAR)
-    }
-
-    /// A lobe that light sampling can reach (diffuse or glossy).
-    pub fn has_non_specular(self) -> bool {
-        self.has_diffuse() || self.has_glossy()
-    }
-
-    /// Only delta lobes.
-    pub fn is_specular_only(self) -> bool {
-        self.has_specular() && !self.has_non_specular()
-    }
-}
-
-impl std::ops::BitOr for BxdfFlags {
-    type Output = BxdfFlags;
-    fn bitor(self, other: BxdfFlags) -> BxdfFlags {
-        self.union(other)
-    }
-}
-
-impl std::ops::BitAnd for BxdfFlags {
-    type Output = BxdfFlags;
-    fn bitand(self, other: BxdfFlags) -> BxdfFlags {
-        BxdfFlags(self.0 & other.0)
-    }
-}
 
 /// pbrt-v4's conductor from reflectance: k = 2 sqrt(r) / sqrt(1 - r), with r at most 1 - 1e-7
 /// (so that k stays finite): its normal-incidence reflectance with eta = 1 is r.
@@ -337,6 +169,21 @@ impl MaterialKind {
     }
 }
 
+/// Calls `$call` on the model inside a [`Bsdf`] (one closed-enum dispatch per method).
+macro_rules! dispatch {
+    ($bsdf:expr, $b:ident => $call:expr) => {
+        match $bsdf {
+            Bsdf::Diffuse($b) => $call,
+            Bsdf::Dielectric($b) => $call,
+            Bsdf::Conductor($b) => $call,
+            Bsdf::ThinDielectric($b) => $call,
+            Bsdf::DiffuseTransmission($b) => $call,
+            Bsdf::CoatedDiffuse($b) => $call,
+            Bsdf::CoatedConductor($b) => $call,
+        }
+    };
+}
+
 /// The BSDF at a surface point (a closed set; no dynamic dispatch).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Bsdf {
@@ -365,12 +212,12 @@ fn conductor(metal: &Metal, roughness: &Roughness, outside: f32, tc: &TexCoord) 
 }
 
 /// The layered BSDF at `tc` of a coat of `roughness` over `base`.
-fn coated<B: layered::Layer + Copy>(
+fn coated<B: Bxdf + Copy>(
     c: &Coat,
     roughness: &Roughness,
     base: B,
     tc: &TexCoord,
-) -> layered::Layered<B> {
+) -> layered::Layered<Dielectric, B> {
     let (au, av) = roughness.eval(tc);
     let top = Dielectric::rough(c.eta, au, av);
     let (thickness, g) = (c.thickness.eval_float(tc), c.g.eval_float(tc));
@@ -434,15 +281,7 @@ impl Bsdf {
         if wo.z == 0.0 {
             return Vec3::ZERO;
         }
-        match self {
-            Bsdf::Diffuse(b) => b.f(wo, wi),
-            Bsdf::Dielectric(b) => b.f(wo, wi, mode),
-            Bsdf::Conductor(b) => b.f(wo, wi),
-            Bsdf::ThinDielectric(_) => Vec3::ZERO,
-            Bsdf::DiffuseTransmission(b) => b.f(wo, wi),
-            Bsdf::CoatedDiffuse(b) => b.f(wo, wi, mode),
-            Bsdf::CoatedConductor(b) => b.f(wo, wi, mode),
-        }
+        dispatch!(self, b => b.f(wo, wi, mode))
     }
 
     /// Solid-angle density with which [`Self::sample`] picks `wi`; 0 for delta lobes. For the
@@ -452,15 +291,7 @@ impl Bsdf {
             return 0.0;
         }
         let mode = TransportMode::Radiance; // no density here depends on it
-        match self {
-            Bsdf::Diffuse(b) => b.pdf(wo, wi),
-            Bsdf::Dielectric(b) => b.pdf(wo, wi, Lobes::All),
-            Bsdf::Conductor(b) => b.pdf(wo, wi),
-            Bsdf::ThinDielectric(_) => 0.0,
-            Bsdf::DiffuseTransmission(b) => b.pdf(wo, wi, Lobes::All),
-            Bsdf::CoatedDiffuse(b) => b.pdf(wo, wi, mode),
-            Bsdf::CoatedConductor(b) => b.pdf(wo, wi, mode),
-        }
+        dispatch!(self, b => b.pdf(wo, wi, mode, Lobes::All))
     }
 
     /// Samples an incident direction for `wo`.
@@ -475,15 +306,7 @@ impl Bsdf {
         if wo.z == 0.0 || !wo.is_finite() {
             return None;
         }
-        let s = match self {
-            Bsdf::Diffuse(b) => b.sample(wo, u),
-            Bsdf::Dielectric(b) => b.sample(wo, uc, u, mode, Lobes::All),
-            Bsdf::Conductor(b) => b.sample(wo, u),
-            Bsdf::ThinDielectric(b) => b.sample(wo, uc, Lobes::All),
-            Bsdf::DiffuseTransmission(b) => b.sample(wo, uc, u, Lobes::All),
-            Bsdf::CoatedDiffuse(b) => b.sample(wo, uc, u, mode),
-            Bsdf::CoatedConductor(b) => b.sample(wo, uc, u, mode),
-        }?;
+        let s = dispatch!(self, b => b.sample(wo, uc, u, mode, Lobes::All))?;
         s.is_valid().then_some(s)
     }
 
@@ -503,17 +326,7 @@ impl Bsdf {
 
     /// The lobes this BSDF has.
     pub fn flags(&self) -> BxdfFlags {
-        use BxdfFlags as F;
-        match self {
-            Bsdf::Diffuse(_) => F::REFLECTION | F::DIFFUSE,
-            Bsdf::Dielectric(b) => b.flags(),
-            Bsdf::Conductor(c) if c.is_smooth() => F::REFLECTION | F::SPECULAR,
-            Bsdf::Conductor(_) => F::REFLECTION | F::GLOSSY,
-            Bsdf::ThinDielectric(_) => F::REFLECTION | F::TRANSMISSION | F::SPECULAR,
-            Bsdf::DiffuseTransmission(b) => b.flags(),
-            Bsdf::CoatedDiffuse(b) => b.flags(),
-            Bsdf::CoatedConductor(b) => b.flags(),
-        }
+        dispatch!(self, b => b.flags())
     }
 
     /// The smaller GGX alpha of a single rough microfacet lobe (a rough conductor or
@@ -595,14 +408,7 @@ impl Bsdf {
     /// transmission, and for a coat its normal-incidence reflectance plus the rest times the
     /// base's estimate.
     pub fn reflectance_estimate(&self) -> Vec3 {
-        match self {
-            Bsdf::Diffuse(b) => b.reflectance,
-            Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => Vec3::ONE,
-            Bsdf::Conductor(c) => c.normal_reflectance(),
-            Bsdf::DiffuseTransmission(b) => b.reflectance + b.transmittance,
-            Bsdf::CoatedDiffuse(b) => b.reflectance_estimate(b.bottom.reflectance),
-            Bsdf::CoatedConductor(b) => b.reflectance_estimate(b.bottom.normal_reflectance()),
-        }
+        dispatch!(self, b => b.reflectance_estimate())
     }
 }
 

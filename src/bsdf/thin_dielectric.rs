@@ -9,8 +9,8 @@
 //! Material "thindielectric" "float eta" [ 1.5 ]
 //! ```
 use super::fresnel::fr_dielectric;
-use super::{BsdfSample, Lobes};
-use crate::math::Vec3;
+use super::{BsdfSample, Bxdf, BxdfFlags, Lobes, TransportMode};
+use crate::math::{Vec2, Vec3};
 
 /// A thin dielectric sheet of relative index `eta`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -42,10 +42,19 @@ impl ThinDielectric {
         let r = r + t * t * r / (1.0 - r * r);
         (r, 1.0 - r)
     }
+}
 
+impl Bxdf for ThinDielectric {
     /// Samples the mirror direction (probability `R'`) or the straight-through one with `uc`
     /// uniform in `[0, 1)`; `f` is `R' / |cos wi|` or `T' / |cos wi|`.
-    pub fn sample(&self, wo: Vec3, uc: f32, lobes: Lobes) -> Option<BsdfSample> {
+    fn sample(
+        &self,
+        wo: Vec3,
+        uc: f32,
+        _: Vec2,
+        _: TransportMode,
+        lobes: Lobes,
+    ) -> Option<BsdfSample> {
         let (r, t) = self.reflect_transmit(wo.z);
         let (pr, pt) = lobes.choose(r, t)?;
         if uc < pr {
@@ -68,6 +77,27 @@ impl ThinDielectric {
             true,
             1.0,
         ))
+    }
+
+    /// Both lobes are deltas: 0.
+    fn f(&self, _: Vec3, _: Vec3, _: TransportMode) -> Vec3 {
+        Vec3::ZERO
+    }
+
+    fn pdf(&self, _: Vec3, _: Vec3, _: TransportMode, _: Lobes) -> f32 {
+        0.0
+    }
+
+    fn flags(&self) -> BxdfFlags {
+        BxdfFlags::REFLECTION | BxdfFlags::TRANSMISSION | BxdfFlags::SPECULAR
+    }
+
+    fn reflectance_estimate(&self) -> Vec3 {
+        Vec3::ONE
+    }
+
+    fn normal_reflectance(&self) -> Vec3 {
+        Vec3::splat(self.reflect_transmit(1.0).0)
     }
 }
 
@@ -156,8 +186,18 @@ mod tests {
         for row in rows {
             let sheet = ThinDielectric::new(row["eta"].as_f64().unwrap() as f32);
             let wo = v3(&row["wo"]).normalize();
-            let refl = sheet.sample(wo, 0.0, Lobes::All).unwrap();
-            let trans = sheet.sample(wo, 0.999_999, Lobes::All).unwrap();
+            let refl = sheet
+                .sample(wo, 0.0, Vec2::ZERO, TransportMode::Radiance, Lobes::All)
+                .unwrap();
+            let trans = sheet
+                .sample(
+                    wo,
+                    0.999_999,
+                    Vec2::ZERO,
+                    TransportMode::Radiance,
+                    Lobes::All,
+                )
+                .unwrap();
             for (s, key) in [(refl, "reflect"), (trans, "transmit")] {
                 let want = row[format!("{key}_pdf")].as_f64().unwrap();
                 worst = worst.max((s.pdf as f64 - want).abs());

@@ -285,6 +285,7 @@ fn estimate_by(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bsdf::{Bxdf, TransportMode};
     use crate::photon::record::Photon;
 
     const KERNELS: [Kernel; 5] = [
@@ -429,7 +430,7 @@ mod tests {
                 for j in 0..np {
                     let phi = 2.0 * PI * (j as f32 + 0.5) / np as f32;
                     let wi = Vec3::new(sin * phi.cos(), sin * phi.sin(), c);
-                    albedo += metal.f(wo, wi) * c;
+                    albedo += metal.f(wo, wi, TransportMode::Radiance) * c;
                 }
             }
             let albedo = albedo * (2.0 * PI / (nt * np) as f32);
@@ -439,7 +440,7 @@ mod tests {
             for _ in 0..queries {
                 let p = Vec3::new(0.1 + 0.8 * rng(&mut s), 0.1 + 0.8 * rng(&mut s), 0.0);
                 let (l, used, _) = radiance_with(&map, p, Vec3::Z, &params, &mut buf, |ph| {
-                    metal.f(wo, -ph.dir()) * ph.power()
+                    metal.f(wo, -ph.dir(), TransportMode::Radiance) * ph.power()
                 });
                 assert!(used >= 199, "both layers take part in the search: {used}");
                 sum += l;
