@@ -96,7 +96,7 @@ impl<'s> SurfaceInteraction<'s> {
         if let Some(d) = &m.displacement {
             self.bump(d, &tc);
         }
-        Bsdf::new(&m.kind, &tc)
+        m.kind.bsdf(&tc)
     }
 
     /// The material at this point: the mesh's, with every `mix` resolved as pbrt-v4's
@@ -107,9 +107,9 @@ impl<'s> SurfaceInteraction<'s> {
         // Mixes name materials defined before them, so chains end, and the loader refuses a
         // chain deeper than MAX_MIX_DEPTH: the loop always reaches a material that is no mix.
         for _ in 0..crate::scene::MAX_MIX_DEPTH {
-            let MaterialKind::Mix {
+            let MaterialKind::Mix(crate::material::MixMaterial {
                 materials, amount, ..
-            } = &m.kind
+            }) = &m.kind
             else {
                 break;
             };

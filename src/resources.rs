@@ -288,12 +288,12 @@ fn landings_per_photon(scene: &Scene, max_bounces: u32) -> f64 {
         .iter()
         .map(|m| match &m.kind {
             // A texture may reach 1 somewhere: bounded by max_bounces below.
-            MaterialKind::Diffuse { reflectance } => reflectance
+            MaterialKind::Diffuse(crate::material::DiffuseMaterial { reflectance }) => reflectance
                 .constant()
                 .map_or(1.0, |r| r.clamp(Vec3::ZERO, Vec3::ONE).element_sum() / 3.0),
             // Coated diffuse, diffuse transmission: their albedo estimate (at uv 0,0).
             kind if kind.flags().has_diffuse() => {
-                let b = crate::bsdf::Bsdf::new(kind, &crate::texture::TexCoord::default());
+                let b = kind.bsdf(&crate::texture::TexCoord::default());
                 b.reflectance_estimate()
                     .clamp(Vec3::ZERO, Vec3::ONE)
                     .element_sum()
@@ -519,12 +519,12 @@ mod tests {
             Scene::with_geometry(
                 vec![],
                 vec![
-                    Material::from(MaterialKind::Diffuse {
+                    Material::from(MaterialKind::Diffuse(crate::material::DiffuseMaterial {
                         reflectance: Vec3::splat(0.2).into(),
-                    }),
-                    Material::from(MaterialKind::Diffuse {
+                    })),
+                    Material::from(MaterialKind::Diffuse(crate::material::DiffuseMaterial {
                         reflectance: Vec3::splat(rho).into(),
-                    }),
+                    })),
                 ],
                 vec![],
             )

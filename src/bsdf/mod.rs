@@ -4,22 +4,16 @@
 //! the surface towards the viewer (or the previous path vertex), `wi` towards the light (or
 //! the next vertex); both are unit vectors. Colours are linear RGB [`Vec3`]s.
 //!
-//! The materials map to BSDFs as follows (scene syntax, pbrt-v4):
+//! Each model is one file implementing the [`Bxdf`] interface ([`bxdf`]); [`Bsdf`] is the
+//! closed enum over them that integrators call (one dispatch per method). The materials of
+//! a scene (`crate::material`) build them per hit:
 //!
 //! ```text
-//! Material "diffuse"    "rgb reflectance" [ .5 .5 .5 ]          -> Bsdf::Diffuse (Lambertian)
-//! Material "dielectric" "float eta" [ 1.5 ]                     -> Bsdf::Dielectric (smooth)
-//! Material "conductor"  "spectrum eta" ... "spectrum k" ...
-//!                       "float roughness" [ 0 ]                 -> Bsdf::Conductor (mirror)
-//! Material "conductor"  "rgb reflectance" [ .9 .6 .3 ]
-//!                       "float uroughness" [ .1 ] "float vroughness" [ .3 ]
-//!                                                               -> Bsdf::Conductor (GGX)
-//! Material "dielectric" "float roughness" [ .05 ]               -> Bsdf::Dielectric (GGX)
-//! Material "thindielectric" "float eta" [ 1.5 ]                 -> Bsdf::ThinDielectric
-//! Material "diffusetransmission" "rgb transmittance" [ .5 .5 .5 ]
-//!                                                               -> Bsdf::DiffuseTransmission
-//! Material "coateddiffuse" "rgb reflectance" [ .5 .5 .5 ]       -> Bsdf::CoatedDiffuse
-//! Material "coatedconductor" "float conductor.roughness" [ .1 ] -> Bsdf::CoatedConductor
+//! diffuse -> Diffuse          dielectric -> Dielectric (smooth or GGX)
+//! conductor -> Conductor      thindielectric -> ThinDielectric
+//! diffusetransmission -> DiffuseTransmission
+//! coateddiffuse -> CoatedDiffuse = Layered<Dielectric, Diffuse>
+//! coatedconductor -> CoatedConductor = Layered<Dielectric, Conductor>
 //! ```
 //!
 //! The coated BSDFs ([`layered`]) are stochastic: `f` and `pdf` are deterministic Monte Carlo
@@ -54,8 +48,6 @@ pub use microfacet::TrowbridgeReitz;
 pub use thin_dielectric::ThinDielectric;
 
 use crate::math::{Vec2, Vec3};
-use crate::scene::{Coat, MaterialKind, Metal, Roughness};
-use crate::texture::TexCoord;
 
 /// pbrt-v4's conductor from reflectance: k = 2 sqrt(r) / sqrt(1 - r), with r at most 1 - 1e-7
 /// (so that k stays finite): its normal-incidence reflectance with eta = 1 is r.
@@ -66,107 +58,6 @@ pub fn k_from_reflectance(r: Vec3) -> Vec3 {
         (2.0 * r.sqrt() / (1.0 - r).sqrt()) as f32
     };
     Vec3::new(f(r.x), f(r.y), f(r.z))
-}
-
-/// The specular and/or glossy lobe of a microfacet surface whose roughness may vary.
-fn microfacet_lobe(r: &Roughness) -> BxdfFlags {
-    match r.constant() {
-        Some((u, v)) if TrowbridgeReitz::new(u, v).effectively_smooth() => BxdfFlags::SPECULAR,
-        Some(_) => BxdfFlags::GLOSSY,
-        None => BxdfFlags::SPECULAR | BxdfFlags::GLOSSY,
-    }
-}
-
-/// Whether a texture is the constant 0 (black everywhere).
-fn is_zero(t: &crate::texture::Tex) -> bool {
-    t.constant().is_some_and(|v| v.max_element() <= 0.0)
-}
-
-impl MaterialKind {
-    /// Every lobe the BSDF may have somewhere on a surface of this material (the union over
-    /// its textures' values): what the photon-map rules read to decide which maps a scene
-    /// needs. The coated materials follow pbrt-v4's `LayeredBxDF::Flags`: reflection,
-    /// specular when the coat is smooth, diffuse when the base is diffuse or the slab
-    /// scatters (`albedo`), else glossy when the coat or the base is rough.
-    pub fn flags(&self) -> BxdfFlags {
-        use BxdfFlags as F;
-        match self {
-            MaterialKind::Diffuse { .. } => F::REFLECTION | F::DIFFUSE,
-            MaterialKind::Dielectric { eta, roughness } => {
-                let sides = if *eta == 1.0 {
-                    return F::TRANSMISSION | F::SPECULAR; // no interface: straight through
-                } else {
-                    F::REFLECTION | F::TRANSMISSION
-                };
-                sides | microfacet_lobe(roughness)
-            }
-            MaterialKind::Conductor { roughness, .. } => F::REFLECTION | microfacet_lobe(roughness),
-            MaterialKind::ThinDielectric { .. } => F::REFLECTION | F::TRANSMISSION | F::SPECULAR,
-            MaterialKind::DiffuseTransmission {
-                reflectance,
-                transmittance,
-                scale,
-            } => {
-                let mut f = F::default();
-                if *scale > 0.0 && !is_zero(reflectance) {
-                    f = f | F::REFLECTION | F::DIFFUSE;
-                }
-                if *scale > 0.0 && !is_zero(transmittance) {
-                    f = f | F::TRANSMISSION | F::DIFFUSE;
-                }
-                f
-            }
-            MaterialKind::CoatedDiffuse { roughness, .. } => {
-                F::REFLECTION | F::DIFFUSE | (microfacet_lobe(roughness) & F::SPECULAR)
-            }
-            MaterialKind::CoatedConductor {
-                interface,
-                coat,
-                roughness,
-                ..
-            } => {
-                let (top, base) = (microfacet_lobe(interface), microfacet_lobe(roughness));
-                let mut f = F::REFLECTION | (top & F::SPECULAR);
-                if !is_zero(&coat.albedo) {
-                    f = f | F::DIFFUSE;
-                }
-                if is_zero(&coat.albedo) || coat.albedo.constant().is_none() {
-                    f = f | ((top | base) & F::GLOSSY);
-                }
-                f
-            }
-            MaterialKind::Mix { flags, .. } => *flags,
-        }
-    }
-
-    /// Whether the BSDF may somewhere have a sharp lobe: a delta one, or the microfacet lobe
-    /// of a conductor or dielectric narrower than `min_alpha` (GGX alpha; a textured
-    /// roughness counts as possibly sharp). Caustic photons are aimed at such objects and go
-    /// on through them (see `photon::trace::is_sharp_bounce`).
-    pub fn has_sharp_lobe(&self, min_alpha: f32) -> bool {
-        let narrow = |r: &Roughness| r.constant().is_none_or(|(u, v)| u.min(v) < min_alpha);
-        match self {
-            MaterialKind::Dielectric { eta, roughness } => {
-                *eta != 1.0 && narrow(roughness) || self.flags().has_specular()
-            }
-            MaterialKind::Conductor { roughness, .. } => narrow(roughness),
-            _ => self.flags().has_specular(),
-        }
-    }
-
-    /// Whether the surface reflects nothing anywhere (a diffuse or diffuse-transmission
-    /// material with constant black colours): no photon map is needed for it.
-    pub fn is_black(&self) -> bool {
-        match self {
-            MaterialKind::Diffuse { reflectance } => is_zero(reflectance),
-            MaterialKind::DiffuseTransmission {
-                reflectance,
-                transmittance,
-                scale,
-            } => *scale <= 0.0 || (is_zero(reflectance) && is_zero(transmittance)),
-            _ => false,
-        }
-    }
 }
 
 /// Calls `$call` on the model inside a [`Bsdf`] (one closed-enum dispatch per method).
@@ -196,84 +87,12 @@ pub enum Bsdf {
     CoatedConductor(CoatedConductor),
 }
 
-/// A conductor's BSDF at `tc`, its index divided by `outside` (the index of the medium above
-/// it: 1, or a coat's).
-fn conductor(metal: &Metal, roughness: &Roughness, outside: f32, tc: &TexCoord) -> Conductor {
-    let (eta, k) = match metal {
-        Metal::EtaK { eta, k } => (eta.eval(tc), k.eval(tc)),
-        Metal::Reflectance(r) => (
-            Vec3::ONE,
-            k_from_reflectance(r.eval(tc).clamp(Vec3::ZERO, Vec3::ONE)),
-        ),
-    };
-    let e = if outside > 0.0 { outside } else { 1.0 };
-    let (au, av) = roughness.eval(tc);
-    Conductor::new(eta / e, k / e, au, av)
-}
-
-/// The layered BSDF at `tc` of a coat of `roughness` over `base`.
-fn coated<B: Bxdf + Copy>(
-    c: &Coat,
-    roughness: &Roughness,
-    base: B,
-    tc: &TexCoord,
-) -> layered::Layered<Dielectric, B> {
-    let (au, av) = roughness.eval(tc);
-    let top = Dielectric::rough(c.eta, au, av);
-    let (thickness, g) = (c.thickness.eval_float(tc), c.g.eval_float(tc));
-    let albedo = c.albedo.eval(tc);
-    layered::Layered::new(top, base, thickness, albedo, g, c.max_depth, c.n_samples)
-}
-
 /// True when `a` and `b` are strictly on the same side of the surface.
 pub(crate) fn same_hemisphere(a: Vec3, b: Vec3) -> bool {
     a.z * b.z > 0.0
 }
 
 impl Bsdf {
-    /// The BSDF of scattering model `kind` with its textures looked up at `tc` (bad values are
-    /// sanitised: reflectances clamped to [0, 1] as pbrt-v4 does, see each variant's `new`).
-    pub fn new(kind: &MaterialKind, tc: &TexCoord) -> Bsdf {
-        let unit = |t: &crate::texture::Tex| t.eval(tc).clamp(Vec3::ZERO, Vec3::ONE);
-        match kind {
-            MaterialKind::Diffuse { reflectance } => Bsdf::Diffuse(Diffuse::new(unit(reflectance))),
-            MaterialKind::Dielectric { eta, roughness } => {
-                let (au, av) = roughness.eval(tc);
-                Bsdf::Dielectric(Dielectric::rough(*eta, au, av))
-            }
-            MaterialKind::Conductor { metal, roughness } => {
-                Bsdf::Conductor(conductor(metal, roughness, 1.0, tc))
-            }
-            MaterialKind::ThinDielectric { eta } => Bsdf::ThinDielectric(ThinDielectric::new(*eta)),
-            MaterialKind::DiffuseTransmission {
-                reflectance,
-                transmittance,
-                scale,
-            } => Bsdf::DiffuseTransmission(DiffuseTransmission::new(
-                reflectance.eval(tc) * *scale,
-                transmittance.eval(tc) * *scale,
-            )),
-            MaterialKind::CoatedDiffuse {
-                reflectance,
-                roughness,
-                coat,
-            } => Bsdf::CoatedDiffuse(coated(coat, roughness, Diffuse::new(unit(reflectance)), tc)),
-            MaterialKind::CoatedConductor {
-                interface,
-                coat,
-                metal,
-                roughness,
-            } => {
-                // pbrt-v4: the base's index is relative to the coat's medium.
-                let base = conductor(metal, roughness, coat.eta, tc);
-                Bsdf::CoatedConductor(coated(coat, interface, base, tc))
-            }
-            // SurfaceInteraction::bsdf resolves a mix to one of its materials first; a mix
-            // that reaches here unresolved reflects nothing.
-            MaterialKind::Mix { .. } => Bsdf::Diffuse(Diffuse::new(Vec3::ZERO)),
-        }
-    }
-
     /// BSDF value for the pair `(wo, wi)`; 0 for delta lobes. `mode` matters for refraction
     /// through a rough dielectric (radiance is scaled by `1 / eta'^2`) and for the layered
     /// BSDFs; the coated BSDFs' value is a deterministic Monte Carlo estimate.
@@ -415,75 +234,6 @@ impl Bsdf {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn material_mapping_and_flags() {
-        let tc = TexCoord::default();
-        let diffuse = Bsdf::new(
-            &MaterialKind::Diffuse {
-                reflectance: Vec3::new(0.1, 0.2, 0.3).into(),
-            },
-            &tc,
-        );
-        let f = diffuse.flags();
-        assert!(f.has_diffuse() && !f.has_specular() && !f.has_glossy() && f.has_non_specular());
-        assert!(f.contains(BxdfFlags::REFLECTION) && !f.contains(BxdfFlags::TRANSMISSION));
-        assert_eq!(diffuse.reflectance_estimate(), Vec3::new(0.1, 0.2, 0.3));
-
-        let glass = Bsdf::new(
-            &MaterialKind::Dielectric {
-                eta: 1.5,
-                roughness: Roughness::alphas(0.0, 0.0),
-            },
-            &tc,
-        );
-        let f = glass.flags();
-        assert!(f.is_specular_only() && !f.has_diffuse() && !f.has_glossy());
-        assert!(f.contains(BxdfFlags::REFLECTION | BxdfFlags::TRANSMISSION));
-        assert_eq!(glass.reflectance_estimate(), Vec3::ONE);
-        let wo = Vec3::new(0.6, 0.0, 0.8);
-        assert_eq!(
-            glass.f(wo, Vec3::new(-0.6, 0.0, 0.8), TransportMode::Radiance),
-            Vec3::ZERO
-        );
-        assert_eq!(glass.pdf(wo, Vec3::new(-0.6, 0.0, 0.8)), 0.0);
-
-        // pbrt-v4's "reflectance" conductor: eta = 1, k = 2 sqrt(r) / sqrt(1 - r) gives a
-        // normal-incidence reflectance of exactly r.
-        let r = Vec3::new(0.9, 0.6, 0.3);
-        let k = Vec3::new(
-            2.0 * r.x.sqrt() / (1.0 - r.x).sqrt(),
-            2.0 * r.y.sqrt() / (1.0 - r.y).sqrt(),
-            2.0 * r.z.sqrt() / (1.0 - r.z).sqrt(),
-        );
-        for (a, smooth) in [(0.0f32, true), (5e-4, true), (0.2, false)] {
-            let eta_k = MaterialKind::Conductor {
-                metal: Metal::EtaK {
-                    eta: Vec3::ONE.into(),
-                    k: k.into(),
-                },
-                roughness: crate::scene::Roughness::alphas(a, a),
-            };
-            let b = Bsdf::new(&eta_k, &tc);
-            assert_eq!(b.flags(), eta_k.flags(), "constant parameters: exact flags");
-            // The same conductor given by reflectance, with roughness remapped (sqrt).
-            let by_r = MaterialKind::Conductor {
-                metal: Metal::Reflectance(r.into()),
-                roughness: crate::scene::Roughness {
-                    u: (a * a).into(),
-                    v: (a * a).into(),
-                    remap: true,
-                },
-            };
-            let b2 = Bsdf::new(&by_r, &tc);
-            assert!((b2.reflectance_estimate() - r).abs().max_element() < 1e-5);
-            assert_eq!(b2.flags(), b.flags());
-            assert_eq!(b.flags().is_specular_only(), smooth);
-            assert_eq!(b.flags().has_glossy(), !smooth);
-            assert!(!b.flags().has_diffuse());
-            assert!((b.reflectance_estimate() - r).abs().max_element() < 1e-5);
-        }
-    }
 
     #[test]
     fn smooth_conductor_mirror_sample() {

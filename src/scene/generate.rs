@@ -105,9 +105,11 @@ pub fn sphere_scene(triangles: usize) -> Scene {
         path: PathBuf::from(format!("sphere-{}", short_count(triangles))),
         ..Scene::with_geometry(
             vec![sphere, floor],
-            vec![Material::from(MaterialKind::Diffuse {
-                reflectance: Vec3::splat(0.6).into(),
-            })],
+            vec![Material::from(MaterialKind::Diffuse(
+                crate::material::DiffuseMaterial {
+                    reflectance: Vec3::splat(0.6).into(),
+                },
+            ))],
             vec![Light::Point {
                 pos: Vec3::new(2.0, -2.0, 4.0),
                 intensity: Vec3::splat(30.0),

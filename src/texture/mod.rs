@@ -43,6 +43,10 @@
 //!
 //! Float textures are [`Texture`]s whose three channels are equal.
 
+mod params;
+
+pub use params::{named_texture, texture_param, value};
+
 use crate::math::{Vec2, Vec3};
 use std::collections::HashMap;
 use std::fmt;

@@ -23,9 +23,9 @@ fn scene_of(meshes: Vec<Mesh>) -> Scene {
         ..Scene::with_geometry(
             meshes,
             vec![photon::scene::Material::from(
-                photon::scene::MaterialKind::Diffuse {
+                photon::scene::MaterialKind::Diffuse(photon::material::DiffuseMaterial {
                     reflectance: Vec3::splat(0.5).into(),
-                },
+                }),
             )],
             Vec::new(),
         )

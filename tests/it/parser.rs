@@ -3,9 +3,10 @@
 //!
 //! Scenes written by the tests go to a fresh directory under the system temp dir.
 
+use photon::material::*;
 use photon::math::{Mat4, Vec2, Vec3};
 use photon::scene::loader::load;
-use photon::scene::{FilterDesc, Light, Material, MaterialKind, Metal, Scene, SceneError};
+use photon::scene::{FilterDesc, Light, Material, MaterialKind, Scene, SceneError};
 use std::f32::consts::PI;
 use std::path::{Path, PathBuf};
 
@@ -561,30 +562,30 @@ fn material_of(body: &str) -> Material {
 
 /// A diffuse material with a constant reflectance and no bump map.
 fn diffuse(r: Vec3) -> Material {
-    MaterialKind::Diffuse {
+    MaterialKind::Diffuse(DiffuseMaterial {
         reflectance: r.into(),
-    }
+    })
     .into()
 }
 
 /// A smooth dielectric.
 fn dielectric(eta: f32) -> Material {
-    MaterialKind::Dielectric {
+    MaterialKind::Dielectric(DielectricMaterial {
         eta,
         // As a file without roughness says: 0, remapped (pbrt-v4's default).
-        roughness: photon::scene::Roughness {
+        roughness: photon::material::Roughness {
             u: 0.0.into(),
             v: 0.0.into(),
             remap: true,
         },
-    }
+    })
     .into()
 }
 
 /// A conductor's constant (eta, k, alpha_u, alpha_v), or `None` for another material; a
 /// `reflectance` conductor reads as pbrt-v4 converts it (eta 1, k from r).
 fn conductor(m: &Material) -> Option<(Vec3, Vec3, f32, f32)> {
-    let MaterialKind::Conductor { metal, roughness } = &m.kind else {
+    let MaterialKind::Conductor(ConductorMaterial { metal, roughness }) = &m.kind else {
         return None;
     };
     let (eta, k) = match metal {
@@ -618,7 +619,7 @@ fn materials() {
     assert_vec(eta, Vec3::new(0.200438, 0.924033, 1.102212), 3e-4);
     assert_vec(k, Vec3::new(3.912949, 2.452848, 2.142188), 3e-4);
     // Named glasses: the index at 550 nm (BK7: 1.51852 from Schott's Sellmeier fit).
-    let MaterialKind::Dielectric { eta, .. } =
+    let MaterialKind::Dielectric(DielectricMaterial { eta, .. }) =
         material_of(r#"Material "dielectric" "spectrum eta" [ "glass-BK7" ]"#).kind
     else {
         panic!("not a dielectric")
@@ -2022,10 +2023,10 @@ fn object_instancing_errors() {
 #[test]
 fn coated_rough_and_translucent_materials() {
     use photon::bsdf::{Bsdf, BxdfFlags as F};
-    use photon::scene::{Coat, Roughness};
+    use photon::material::{Coat, Roughness};
     use photon::texture::TexCoord;
     let tc = TexCoord::default();
-    let bsdf = |m: &Material| Bsdf::new(&m.kind, &tc);
+    let bsdf = |m: &Material| m.kind.bsdf(&tc);
     let constant = |u: f32, remap: bool| Roughness {
         u: u.into(),
         v: u.into(),
@@ -2036,10 +2037,10 @@ fn coated_rough_and_translucent_materials() {
     let m = material_of(r#"Material "dielectric" "float roughness" 0.04"#);
     assert_eq!(
         m.kind,
-        MaterialKind::Dielectric {
+        MaterialKind::Dielectric(DielectricMaterial {
             eta: 1.5,
             roughness: constant(0.04, true)
-        }
+        })
     );
     let Bsdf::Dielectric(d) = bsdf(&m) else {
         panic!("{m:?}")
@@ -2063,10 +2064,13 @@ fn coated_rough_and_translucent_materials() {
 
     // Thin dielectric.
     let m = material_of(r#"Material "thindielectric""#);
-    assert_eq!(m.kind, MaterialKind::ThinDielectric { eta: 1.5 });
+    assert_eq!(
+        m.kind,
+        MaterialKind::ThinDielectric(ThinDielectricMaterial { eta: 1.5 })
+    );
     assert!(bsdf(&m).flags().is_specular_only());
     let m = material_of(r#"Material "thindielectric" "spectrum eta" "glass-BK7""#);
-    let MaterialKind::ThinDielectric { eta } = m.kind else {
+    let MaterialKind::ThinDielectric(ThinDielectricMaterial { eta }) = m.kind else {
         panic!("{m:?}")
     };
     assert!((eta - 1.5185).abs() < 1e-3, "{eta}");
@@ -2105,11 +2109,11 @@ fn coated_rough_and_translucent_materials() {
     };
     assert_eq!(
         m.kind,
-        MaterialKind::CoatedDiffuse {
+        MaterialKind::CoatedDiffuse(CoatedDiffuseMaterial {
             reflectance: Vec3::splat(0.5).into(),
             roughness: constant(0.0, true),
             coat: want_coat.clone(),
-        }
+        })
     );
     let Bsdf::CoatedDiffuse(c) = bsdf(&m) else {
         panic!("{m:?}")
@@ -2161,21 +2165,21 @@ fn coated_rough_and_translucent_materials() {
     let m = material_of(r#"Material "coatedconductor" "rgb reflectance" [0.9 0.5 0.1]"#);
     assert!(matches!(
         m.kind,
-        MaterialKind::CoatedConductor {
+        MaterialKind::CoatedConductor(CoatedConductorMaterial {
             metal: Metal::Reflectance(_),
             ..
-        }
+        })
     ));
 
     // Textures where pbrt-v4 allows them.
     let m = material_of(
         "Texture \"r\" \"spectrum\" \"checkerboard\"\nTexture \"t\" \"float\" \"constant\" \"float value\" 0.3\nMaterial \"coateddiffuse\" \"texture reflectance\" \"r\" \"texture thickness\" \"t\" \"texture roughness\" \"t\"",
     );
-    let MaterialKind::CoatedDiffuse {
+    let MaterialKind::CoatedDiffuse(CoatedDiffuseMaterial {
         coat,
         reflectance,
         roughness,
-    } = &m.kind
+    }) = &m.kind
     else {
         panic!("{m:?}")
     };

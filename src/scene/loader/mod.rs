@@ -33,12 +33,10 @@
 pub mod blackbody;
 pub mod extent;
 pub mod lights;
-pub mod materials;
-pub mod params;
+pub use crate::params;
 pub mod parser;
 pub mod ply;
 pub mod shapes;
-pub mod spectra;
 pub mod textures;
 pub mod tokenizer;
 

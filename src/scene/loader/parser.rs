@@ -38,10 +38,10 @@
 //! camera-from-world; its inverse becomes `world_from_camera` and the named system "camera".
 
 use super::lights::{area_light, light_source, AreaSpec};
-use super::materials::{make_material, MaterialContext};
 use super::params::{Param, ParamSet, ParamType, ParamValues};
 use super::shapes;
 use super::tokenizer::{unescape, TokKind, Token, Tokenizer};
+use crate::material::{self, MaterialContext};
 use crate::math::{Mat4, Vec2, Vec3};
 use crate::scene::{
     CameraDesc, FilmDesc, FilterDesc, IntegratorDesc, Loc, Material, MaterialKind, Mesh,
@@ -679,7 +679,7 @@ impl Builder {
         match what {
             "Material" => {
                 let mut params = read_params(tok)?;
-                let m = make_material(&name, &mut params, &at, &self.material_context());
+                let m = material::create(&name, &mut params, &at, &self.material_context());
                 let m = self.or_default(m)?;
                 self.materials.push(m);
                 self.gs.material = MatRef::Index(self.materials.len() as u32 - 1);
@@ -723,9 +723,11 @@ impl Builder {
         if let Some((i, _)) = self.pending_materials.get(&name) {
             return *i;
         }
-        self.materials.push(Material::from(MaterialKind::Diffuse {
-            reflectance: Vec3::splat(0.5).into(),
-        }));
+        self.materials.push(Material::from(MaterialKind::Diffuse(
+            crate::material::DiffuseMaterial {
+                reflectance: Vec3::splat(0.5).into(),
+            },
+        )));
         let i = self.materials.len() as u32 - 1;
         self.pending_materials.insert(name, (i, at));
         i
@@ -816,9 +818,11 @@ impl Builder {
     fn or_default(&mut self, m: Result<Material, SceneError>) -> Result<Material, SceneError> {
         m.or_else(|e| {
             self.recover(e)?;
-            Ok(Material::from(MaterialKind::Diffuse {
-                reflectance: Vec3::splat(0.5).into(),
-            }))
+            Ok(Material::from(MaterialKind::Diffuse(
+                crate::material::DiffuseMaterial {
+                    reflectance: Vec3::splat(0.5).into(),
+                },
+            )))
         })
     }
 
@@ -996,9 +1000,11 @@ impl Builder {
         match self.gs.material {
             MatRef::Index(i) => i,
             MatRef::Default => *self.default_material.get_or_insert_with(|| {
-                self.materials.push(Material::from(MaterialKind::Diffuse {
-                    reflectance: Vec3::splat(0.5).into(),
-                }));
+                self.materials.push(Material::from(MaterialKind::Diffuse(
+                    crate::material::DiffuseMaterial {
+                        reflectance: Vec3::splat(0.5).into(),
+                    },
+                )));
                 self.materials.len() as u32 - 1
             }),
         }
@@ -1095,7 +1101,7 @@ fn named_material(
         ));
     };
     let ty_loc = params.loc("type").cloned().unwrap_or_else(|| at.clone());
-    make_material(&ty, params, &ty_loc, cx)
+    material::create(&ty, params, &ty_loc, cx)
 }
 
 /// `ActiveTransform All | StartTime | EndTime` (a bare word): which CTMs later transforms change.

@@ -51,9 +51,9 @@
 
 use super::params::ParamSet;
 use super::ply::read_ply;
-use super::textures::named_texture;
 use crate::math::{Mat3, Mat4, Vec2, Vec3};
 use crate::scene::{clip_for_message, Loc, Mesh, SceneError};
+use crate::texture::named_texture;
 use crate::texture::{Texture, Textures};
 use std::f32::consts::PI;
 use std::path::Path;

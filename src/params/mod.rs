@@ -13,7 +13,9 @@
 //! values is an error at the parameter's location.
 
 use crate::math::{Vec2, Vec3};
-use crate::scene::{Loc, SceneError};
+mod error;
+
+pub use error::{clip_for_message, one_line, Loc, SceneError, MAX_LINE, MAX_MESSAGE, MAX_TOKEN};
 
 /// What a texture is told where photon does not take one (materials take them where pbrt-v4
 /// does; a light's or a shape's other parameters, `"texture normalmap"`, plymesh displacement).
