@@ -108,53 +108,78 @@ fn invert(cdf: &[f32], r: f32, u: f32) -> f32 {
     -r + 2.0 * r * (i as f32 + t) / bins as f32
 }
 
-/// The per-component radiance of one camera sample (the parts sum to the total).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Radiance {
+/// The parts radiance is split into (Jensen's split), each written as its own image layer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Component {
     /// Emitters seen directly plus direct lighting by shadow rays.
-    pub direct: Vec3,
+    Direct,
     /// Light arriving through specular/glossy bounces traced by rays.
-    pub specular: Vec3,
-    pub caustic: Vec3,
-    pub indirect: Vec3,
+    Specular,
+    /// The caustic estimates of visible points.
+    Caustic,
+    /// Indirect diffuse light (final gathering, or the path tracer's further bounces).
+    Indirect,
 }
 
-impl Radiance {
-    pub fn total(&self) -> Vec3 {
-        self.direct + self.specular + self.caustic + self.indirect
+impl Component {
+    /// Every component, in layer order.
+    pub const ALL: [Component; 4] = [
+        Component::Direct,
+        Component::Specular,
+        Component::Caustic,
+        Component::Indirect,
+    ];
+    /// The layer names, in the order of [`Self::ALL`].
+    pub const NAMES: [&'static str; 4] = ["direct", "specular", "caustic", "indirect"];
+
+    /// The layer name.
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
     }
 }
 
+/// The per-component radiance of one camera sample (the parts sum to the total), indexed by
+/// [`Component`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Radiance(pub [Vec3; 4]);
+
 impl Radiance {
+    pub fn total(&self) -> Vec3 {
+        let [d, s, c, i] = self.0;
+        d + s + c + i
+    }
+
     /// `f` applied to each component.
     pub fn map(&self, f: impl Fn(Vec3) -> Vec3) -> Radiance {
-        Radiance {
-            direct: f(self.direct),
-            specular: f(self.specular),
-            caustic: f(self.caustic),
-            indirect: f(self.indirect),
-        }
+        Radiance(self.0.map(f))
+    }
+}
+
+impl std::ops::Index<Component> for Radiance {
+    type Output = Vec3;
+    fn index(&self, c: Component) -> &Vec3 {
+        &self.0[c as usize]
+    }
+}
+
+impl std::ops::IndexMut<Component> for Radiance {
+    fn index_mut(&mut self, c: Component) -> &mut Vec3 {
+        &mut self.0[c as usize]
     }
 }
 
 impl std::ops::AddAssign for Radiance {
     fn add_assign(&mut self, o: Radiance) {
-        self.direct += o.direct;
-        self.specular += o.specular;
-        self.caustic += o.caustic;
-        self.indirect += o.indirect;
+        for (a, b) in self.0.iter_mut().zip(o.0) {
+            *a += b;
+        }
     }
 }
 
 impl std::ops::Mul<f32> for Radiance {
     type Output = Radiance;
     fn mul(self, s: f32) -> Radiance {
-        Radiance {
-            direct: self.direct * s,
-            specular: self.specular * s,
-            caustic: self.caustic * s,
-            indirect: self.indirect * s,
-        }
+        self.map(|v| v * s)
     }
 }
 

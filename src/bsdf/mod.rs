@@ -172,6 +172,21 @@ impl Bsdf {
         }
     }
 
+    /// One Lambertian reflection lobe (`f` the same for every pair on the side of `wo`): the
+    /// photon estimates can use irradiance times `f` towards the normal.
+    pub fn is_lambertian(&self) -> bool {
+        matches!(self, Bsdf::Diffuse(_))
+    }
+
+    /// The index of a coat's dielectric interface; `None` without a coat.
+    pub fn coat_eta(&self) -> Option<f32> {
+        match self {
+            Bsdf::CoatedDiffuse(b) => Some(b.top.eta),
+            Bsdf::CoatedConductor(b) => Some(b.top.eta),
+            _ => None,
+        }
+    }
+
     /// The coat's reflection (exact): 0 without a coat ([`Self::has_coat`]).
     pub fn f_coat(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
         match self {

@@ -11,6 +11,7 @@
 pub mod direct;
 pub mod passes;
 pub mod path;
+pub mod photon_mapper;
 pub mod photonmap;
 pub mod record;
 pub mod settings;
@@ -18,7 +19,7 @@ pub mod wavefront;
 
 use crate::accel::Accel;
 use crate::camera::Camera;
-use crate::film::{self, Filter, Radiance};
+use crate::film::{self, Component, Filter, Radiance};
 use crate::imageio::RgbImage;
 use crate::light::Lights;
 use crate::math::{Ray, Vec2};
@@ -316,6 +317,9 @@ pub fn render_prepared(
                 return ((x0, y0), vec![Radiance::default(); n]);
             }
             let px = match kind {
+                IntegratorKind::Photonmap if ctx.photons.is_some() => {
+                    photon_mapper::render_tile(&ctx, x0, y0, x1, y1)
+                }
                 IntegratorKind::Direct | IntegratorKind::Photonmap => {
                     direct::render_tile(&ctx, x0, y0, x1, y1)
                 }
@@ -343,24 +347,15 @@ pub fn render_prepared(
         for (i, r) in px.iter().enumerate() {
             let (x, y) = ((x0 - bx0) as usize + i % tw, (y0 - by0) as usize + i / tw);
             let k = y * wu + x;
-            for (part, v) in parts
-                .iter_mut()
-                .zip([r.direct, r.specular, r.caustic, r.indirect])
-            {
+            for (part, v) in parts.iter_mut().zip(r.0) {
                 part.pixels[k] = v.to_array();
             }
             image.pixels[k] = r.total().to_array();
         }
     }
-    let [direct, specular, caustic, indirect] = parts;
     RenderOutput {
         image,
-        components: vec![
-            ("direct", direct),
-            ("specular", specular),
-            ("caustic", caustic),
-            ("indirect", indirect),
-        ],
+        components: Component::NAMES.into_iter().zip(parts).collect(),
         seconds: start.elapsed().as_secs_f64() + photon_seconds + map_build_seconds,
         photon_seconds,
         map_build_seconds,

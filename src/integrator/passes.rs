@@ -30,6 +30,7 @@
 use super::photonmap::PhotonPass;
 use super::{IntegratorKind, RenderOutput, RenderSettings};
 use crate::accel::Accel;
+use crate::film::Component;
 use crate::imageio::RgbImage;
 use crate::resources::MAX_PASSES;
 use crate::sampling::hash;
@@ -38,9 +39,6 @@ use std::ops::Range;
 
 /// Units of the fixed-point accumulator: a pass value `v` adds `round(v * 2^24)`.
 pub const FIXED_ONE: f64 = (1u64 << 24) as f64;
-
-/// The components a pass image has, in the order of [`RenderOutput::components`].
-pub const COMPONENTS: [&str; 4] = ["direct", "specular", "caustic", "indirect"];
 
 /// The seed of pass `k`'s sample streams (and of its photon maps when progressive).
 pub fn pass_seed(seed: u64, k: u64) -> u64 {
@@ -105,7 +103,7 @@ impl PartialHeader {
 pub struct Partial {
     pub header: PartialHeader,
     pub passes: Range<u64>,
-    /// Per pixel: R, G, B of each of the [`COMPONENTS`], in units of 2^-24.
+    /// Per pixel: R, G, B of each of the [`Component`]s, in units of 2^-24.
     pub sums: Vec<[i64; 12]>,
     /// Values that were not finite (left out) or saturated the accumulator.
     pub rejected: u64,
@@ -132,7 +130,12 @@ impl Partial {
 
     /// Adds the image of pass `self.passes.end`.
     pub fn add_pass(&mut self, out: &RenderOutput) {
-        for (c, (_, img)) in out.components.iter().enumerate().take(COMPONENTS.len()) {
+        for (c, (_, img)) in out
+            .components
+            .iter()
+            .enumerate()
+            .take(Component::NAMES.len())
+        {
             for (sum, px) in self.sums.iter_mut().zip(&img.pixels) {
                 for (k, &v) in px.iter().enumerate() {
                     let slot = &mut sum[3 * c + k];
@@ -173,7 +176,7 @@ impl Partial {
     pub fn mean(&self) -> (RgbImage, Vec<(&'static str, RgbImage)>) {
         let (w, h) = (self.header.width, self.header.height);
         let n = (self.passes.end - self.passes.start).max(1) as f64 * FIXED_ONE;
-        let mut parts: Vec<(&'static str, RgbImage)> = COMPONENTS
+        let mut parts: Vec<(&'static str, RgbImage)> = Component::NAMES
             .iter()
             .map(|&c| (c, RgbImage::new(w, h)))
             .collect();
@@ -202,7 +205,7 @@ impl Partial {
     /// pass range.
     pub fn write(&self, path: &std::path::Path) -> Result<(), crate::imageio::ImageError> {
         let (total, parts) = self.mean();
-        let words: Vec<(String, Vec<[u32; 3]>)> = COMPONENTS
+        let words: Vec<(String, Vec<[u32; 3]>)> = Component::NAMES
             .iter()
             .enumerate()
             .flat_map(|(c, name)| {
@@ -318,7 +321,7 @@ impl Partial {
         // Allocated once the first layer has shown the file really holds w x h pixels (a
         // forged photon.resolution asked for 960 GB here).
         let mut sums: Vec<[i64; 12]> = Vec::new();
-        for (c, name) in COMPONENTS.iter().enumerate() {
+        for (c, name) in Component::NAMES.iter().enumerate() {
             let read = |half: &str| {
                 let layer = format!("sum.{name}.{half}");
                 let (lw, lh, words) =
@@ -499,7 +502,12 @@ pub fn render_for_time(
         if crate::interrupt::requested().is_some() && spp_done > 0 {
             break; // cut short: not added
         }
-        for (c, (_, img)) in out.components.iter().enumerate().take(COMPONENTS.len()) {
+        for (c, (_, img)) in out
+            .components
+            .iter()
+            .enumerate()
+            .take(Component::NAMES.len())
+        {
             for (sum, px) in sums.iter_mut().zip(&img.pixels) {
                 for (k, v) in px.iter().enumerate() {
                     sum[3 * c + k] += *v as f64 * pass_spp as f64;
@@ -524,7 +532,7 @@ pub fn render_for_time(
         }
     }
     let n = spp_done.max(1) as f64;
-    let mut parts: Vec<(&'static str, RgbImage)> = COMPONENTS
+    let mut parts: Vec<(&'static str, RgbImage)> = Component::NAMES
         .iter()
         .map(|&c| (c, RgbImage::new(w, h)))
         .collect();
@@ -620,7 +628,7 @@ mod tests {
             };
             RenderOutput {
                 image: img.clone(),
-                components: COMPONENTS.iter().map(|&c| (c, img.clone())).collect(),
+                components: Component::NAMES.iter().map(|&c| (c, img.clone())).collect(),
                 seconds: 0.0,
                 photon_seconds: 0.0,
                 map_build_seconds: 0.0,

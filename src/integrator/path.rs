@@ -66,6 +66,7 @@ pub fn render_tile(ctx: &RenderContext, x0: u32, y0: u32, x1: u32, y1: u32) -> V
 pub struct PathTracer;
 
 impl Shade for PathTracer {
+    type PathData = ();
     type Extra = ();
 
     fn shade(&self, ctx: &RenderContext, path: PathState, hit: &Hit, wave: &mut Wave<()>) {

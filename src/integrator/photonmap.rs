@@ -430,7 +430,7 @@ pub fn at_diffuse(
     let (nx, ny) = strata(g);
     let frame = Frame::from_normal(n);
     let weight = beta * f_d * (std::f32::consts::PI / g as f32);
-    let lambertian = matches!(bsdf, Bsdf::Diffuse(_));
+    let lambertian = bsdf.is_lambertian();
     let o = si.spawn(n);
     for k in 0..g {
         let j = sampler.next_2d();
@@ -521,7 +521,7 @@ pub fn caustic_alpha(pass: &PhotonPass) -> Option<f32> {
 /// [`crate::photon::estimate::radiance_with`]); `None` when the point is no receiver
 /// ([`trace::is_receiver`]) or no caustic photons were shot. A `Some` means the camera path
 /// must not count light it finds from here through sharp bounces only
-/// ([`super::wavefront::Covered`]).
+/// ([`super::photon_mapper::Covered`]).
 pub fn at_glossy(
     pass: &PhotonPass,
     counters: &AtomicU64,
@@ -665,10 +665,8 @@ fn direct_at_gather(
 /// The probability with which a gather ray that reaches a coated surface follows its coat:
 /// the coat's Fresnel reflectance towards `wo`, within [0.1, 0.9].
 fn coat_choice(bsdf: &Bsdf, wo: Vec3) -> f32 {
-    let eta = match bsdf {
-        Bsdf::CoatedDiffuse(b) => b.top.eta,
-        Bsdf::CoatedConductor(b) => b.top.eta,
-        _ => return 0.0,
+    let Some(eta) = bsdf.coat_eta() else {
+        return 0.0;
     };
     crate::bsdf::fresnel::fr_dielectric(wo.z.abs(), eta).clamp(0.1, 0.9)
 }

@@ -9,6 +9,7 @@
 //! rays, is flushed the same way); then the continuations form the next wave.
 use super::{charge, tile_pixels, RenderContext};
 use crate::accel::{Hit, RayKind};
+pub use crate::film::Component;
 use crate::film::Radiance;
 use crate::math::{Ray, Vec3};
 use crate::resources::BATCH;
@@ -19,9 +20,9 @@ use std::time::Instant;
 /// Dimensions the camera sample uses (pixel filter offset).
 pub const CAMERA_DIMS: u32 = 2;
 
-/// One path in flight.
+/// One path in flight; `T` is the integrator's own per-path state ([`Shade::PathData`]).
 #[derive(Clone, Debug)]
-pub struct PathState {
+pub struct PathState<T = ()> {
     /// Index of the pixel within the tile.
     pub pixel: usize,
     pub ray: Ray,
@@ -38,42 +39,12 @@ pub struct PathState {
     pub prev_delta: bool,
     /// Product of `eta^2` over the delta refractions so far (for roulette).
     pub eta_scale: f32,
-    /// Whether light this path finds next is already counted by a photon estimate.
-    pub covered: Covered,
     pub sampler: Sampler,
+    /// The integrator's own state.
+    pub data: T,
 }
 
-/// Where a camera path stands towards the caustic photons of rough glossy surfaces: the
-/// estimate at such a surface counts every L (S|G)+ G path through it whose bounces before it
-/// were sharp (delta or near-smooth, `photon::trace::is_sharp_bounce`), so the path traced on
-/// from it must not count light it finds through sharp bounces only: emitters hit after them,
-/// and shadow rays from near-smooth vertices.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Covered {
-    /// Nothing is covered.
-    #[default]
-    No,
-    /// The last vertex was a receiver (its caustic estimate taken) and the path left it by a
-    /// non-delta sample: an emitter hit next is direct light (MIS-weighted), still counted.
-    Next,
-    /// Sharp bounces only since such a vertex: emitters (and the infinite lights) count zero.
-    Specular,
-}
-
-impl Covered {
-    /// The state after a bounce: `receiver` says whether the vertex took a caustic estimate
-    /// from glossy photons, `sharp` whether the bounce was sharp (a delta lobe, or a
-    /// near-smooth one; a receiver's own lobe is never near-smooth).
-    pub fn after(self, receiver: bool, sharp: bool) -> Covered {
-        match (receiver, sharp, self) {
-            (true, false, _) => Covered::Next,
-            (_, true, Covered::Next | Covered::Specular) => Covered::Specular,
-            _ => Covered::No,
-        }
-    }
-}
-
-impl PathState {
+impl<T: Default> PathState<T> {
     /// A path leaving the camera along `ray` for pixel `pixel` of the tile.
     pub fn camera(pixel: usize, ray: Ray, sampler: Sampler) -> Self {
         PathState {
@@ -85,19 +56,10 @@ impl PathState {
             prev_p: ray.o,
             prev_delta: true,
             eta_scale: 1.0,
-            covered: Covered::No,
             sampler,
+            data: T::default(),
         }
     }
-}
-
-/// The image component a contribution belongs to (see [`Radiance`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Component {
-    Direct,
-    Specular,
-    Caustic,
-    Indirect,
 }
 
 /// Adds `value` to a pixel's component; a non-finite value is dropped (one bad sample must not
@@ -106,13 +68,7 @@ pub fn add(acc: &mut [Radiance], pixel: usize, c: Component, value: Vec3) {
     if !value.is_finite() {
         return;
     }
-    let px = &mut acc[pixel];
-    match c {
-        Component::Direct => px.direct += value,
-        Component::Specular => px.specular += value,
-        Component::Caustic => px.caustic += value,
-        Component::Indirect => px.indirect += value,
-    }
+    acc[pixel][c] += value;
 }
 
 /// A shadow ray and what it adds to its pixel if unoccluded.
@@ -125,12 +81,12 @@ pub struct Shadow {
 }
 
 /// Where a shading step puts its results.
-pub struct Wave<'a, X> {
+pub struct Wave<'a, X, T = ()> {
     /// The tile's per-pixel sums.
     pub acc: &'a mut [Radiance],
     pub shadows: &'a mut Vec<Shadow>,
     /// Paths continuing into the next wave.
-    pub next: &'a mut Vec<PathState>,
+    pub next: &'a mut Vec<PathState<T>>,
     /// The integrator's own deferred work.
     pub extra: &'a mut X,
 }
@@ -139,11 +95,23 @@ pub struct Wave<'a, X> {
 pub trait Shade: Sync {
     /// Per-tile work the integrator defers and traces in batches (final-gather rays).
     type Extra: Default;
+    /// What the integrator carries along each path besides the common [`PathState`].
+    type PathData: Copy + Default + std::fmt::Debug;
     /// Shades `path`'s `hit`.
-    fn shade(&self, ctx: &RenderContext, path: PathState, hit: &Hit, wave: &mut Wave<Self::Extra>);
+    fn shade(
+        &self,
+        ctx: &RenderContext,
+        path: PathState<Self::PathData>,
+        hit: &Hit,
+        wave: &mut Wave<Self::Extra, Self::PathData>,
+    );
     /// The component that light emitted towards `path` counts towards: an emitter it hits, or
     /// the infinite lights when it leaves the scene (see [`escaped`]).
-    fn emitted_component(&self, path: &PathState) -> Component;
+    fn emitted_component(&self, path: &PathState<Self::PathData>) -> Component;
+    /// What `path` sees of the infinite lights when it leaves the scene (see [`escaped`]).
+    fn escaped(&self, ctx: &RenderContext, path: &PathState<Self::PathData>) -> Vec3 {
+        escaped(ctx, path)
+    }
     /// Entries waiting in `extra` (flushed at [`BATCH`] and at the end of each wave).
     fn pending(&self, _extra: &Self::Extra) -> usize {
         0
@@ -167,15 +135,28 @@ pub fn intersect_batch(
 }
 
 /// The reusable buffers of one tile.
-#[derive(Default)]
-struct Buffers {
-    paths: Vec<PathState>,
-    next: Vec<PathState>,
+struct Buffers<T> {
+    paths: Vec<PathState<T>>,
+    next: Vec<PathState<T>>,
     rays: Vec<Ray>,
     hits: Vec<Option<Hit>>,
     shadows: Vec<Shadow>,
     shadow_rays: Vec<Ray>,
     occluded: Vec<bool>,
+}
+
+impl<T> Default for Buffers<T> {
+    fn default() -> Self {
+        Buffers {
+            paths: Vec::new(),
+            next: Vec::new(),
+            rays: Vec::new(),
+            hits: Vec::new(),
+            shadows: Vec::new(),
+            shadow_rays: Vec::new(),
+            occluded: Vec::new(),
+        }
+    }
 }
 
 /// Renders the pixels `[x0, x1) x [y0, y1)` with `shader`; returns the per-pixel means over
@@ -200,7 +181,7 @@ pub fn render_tile<S: Shade>(
     } else {
         Vec::new()
     };
-    let mut b = Buffers::default();
+    let mut b = Buffers::<S::PathData>::default();
     let mut extra = S::Extra::default();
     for sample in 0..spp {
         b.paths.clear();
@@ -233,7 +214,7 @@ fn wave<S: Shade>(
     ctx: &RenderContext,
     shader: &S,
     kind: RayKind,
-    b: &mut Buffers,
+    b: &mut Buffers<S::PathData>,
     extra: &mut S::Extra,
     acc: &mut [Radiance],
 ) {
@@ -256,7 +237,7 @@ fn wave<S: Shade>(
                 acc,
                 path.pixel,
                 shader.emitted_component(&path),
-                escaped(ctx, &path),
+                shader.escaped(ctx, &path),
             );
         }
         // Bounded batches: a point adds a bounded number of shadow rays and deferred entries
@@ -279,12 +260,8 @@ fn wave<S: Shade>(
 
 /// What a path that leaves the scene sees of the infinite lights, times its throughput: with
 /// full weight after the camera or a delta bounce, else power-heuristic-weighted against light
-/// sampling (the BSDF density of the last bounce against the lights' density of the direction);
-/// zero when photons already count it ([`Covered::Specular`]).
-pub fn escaped(ctx: &RenderContext, path: &PathState) -> Vec3 {
-    if path.covered == Covered::Specular {
-        return Vec3::ZERO; // an L S+ G path: the glossy surface's caustic photons have it
-    }
+/// sampling (the BSDF density of the last bounce against the lights' density of the direction).
+pub fn escaped<T>(ctx: &RenderContext, path: &PathState<T>) -> Vec3 {
     let d = path.ray.d.normalize_or_zero();
     let le = ctx.lights.escaped(path.ray.o, d, |light_pdf| {
         if path.prev_pdf > 0.0 {
@@ -321,27 +298,5 @@ fn resolve_shadows(
         if !blocked {
             add(acc, s.pixel, s.component, s.contrib);
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::Covered::{self, *};
-
-    #[test]
-    fn covered_drops_only_delta_chains_after_a_receiver() {
-        // receiver -> glossy sample: the next emitter is direct light (kept).
-        assert_eq!(No.after(true, false), Next);
-        // ... then delta bounces: L S+ G paths, which the receiver's photons have.
-        assert_eq!(Next.after(false, true), Specular);
-        assert_eq!(Specular.after(false, true), Specular);
-        // Any non-delta bounce that is no receiver ends the cover.
-        assert_eq!(Specular.after(false, false), No);
-        assert_eq!(Next.after(false, false), No);
-        // Delta bounces without a receiver before them cover nothing.
-        assert_eq!(No.after(false, true), No);
-        // A receiver that continues by a delta lobe covers nothing of that lobe.
-        assert_eq!(No.after(true, true), No);
-        assert_eq!(Covered::default(), No);
     }
 }

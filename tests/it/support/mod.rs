@@ -574,7 +574,7 @@ pub fn forge_partial(
     let mut attrs = read_exr_attributes(src)?;
     attrs.retain(|(k, _)| k.starts_with("photon."));
     let mut layers = Vec::new();
-    for c in photon::integrator::passes::COMPONENTS {
+    for c in photon::film::Component::NAMES {
         for half in ["hi", "lo"] {
             let name = format!("sum.{c}.{half}");
             let words = read_exr_uint_layer(src, &name)?.2;
