@@ -231,7 +231,7 @@ pub struct RenderOutput {
 pub struct RenderContext<'a> {
     pub scene: &'a Scene,
     pub accel: &'a Accel,
-    pub lights: Lights,
+    pub lights: &'a Lights,
     pub camera: Camera,
     pub filter: Filter,
     pub settings: RenderSettings,
@@ -252,7 +252,7 @@ pub fn prepare(
         ps.trace.seed = settings.seed;
         ps.trace.pattern = settings.pattern;
         ps.trace.footprint = Some(settings.footprint());
-        photonmap::prepare(scene, accel, &Lights::new(scene), &ps)
+        photonmap::prepare(scene, accel, Lights::new(scene), &ps)
     })
 }
 
@@ -283,7 +283,15 @@ pub fn render_prepared(
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> RenderOutput {
     let start = Instant::now();
-    let lights = Lights::new(scene);
+    // Pass 1's lights when there was one (built once per render).
+    let own;
+    let lights = match photons {
+        Some(p) => &p.lights,
+        None => {
+            own = Lights::new(scene);
+            &own
+        }
+    };
     let notes = photons.map(photonmap::describe).unwrap_or_default();
     let (photon_seconds, map_build_seconds) = photons.map_or((0.0, 0.0), |p| {
         let st = &p.maps.stats;

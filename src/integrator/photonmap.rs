@@ -180,6 +180,8 @@ pub struct PhotonPass {
     pub cache_seconds: f64,
     /// Components skipped because the scene cannot produce them, for the statistics.
     pub skipped: Vec<&'static str>,
+    /// The lights pass 1 emitted from, which pass 2 samples too.
+    pub lights: Lights,
 }
 
 /// Which maps the scene needs, (global, caustic), and why a map it does not need is skipped:
@@ -219,9 +221,10 @@ pub fn needed_maps(scene: &Scene, receiver_alpha: f32) -> (bool, bool, Vec<&'sta
 pub fn prepare(
     scene: &Scene,
     accel: &Accel,
-    lights: &Lights,
+    owned_lights: Lights,
     settings: &PhotonSettings,
 ) -> PhotonPass {
+    let lights = &owned_lights;
     let mut s = settings.clone();
     let (need_global, need_caustic, skipped) = needed_maps(scene, s.trace.receiver_alpha);
     if !need_global {
@@ -288,6 +291,7 @@ pub fn prepare(
         caustic_params,
         cache_seconds: t.elapsed().as_secs_f64(),
         skipped,
+        lights: owned_lights,
     }
 }
 

@@ -24,7 +24,10 @@ mod point;
 mod spot;
 
 pub use area::AreaLight;
+pub use distant::DistantLight;
 pub use infinite::{EnvMap, Portal};
+pub use point::PointLight;
+pub use spot::SpotLight;
 
 use crate::math::{luminance, Frame, Vec2, Vec3};
 use crate::sampling::alias::AliasTable;
@@ -52,10 +55,20 @@ pub struct LightSample {
     pub delta: bool,
 }
 
-/// The scene's lights, ready to sample.
+/// One of the scene's lights, ready to sample (an area light with its triangle distribution).
+#[derive(Clone, Debug)]
+enum Emitter {
+    Area(AreaLight),
+    Point(PointLight),
+    Spot(SpotLight),
+    Distant(DistantLight),
+    Infinite(Arc<EnvMap>),
+}
+
+/// The scene's lights, ready to sample; light `i` is the scene's light `i`.
 #[derive(Clone, Debug)]
 pub struct Lights {
-    areas: Vec<Option<AreaLight>>,
+    emitters: Vec<Emitter>,
     /// The infinite lights: (index in the scene's lights, map).
     envs: Vec<(usize, Arc<EnvMap>)>,
     select: AliasTable,
@@ -75,17 +88,20 @@ impl Lights {
         } else {
             (Vec3::ZERO, 1.0)
         };
-        let areas: Vec<Option<AreaLight>> = scene
+        let emitters: Vec<Emitter> = scene
             .lights
             .iter()
             .map(|l| match l {
-                Light::Area { mesh, l, two_sided } => Some(AreaLight::new(
+                Light::Area { mesh, l, two_sided } => Emitter::Area(AreaLight::new(
                     &scene.meshes[*mesh as usize],
                     *mesh,
                     *l,
                     *two_sided,
                 )),
-                _ => None,
+                Light::Point(p) => Emitter::Point(*p),
+                Light::Spot(s) => Emitter::Spot(*s),
+                Light::Distant(d) => Emitter::Distant(*d),
+                Light::Infinite { map } => Emitter::Infinite(map.clone()),
             })
             .collect();
         let envs = scene
@@ -98,14 +114,14 @@ impl Lights {
             })
             .collect();
         let mut lights = Lights {
-            areas,
+            emitters,
             envs,
             select: AliasTable::default(),
             surfaceless: AliasTable::default(),
             center,
             radius,
         };
-        let powers = lights.powers(scene);
+        let powers = lights.powers();
         let surfaceless: Vec<f32> = powers
             .iter()
             .zip(&scene.lights)
@@ -138,18 +154,13 @@ impl Lights {
     }
 
     /// Emitted power (luminance of the RGB power, watts-like units).
-    pub fn power(&self, scene: &Scene, i: usize) -> f32 {
-        match &scene.lights[i] {
-            Light::Area { .. } => self.areas[i].as_ref().map_or(0.0, |a| a.power()),
-            Light::Point { intensity, .. } => point::power(*intensity),
-            Light::Spot {
-                intensity,
-                cos_falloff_start,
-                cos_falloff_end,
-                ..
-            } => spot::power(*intensity, *cos_falloff_start, *cos_falloff_end),
-            Light::Distant { l, .. } => distant::power(*l, self.radius),
-            Light::Infinite { map } => map.power(self.radius),
+    pub fn power(&self, i: usize) -> f32 {
+        match &self.emitters[i] {
+            Emitter::Area(a) => a.power(),
+            Emitter::Point(p) => p.power(),
+            Emitter::Spot(s) => s.power(),
+            Emitter::Distant(d) => d.power(self.radius),
+            Emitter::Infinite(map) => map.power(self.radius),
         }
     }
 
@@ -200,25 +211,12 @@ impl Lights {
         p: Vec3,
         u: Vec2,
     ) -> Option<LightSample> {
-        let mut s = match &scene.lights[i] {
-            Light::Area { .. } => self.areas[i].as_ref()?.sample(&scene.meshes, p, u)?,
-            Light::Point { pos, intensity } => point::sample(*pos, *intensity, p)?,
-            Light::Spot {
-                pos,
-                dir,
-                intensity,
-                cos_falloff_start,
-                cos_falloff_end,
-            } => spot::sample(
-                *pos,
-                *dir,
-                *intensity,
-                *cos_falloff_start,
-                *cos_falloff_end,
-                p,
-            )?,
-            Light::Distant { dir, l } => distant::sample(*dir, *l, p, self.center, self.radius),
-            Light::Infinite { map } => {
+        let mut s = match &self.emitters[i] {
+            Emitter::Area(a) => a.sample(&scene.meshes, p, u)?,
+            Emitter::Point(l) => l.sample(p)?,
+            Emitter::Spot(l) => l.sample(p)?,
+            Emitter::Distant(l) => l.sample(p, self.center, self.radius),
+            Emitter::Infinite(map) => {
                 let (wi, li, pdf) = map.sample(u)?;
                 if !map.admits(p, wi) {
                     return None; // a portal light: this direction is dark from p
@@ -243,7 +241,7 @@ impl Lights {
     /// `n_light`) on area light `i` as seen from `p_ref`; for MIS when a BSDF-sampled ray hits
     /// an emitter.
     pub fn pdf_area(&self, i: usize, p_ref: Vec3, p_light: Vec3, n_light: Vec3) -> f32 {
-        match self.areas.get(i).and_then(|a| a.as_ref()) {
+        match self.area_light(i) {
             Some(a) => self.selection_pmf(i) * a.pdf(p_ref, p_light, n_light),
             None => 0.0,
         }
@@ -251,14 +249,17 @@ impl Lights {
 
     /// Radiance leaving area light `i` at a point with geometric normal `n` along `w`.
     pub fn le(&self, i: usize, n: Vec3, w: Vec3) -> Vec3 {
-        match self.areas.get(i).and_then(|a| a.as_ref()) {
+        match self.area_light(i) {
             Some(a) => a.le(n, w),
             None => Vec3::ZERO,
         }
     }
 
     pub fn area_light(&self, i: usize) -> Option<&AreaLight> {
-        self.areas.get(i).and_then(|a| a.as_ref())
+        match self.emitters.get(i) {
+            Some(Emitter::Area(a)) => Some(a),
+            _ => None,
+        }
     }
 
     pub fn scene_sphere(&self) -> (Vec3, f32) {
@@ -296,27 +297,12 @@ impl Lights {
     /// [0,1)^2, so both can be stratified over the light's photons). The flux is
     /// `Le cos / (pdf_pos pdf_dir)`: the light's power for uniform cosine-weighted sampling.
     pub fn emit(&self, scene: &Scene, i: usize, u_pos: Vec2, u_dir: Vec2) -> Option<Emission> {
-        match &scene.lights[i] {
-            Light::Area { .. } => self.areas[i].as_ref()?.emit(&scene.meshes, u_pos, u_dir),
-            Light::Point { pos, intensity } => Some(point::emit(*pos, *intensity, u_dir)),
-            Light::Spot {
-                pos,
-                dir,
-                intensity,
-                cos_falloff_start,
-                cos_falloff_end,
-            } => spot::emit(
-                *pos,
-                *dir,
-                *intensity,
-                *cos_falloff_start,
-                *cos_falloff_end,
-                u_dir,
-            ),
-            Light::Distant { dir, l } => {
-                Some(distant::emit(*dir, *l, self.center, self.radius, u_pos))
-            }
-            Light::Infinite { map } => self.emit_env(map, u_pos, u_dir),
+        match &self.emitters[i] {
+            Emitter::Area(a) => a.emit(&scene.meshes, u_pos, u_dir),
+            Emitter::Point(l) => Some(l.emit(u_dir)),
+            Emitter::Spot(l) => l.emit(u_dir),
+            Emitter::Distant(l) => Some(l.emit(self.center, self.radius, u_pos)),
+            Emitter::Infinite(map) => self.emit_env(map, u_pos, u_dir),
         }
     }
 
@@ -355,7 +341,7 @@ impl Lights {
         u_dir: Vec2,
         targets: &[(Vec3, f32)],
     ) -> Option<Emission> {
-        let Light::Infinite { map } = &scene.lights[i] else {
+        let Emitter::Infinite(map) = &self.emitters[i] else {
             return self.emit(scene, i, u_pos, u_dir);
         };
         let areas: Vec<f32> = targets.iter().map(|&(_, r)| r * r).collect();
@@ -390,40 +376,40 @@ impl Lights {
     }
 
     /// The sample domain a projection map of light `i` restricts.
-    pub fn emission_domain(&self, scene: &Scene, i: usize) -> EmissionDomain {
-        match scene.lights[i] {
-            Light::Distant { .. } => EmissionDomain::Position,
+    pub fn emission_domain(&self, i: usize) -> EmissionDomain {
+        match self.emitters[i] {
+            Emitter::Distant(_) => EmissionDomain::Position,
             _ => EmissionDomain::Direction,
         }
     }
 
     /// Whether every photon of light `i` leaves with the same direction warp (so a cell of the
     /// direction domain maps to one cone of world directions): false for curved area lights.
-    pub fn fixed_direction_frame(&self, scene: &Scene, i: usize) -> bool {
-        match &scene.lights[i] {
-            Light::Area { .. } => self.areas[i]
-                .as_ref()
-                .is_some_and(|a| a.plane_normal().is_some()),
+    pub fn fixed_direction_frame(&self, i: usize) -> bool {
+        match &self.emitters[i] {
+            Emitter::Area(a) => a.plane_normal().is_some(),
             // Photons leave from anywhere on a disc that turns with the direction.
-            Light::Infinite { .. } => false,
+            Emitter::Infinite(_) => false,
             _ => true,
         }
     }
 
     /// Bounding sphere of the points light `i` emits from (radius 0 for point and spot).
     pub fn origin_bounds(&self, scene: &Scene, i: usize) -> (Vec3, f32) {
-        match &scene.lights[i] {
-            Light::Area { mesh, .. } => bounding_sphere(&scene.meshes[*mesh as usize].positions),
-            Light::Point { pos, .. } | Light::Spot { pos, .. } => (*pos, 0.0),
-            Light::Distant { .. } => (self.center, self.radius),
-            Light::Infinite { .. } => (self.center, 3.0 * self.radius),
+        match &self.emitters[i] {
+            Emitter::Area(a) => bounding_sphere(&scene.meshes[a.mesh as usize].positions),
+            Emitter::Point(PointLight { pos, .. }) | Emitter::Spot(SpotLight { pos, .. }) => {
+                (*pos, 0.0)
+            }
+            Emitter::Distant(_) => (self.center, self.radius),
+            Emitter::Infinite(_) => (self.center, 3.0 * self.radius),
         }
     }
 
     /// Photon-count weights: emitted power of each light (0 for lights that emit nothing).
-    pub fn powers(&self, scene: &Scene) -> Vec<f32> {
-        (0..scene.lights.len())
-            .map(|i| self.power(scene, i).max(0.0))
+    pub fn powers(&self) -> Vec<f32> {
+        (0..self.emitters.len())
+            .map(|i| self.power(i).max(0.0))
             .collect()
     }
 }

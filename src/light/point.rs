@@ -4,35 +4,44 @@ use crate::math::{Vec2, Vec3};
 use crate::sampling::warp::square_to_uniform_sphere;
 use std::f32::consts::PI;
 
-pub fn power(intensity: Vec3) -> f32 {
-    4.0 * PI * scalar_power(intensity)
+/// `LightSource "point"`: intensity `intensity` (W/sr) at `pos`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointLight {
+    pub pos: Vec3,
+    pub intensity: Vec3,
 }
 
-pub fn sample(pos: Vec3, intensity: Vec3, p_ref: Vec3) -> Option<LightSample> {
-    let to = pos - p_ref;
-    let d2 = to.length_squared();
-    if d2 <= 0.0 {
-        return None;
+impl PointLight {
+    pub fn power(&self) -> f32 {
+        4.0 * PI * scalar_power(self.intensity)
     }
-    let wi = to / d2.sqrt();
-    Some(LightSample {
-        li: intensity / d2,
-        wi,
-        p: pos,
-        n: Vec3::ZERO,
-        err: Vec3::ZERO,
-        pdf: 1.0,
-        delta: true,
-    })
-}
 
-/// A photon in a uniform direction; flux `4 pi I`.
-pub fn emit(pos: Vec3, intensity: Vec3, u_dir: Vec2) -> Emission {
-    Emission {
-        p: pos,
-        n: Vec3::ZERO,
-        err: Vec3::ZERO,
-        dir: square_to_uniform_sphere(u_dir),
-        flux: intensity * (4.0 * PI),
+    pub fn sample(&self, p_ref: Vec3) -> Option<LightSample> {
+        let to = self.pos - p_ref;
+        let d2 = to.length_squared();
+        if d2 <= 0.0 {
+            return None;
+        }
+        let wi = to / d2.sqrt();
+        Some(LightSample {
+            li: self.intensity / d2,
+            wi,
+            p: self.pos,
+            n: Vec3::ZERO,
+            err: Vec3::ZERO,
+            pdf: 1.0,
+            delta: true,
+        })
+    }
+
+    /// A photon in a uniform direction; flux `4 pi I`.
+    pub fn emit(&self, u_dir: Vec2) -> Emission {
+        Emission {
+            p: self.pos,
+            n: Vec3::ZERO,
+            err: Vec3::ZERO,
+            dir: square_to_uniform_sphere(u_dir),
+            flux: self.intensity * (4.0 * PI),
+        }
     }
 }

@@ -13,59 +13,64 @@ pub fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
     t * t * (3.0 - 2.0 * t)
 }
 
-/// pbrt-v4's spot power: `I 2 pi ((1 - cos_start) + (cos_start - cos_end) / 2)`.
-pub fn power(intensity: Vec3, cos_start: f32, cos_end: f32) -> f32 {
-    scalar_power(intensity) * 2.0 * PI * ((1.0 - cos_start) + (cos_start - cos_end) / 2.0)
+/// `LightSource "spot"`: like a point light, inside a cone around unit `dir`, with pbrt-v4's
+/// smoothstep falloff from `cos_falloff_start` (full) to `cos_falloff_end` (zero).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpotLight {
+    pub pos: Vec3,
+    pub dir: Vec3,
+    pub intensity: Vec3,
+    pub cos_falloff_start: f32,
+    pub cos_falloff_end: f32,
 }
 
-/// Intensity scale towards unit direction `w` (from the light).
-pub fn falloff(dir: Vec3, w: Vec3, cos_start: f32, cos_end: f32) -> f32 {
-    smoothstep(cos_end, cos_start, dir.dot(w))
-}
-
-pub fn sample(
-    pos: Vec3,
-    dir: Vec3,
-    intensity: Vec3,
-    cos_start: f32,
-    cos_end: f32,
-    p_ref: Vec3,
-) -> Option<LightSample> {
-    let to = pos - p_ref;
-    let d2 = to.length_squared();
-    if d2 <= 0.0 {
-        return None;
+impl SpotLight {
+    /// pbrt-v4's spot power: `I 2 pi ((1 - cos_start) + (cos_start - cos_end) / 2)`.
+    pub fn power(&self) -> f32 {
+        let (s, e) = (self.cos_falloff_start, self.cos_falloff_end);
+        scalar_power(self.intensity) * 2.0 * PI * ((1.0 - s) + (s - e) / 2.0)
     }
-    let wi = to / d2.sqrt();
-    let li = intensity * falloff(dir, -wi, cos_start, cos_end) / d2;
-    Some(LightSample {
-        li,
-        wi,
-        p: pos,
-        n: Vec3::ZERO,
-        err: Vec3::ZERO,
-        pdf: 1.0,
-        delta: true,
-    })
-}
 
-/// A photon uniform in the cone of half-angle `acos(cos_end)`, weighted by the falloff; flux
-/// `I falloff 2 pi (1 - cos_end)`.
-pub fn emit(
-    pos: Vec3,
-    dir: Vec3,
-    intensity: Vec3,
-    cos_start: f32,
-    cos_end: f32,
-    u_dir: Vec2,
-) -> Option<Emission> {
-    let w = Frame::from_normal(dir).to_world(square_to_uniform_cone(u_dir, cos_end));
-    let flux = intensity * (falloff(dir, w, cos_start, cos_end) * 2.0 * PI * (1.0 - cos_end));
-    (flux.max_element() > 0.0).then_some(Emission {
-        p: pos,
-        n: Vec3::ZERO,
-        err: Vec3::ZERO,
-        dir: w,
-        flux,
-    })
+    /// Intensity scale towards unit direction `w` (from the light).
+    pub fn falloff(&self, w: Vec3) -> f32 {
+        smoothstep(
+            self.cos_falloff_end,
+            self.cos_falloff_start,
+            self.dir.dot(w),
+        )
+    }
+
+    pub fn sample(&self, p_ref: Vec3) -> Option<LightSample> {
+        let to = self.pos - p_ref;
+        let d2 = to.length_squared();
+        if d2 <= 0.0 {
+            return None;
+        }
+        let wi = to / d2.sqrt();
+        let li = self.intensity * self.falloff(-wi) / d2;
+        Some(LightSample {
+            li,
+            wi,
+            p: self.pos,
+            n: Vec3::ZERO,
+            err: Vec3::ZERO,
+            pdf: 1.0,
+            delta: true,
+        })
+    }
+
+    /// A photon uniform in the cone of half-angle `acos(cos_end)`, weighted by the falloff;
+    /// flux `I falloff 2 pi (1 - cos_end)`.
+    pub fn emit(&self, u_dir: Vec2) -> Option<Emission> {
+        let cos_end = self.cos_falloff_end;
+        let w = Frame::from_normal(self.dir).to_world(square_to_uniform_cone(u_dir, cos_end));
+        let flux = self.intensity * (self.falloff(w) * 2.0 * PI * (1.0 - cos_end));
+        (flux.max_element() > 0.0).then_some(Emission {
+            p: self.pos,
+            n: Vec3::ZERO,
+            err: Vec3::ZERO,
+            dir: w,
+            flux,
+        })
+    }
 }

@@ -37,9 +37,9 @@ impl ProjectionMap {
         targets: &[(Vec3, f32)],
         res: u32,
     ) -> ProjectionMap {
-        let domain = lights.emission_domain(scene, i);
+        let domain = lights.emission_domain(i);
         let res = res.max(1);
-        let all = !lights.fixed_direction_frame(scene, i);
+        let all = !lights.fixed_direction_frame(i);
         let marked = (0..res * res)
             .filter(|&c| {
                 all || cell_may_hit(scene, lights, i, domain, c % res, c / res, res, targets)

@@ -206,14 +206,14 @@ pub fn allocate(total: u64, powers: &[f32]) -> Vec<u64> {
 pub fn trace(scene: &Scene, accel: &Accel, lights: &Lights, s: &TraceSettings) -> PhotonMaps {
     let start = Instant::now();
     let mut stats = TraceStats::default();
-    let powers = lights.powers(scene);
+    let powers = lights.powers();
     let targets = caustic_targets(scene, s.receiver_alpha);
     let global = if s.global_photons > 0 {
         let counts = allocate(s.global_photons, &powers);
         stats.global_emitted = counts.iter().sum();
         stats.global_per_light = counts.clone();
         let full: Vec<ProjectionMap> = (0..powers.len())
-            .map(|i| ProjectionMap::full(lights.emission_domain(scene, i)))
+            .map(|i| ProjectionMap::full(lights.emission_domain(i)))
             .collect();
         let (l, _, rays) = shoot(
             scene,
@@ -239,7 +239,7 @@ pub fn trace(scene: &Scene, accel: &Accel, lights: &Lights, s: &TraceSettings) -
                 if s.projection_maps {
                     ProjectionMap::build(scene, lights, i, &targets, s.projection_resolution)
                 } else {
-                    ProjectionMap::full(lights.emission_domain(scene, i))
+                    ProjectionMap::full(lights.emission_domain(i))
                 }
             })
             .collect();

@@ -110,10 +110,10 @@ pub fn sphere_scene(triangles: usize) -> Scene {
                     reflectance: Vec3::splat(0.6).into(),
                 },
             ))],
-            vec![Light::Point {
+            vec![Light::Point(crate::light::PointLight {
                 pos: Vec3::new(2.0, -2.0, 4.0),
                 intensity: Vec3::splat(30.0),
-            }],
+            })],
         )
     }
 }

@@ -143,20 +143,12 @@ pub enum Light {
     /// `AreaLightSource "diffuse"` on mesh `mesh`: radiance `l` leaving the side of the
     /// geometric normal (both sides when `two_sided`).
     Area { mesh: u32, l: Vec3, two_sided: bool },
-    /// `LightSource "point"`: intensity `intensity` (W/sr) at `pos`.
-    Point { pos: Vec3, intensity: Vec3 },
-    /// `LightSource "spot"`: like a point light, inside a cone around unit `dir`, with pbrt-v4's
-    /// smoothstep falloff from `cos_falloff_start` (full) to `cos_falloff_end` (zero).
-    Spot {
-        pos: Vec3,
-        dir: Vec3,
-        intensity: Vec3,
-        cos_falloff_start: f32,
-        cos_falloff_end: f32,
-    },
-    /// `LightSource "distant"`: radiance `l` arriving along unit `dir` (the direction the
-    /// light travels, from `from` to `to`); irradiance on a surface facing it is `l`.
-    Distant { dir: Vec3, l: Vec3 },
+    /// `LightSource "point"`.
+    Point(crate::light::PointLight),
+    /// `LightSource "spot"`.
+    Spot(crate::light::SpotLight),
+    /// `LightSource "distant"`.
+    Distant(crate::light::DistantLight),
     /// `LightSource "infinite"`: radiance arriving from every direction at infinity, constant
     /// or from an equal-area image, oriented by the CTM (see [`crate::light::EnvMap`]).
     Infinite { map: Arc<crate::light::EnvMap> },

@@ -227,7 +227,8 @@ fn floor_case((s, y0, tilt): (f32, f32, f32), check_down: bool) -> Result<(), St
     let name = format!("floor scale {s:e}, y = {y0:e}, tilt {tilt}");
     let bad = nonfinite(&name, &out.image);
     let cam = Camera::new(&sc.camera, RES, RES);
-    let photon::scene::Light::Point { pos: light, .. } = sc.lights[0] else {
+    let photon::scene::Light::Point(photon::light::PointLight { pos: light, .. }) = sc.lights[0]
+    else {
         unreachable!()
     };
     // The floor plane (world space, after the rotation), normal towards the camera.

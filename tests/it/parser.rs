@@ -391,12 +391,12 @@ LightSource "point" "point3 from" [ 1 0 0 ]
     );
     assert_eq!(s.camera.fov_deg, 45.0);
     // "camera": one unit in front of the eye.
-    let Light::Point { pos, .. } = s.lights[0] else {
+    let Light::Point(photon::light::PointLight { pos, .. }) = s.lights[0] else {
         panic!()
     };
     assert_vec(pos, Vec3::new(1.0, 2.0, 2.0), 1e-6);
     // "mine" = world_from_camera * T(0,5,0): camera-space (1,5,0) is eye - 1 x + 5 y.
-    let Light::Point { pos, .. } = s.lights[1] else {
+    let Light::Point(photon::light::PointLight { pos, .. }) = s.lights[1] else {
         panic!()
     };
     assert_vec(pos, Vec3::new(0.0, 7.0, 3.0), 1e-5);
@@ -705,24 +705,24 @@ LightSource "distant" "point3 from" [ 0 10 0 ] "point3 to" [ 0 0 0 ] "rgb L" [ 1
 "#);
     assert_eq!(
         s.lights[0],
-        Light::Point {
+        Light::Point(photon::light::PointLight {
             pos: Vec3::new(2.0, 2.0, 3.0),
             intensity: Vec3::new(2.0, 4.0, 6.0)
-        }
+        })
     );
-    let Light::Point { pos, intensity } = s.lights[1] else {
+    let Light::Point(photon::light::PointLight { pos, intensity }) = s.lights[1] else {
         panic!()
     };
     assert_eq!(pos, Vec3::X);
     assert_vec(intensity, Vec3::splat(100.0 / (4.0 * PI)), 1e-5);
     // R_z(90) maps (x, y) to (-y, x).
-    let Light::Spot {
+    let Light::Spot(photon::light::SpotLight {
         pos,
         dir,
         intensity,
         cos_falloff_start,
         cos_falloff_end,
-    } = s.lights[2]
+    }) = s.lights[2]
     else {
         panic!()
     };
@@ -732,13 +732,13 @@ LightSource "distant" "point3 from" [ 0 10 0 ] "point3 to" [ 0 0 0 ] "rgb L" [ 1
     assert!(close(cos_falloff_end, 0.866_025_4, 1e-6));
     assert!(close(cos_falloff_start, 0.939_692_6, 1e-6));
     // Defaults 30 / 5 degrees; power 10 over pbrt-v4's k_e = 2 pi (1 - (cs + ce) / 2).
-    let Light::Spot {
+    let Light::Spot(photon::light::SpotLight {
         dir,
         intensity,
         cos_falloff_start,
         cos_falloff_end,
         ..
-    } = s.lights[3]
+    }) = s.lights[3]
     else {
         panic!()
     };
@@ -749,10 +749,10 @@ LightSource "distant" "point3 from" [ 0 10 0 ] "point3 to" [ 0 0 0 ] "rgb L" [ 1
     assert_vec(intensity, Vec3::splat(k), 1e-3);
     assert_eq!(
         s.lights[4],
-        Light::Distant {
+        Light::Distant(photon::light::DistantLight {
             dir: -Vec3::Y,
             l: Vec3::splat(2.0)
-        }
+        })
     );
 }
 
@@ -2344,7 +2344,7 @@ LightSource "point" "point3 from" [ 0 0 0 ]
     assert_eq!(errs.len(), 1, "{errs:?}");
     assert!(errs[0].contains("scene.pbrt:2:8") && errs[0].contains("\"realistic\""));
     // Camera space is the inverse of the CTM: the eye is at world (0, 0, 4).
-    let Light::Point { pos, .. } = got.scene.lights[0] else {
+    let Light::Point(photon::light::PointLight { pos, .. }) = got.scene.lights[0] else {
         panic!()
     };
     assert_vec(pos, Vec3::new(0.0, 0.0, 4.0), 1e-6);
@@ -2435,7 +2435,7 @@ AreaLightSource "diffuse" "blackbody L" [ 4000 ] "float scale" 7
 Shape "trianglemesh" "point3 P" [ 0 0 0 1 0 0 0 1 0 ] "integer indices" [ 0 1 2 ]
 AttributeEnd
 "#);
-    let Light::Point { intensity, .. } = s.lights[0] else {
+    let Light::Point(photon::light::PointLight { intensity, .. }) = s.lights[0] else {
         panic!()
     };
     assert!(close(luminance(intensity), 2.0, 1e-3), "{intensity}");
@@ -2449,7 +2449,7 @@ AttributeEnd
         (x - 0.44757).abs() < 1e-3 && (y - 0.40745).abs() < 1e-3,
         "({x}, {y})"
     );
-    let Light::Point { intensity, .. } = s.lights[1] else {
+    let Light::Point(photon::light::PointLight { intensity, .. }) = s.lights[1] else {
         panic!()
     };
     assert!(close(luminance(intensity), 100.0 / (4.0 * PI), 1e-3));
@@ -2459,11 +2459,11 @@ AttributeEnd
             .max_element()
             < 0.05
     );
-    let Light::Spot { intensity, .. } = s.lights[2] else {
+    let Light::Spot(photon::light::SpotLight { intensity, .. }) = s.lights[2] else {
         panic!()
     };
     assert!(close(luminance(intensity), 1.0, 1e-3) && intensity.x > 1.5 * intensity.z);
-    let Light::Distant { l, .. } = s.lights[3] else {
+    let Light::Distant(photon::light::DistantLight { l, .. }) = s.lights[3] else {
         panic!()
     };
     assert!(close(luminance(l), 0.5, 1e-3));

@@ -269,10 +269,10 @@ fn position(params: &mut ParamSet, loc: &Loc, ctm: &Mat4) -> Result<Vec3, SceneE
 
 fn point(params: &mut ParamSet, loc: &Loc, ctm: &Mat4) -> Result<Light, SceneError> {
     let intensity = intensity(params, loc, 4.0 * std::f64::consts::PI)?;
-    Ok(Light::Point {
+    Ok(Light::Point(crate::light::PointLight {
         pos: position(params, loc, ctm)?,
         intensity,
-    })
+    }))
 }
 
 /// `to - from` through the CTM's linear part, normalised; an error when it vanishes.
@@ -294,13 +294,13 @@ fn spot(params: &mut ParamSet, loc: &Loc, ctm: &Mat4) -> Result<Light, SceneErro
     let intensity = intensity(params, loc, solid_angle)?;
     let from = params.get_point3("from", Vec3::ZERO)?;
     let to = params.get_point3("to", Vec3::Z)?;
-    Ok(Light::Spot {
+    Ok(Light::Spot(crate::light::SpotLight {
         pos: position(params, loc, ctm)?,
         dir: direction(from, to, ctm, loc)?,
         intensity,
         cos_falloff_start: cos_start,
         cos_falloff_end: cos_end,
-    })
+    }))
 }
 
 fn distant(params: &mut ParamSet, loc: &Loc, ctm: &Mat4) -> Result<Light, SceneError> {
@@ -317,10 +317,10 @@ fn distant(params: &mut ParamSet, loc: &Loc, ctm: &Mat4) -> Result<Light, SceneE
     }
     let from = params.get_point3("from", Vec3::ZERO)?;
     let to = params.get_point3("to", Vec3::Z)?;
-    Ok(Light::Distant {
+    Ok(Light::Distant(crate::light::DistantLight {
         dir: direction(from, to, ctm, loc)?,
         l,
-    })
+    }))
 }
 
 /// sRGB of an equal-energy spectrum of luminance 1 (XYZ (1, 1, 1)): a constant `spectrum L`.
