@@ -5,9 +5,11 @@
 //! Integrator "path" "integer maxdepth" [ 5 ]
 //! ```
 //! Whatever integrator a file names, it is rendered by the one given on the command line
-//! (`--integrator`, default the photon mapper); the statistics say which. The parameters of
-//! every integrator photon has (`maxdepth`, `passspp`, the photon mapper's) are read whatever
-//! the file's integrator name; any other parameter is an error.
+//! (`--integrator`, default the photon mapper); the statistics say which. Each integrator
+//! reads its own parameters from a line that names it: the photon mapper's (the table in
+//! [`settings`], `progressive`, `alpha`) only under `Integrator "photonmap"`; `maxdepth` and
+//! `passspp` under any name; pbrt-v4's other integrators' own parameters are ignored with a
+//! note; any other parameter is an error at its location.
 pub mod direct;
 pub mod passes;
 pub mod path;
@@ -92,7 +94,22 @@ impl RenderSettings {
                 msg: format!("\"maxdepth\" {m}"),
             },
         )?;
-        let mut photon = photonmap::PhotonSettings::from_params(&mut params)?;
+        // Each integrator reads its own parameters: the photon mapper's belong to a file whose
+        // Integrator is "photonmap" (whichever one --integrator then renders with).
+        let name = &scene.integrator.name;
+        let mut photon = if name == "photonmap" {
+            photonmap::PhotonSettings::from_params(&mut params)?
+        } else {
+            let keys = settings::SETTINGS.iter().map(|r| r.key);
+            for key in keys.chain(["progressive", "alpha"]) {
+                if let Some(p) = params.peek(key) {
+                    return Err(p.err(format!(
+                        "\"{key}\" is a parameter of Integrator \"photonmap\", not of \"{name}\""
+                    )));
+                }
+            }
+            photonmap::PhotonSettings::default()
+        };
         photon.follow_depth(max_depth as u32);
         let pass_spp = params.get_int("passspp", 4)?;
         if pass_spp < 1 {

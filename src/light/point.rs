@@ -17,21 +17,7 @@ impl PointLight {
     }
 
     pub fn sample(&self, p_ref: Vec3) -> Option<LightSample> {
-        let to = self.pos - p_ref;
-        let d2 = to.length_squared();
-        if d2 <= 0.0 {
-            return None;
-        }
-        let wi = to / d2.sqrt();
-        Some(LightSample {
-            li: self.intensity / d2,
-            wi,
-            p: self.pos,
-            n: Vec3::ZERO,
-            err: Vec3::ZERO,
-            pdf: 1.0,
-            delta: true,
-        })
+        delta_sample(self.pos, p_ref, |_, d2| self.intensity / d2)
     }
 
     /// A photon in a uniform direction; flux `4 pi I`.
@@ -44,4 +30,28 @@ impl PointLight {
             flux: self.intensity * (4.0 * PI),
         }
     }
+}
+
+/// The sample of a point-like light at `pos` seen from `p_ref` (none at the light itself):
+/// `li(wi, d2)` is what arrives along unit `wi` from distance squared `d2`.
+pub(super) fn delta_sample(
+    pos: Vec3,
+    p_ref: Vec3,
+    li: impl Fn(Vec3, f32) -> Vec3,
+) -> Option<LightSample> {
+    let to = pos - p_ref;
+    let d2 = to.length_squared();
+    if d2 <= 0.0 {
+        return None;
+    }
+    let wi = to / d2.sqrt();
+    Some(LightSample {
+        li: li(wi, d2),
+        wi,
+        p: pos,
+        n: Vec3::ZERO,
+        err: Vec3::ZERO,
+        pdf: 1.0,
+        delta: true,
+    })
 }

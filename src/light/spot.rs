@@ -41,21 +41,8 @@ impl SpotLight {
     }
 
     pub fn sample(&self, p_ref: Vec3) -> Option<LightSample> {
-        let to = self.pos - p_ref;
-        let d2 = to.length_squared();
-        if d2 <= 0.0 {
-            return None;
-        }
-        let wi = to / d2.sqrt();
-        let li = self.intensity * self.falloff(-wi) / d2;
-        Some(LightSample {
-            li,
-            wi,
-            p: self.pos,
-            n: Vec3::ZERO,
-            err: Vec3::ZERO,
-            pdf: 1.0,
-            delta: true,
+        super::point::delta_sample(self.pos, p_ref, |wi, d2| {
+            self.intensity * self.falloff(-wi) / d2
         })
     }
 

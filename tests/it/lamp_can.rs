@@ -23,13 +23,19 @@ use crate::support as common;
 use common::TempDir;
 
 fn scene(integrator: &str, spp: u32) -> String {
+    // The photon mapper's parameters only on its own Integrator line.
+    let photons = if integrator == "photonmap" {
+        r#" "integer globalphotons" [ 20000 ] "integer causticphotons" [ 0 ]"#
+    } else {
+        ""
+    };
     format!(
         r#"LookAt 1.5 1.6 0  -2 1.5 0  0 1 0
 Camera "perspective" "float fov" [ 50 ]
 Film "rgb" "integer xresolution" [ 32 ] "integer yresolution" [ 24 ]
 PixelFilter "box" "float xradius" [ 0.5 ] "float yradius" [ 0.5 ]
 Sampler "independent" "integer pixelsamples" [ {spp} ]
-Integrator "{integrator}" "integer maxdepth" [ 6 ] "integer globalphotons" [ 20000 ] "integer causticphotons" [ 0 ]
+Integrator "{integrator}" "integer maxdepth" [ 6 ]{photons}
 WorldBegin
 Material "diffuse" "rgb reflectance" [ 0.6 0.6 0.6 ]
 #  room 4 x 2.5 x 4 around the origin's column

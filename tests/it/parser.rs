@@ -1737,6 +1737,41 @@ WorldBegin
     // The photon mapper's own parameters are not "foreign".
     let s = ok("Integrator \"photonmap\" \"integer globalphotons\" 10\nWorldBegin\n");
     assert!(s.notes.is_empty());
+    let settings = photon::integrator::RenderSettings::from_scene(&s).unwrap();
+    assert_eq!(settings.photon.trace.global_photons, 10);
+}
+
+/// Each integrator reads its own parameters: the photon mapper's on another integrator's line
+/// are an error at the parameter (they rendered silently before, issue 16), whichever
+/// integrator the command line then picks.
+#[test]
+fn photon_map_parameters_belong_to_the_photonmap_line() {
+    for (line, key) in [
+        (
+            "Integrator \"path\"\n  \"integer globallookup\" [ 7 ] \"bool progressive\" true",
+            "globallookup",
+        ),
+        (
+            "Integrator \"sppm\" \"bool progressive\" true",
+            "progressive",
+        ),
+        ("Integrator \"volpath\" \"float alpha\" 0.5", "alpha"),
+    ] {
+        let s = ok(&format!("{line}\nWorldBegin\n"));
+        let e = photon::integrator::RenderSettings::from_scene(&s).unwrap_err();
+        let row = if key == "globallookup" { 2 } else { 1 };
+        assert!(
+            e.to_string().contains(&format!("scene.pbrt:{row}:"))
+                && e.to_string().contains(&format!(
+                    "\"{key}\" is a parameter of Integrator \"photonmap\""
+                )),
+            "{e}"
+        );
+    }
+    // maxdepth and passspp belong to every integrator.
+    let s = ok("Integrator \"path\" \"integer maxdepth\" 3 \"integer passspp\" 2\nWorldBegin\n");
+    let settings = photon::integrator::RenderSettings::from_scene(&s).unwrap();
+    assert_eq!((settings.max_depth, settings.pass_spp), (3, 2));
 }
 
 #[test]

@@ -13,13 +13,19 @@ use crate::support as common;
 use common::TempDir;
 
 fn scene(integrator: &str, spp: u32) -> String {
+    // The photon mapper's parameters only on its own Integrator line.
+    let photons = if integrator == "photonmap" {
+        r#" "integer globalphotons" [ 100000 ] "integer causticphotons" [ 0 ]"#
+    } else {
+        ""
+    };
     format!(
         r#"LookAt 0.2 1.4 -1.8  0 0.6 1.2  0 1 0
 Camera "perspective" "float fov" [ 70 ]
 Film "rgb" "integer xresolution" [ 32 ] "integer yresolution" [ 24 ]
 PixelFilter "box" "float xradius" [ 0.5 ] "float yradius" [ 0.5 ]
 Sampler "independent" "integer pixelsamples" [ {spp} ]
-Integrator "{integrator}" "integer maxdepth" [ 6 ] "integer globalphotons" [ 100000 ] "integer causticphotons" [ 0 ]
+Integrator "{integrator}" "integer maxdepth" [ 6 ]{photons}
 WorldBegin
 AttributeBegin
 Material "diffuse" "rgb reflectance" [ 0.3 0.3 0.3 ]
