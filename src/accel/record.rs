@@ -14,7 +14,7 @@
 //!   its capacity; once a chunk has been dropped for lack of room, no chunk of a larger key is
 //!   taken (a bottom-k sample). The sample therefore depends only on the set of rays the render
 //!   casts, never on the thread count or the order of the calls, and holds at most `capacity`
-//!   rays per (kind, query); [`crate::resources::recording_bytes`] bounds its memory.
+//!   rays per (kind, query); [`crate::memory::recording_bytes`] bounds its memory.
 //!
 //! A render that does not record pays nothing: [`Accel`] dispatches through its closed enum as
 //! before and the kind is a constant argument at each call site.

@@ -877,12 +877,12 @@ fn part_info(ctx: &Context) -> Result<PartInfo, ImageError> {
     let (min, max) = (v2i(dw.min), v2i(dw.max));
     let size = |lo: i32, hi: i32| usize::try_from(i64::from(hi) - i64::from(lo) + 1).ok();
     match (size(min[0], max[0]), size(min[1], max[1])) {
-        (Some(w), Some(h)) if w as u64 * h as u64 > crate::resources::MAX_IMAGE_PIXELS => {
+        (Some(w), Some(h)) if w as u64 * h as u64 > crate::limits::MAX_IMAGE_PIXELS => {
             Err(ImageError::invalid(
                 &ctx.path,
                 format!(
                     "{w}x{h} pixels is more than the {} an image may have",
-                    crate::resources::MAX_IMAGE_PIXELS
+                    crate::limits::MAX_IMAGE_PIXELS
                 ),
             ))
         }

@@ -85,7 +85,7 @@ impl RenderSettings {
     pub fn from_scene(scene: &Scene) -> Result<RenderSettings, SceneError> {
         let mut params = scene.integrator.params.clone();
         let max_depth = params.get_int("maxdepth", 5)?;
-        crate::resources::check_range(max_depth, 0, crate::resources::MAX_DEPTH as i32).map_err(
+        crate::limits::check_range(max_depth, 0, crate::limits::MAX_DEPTH as i32).map_err(
             |m| SceneError {
                 loc: params
                     .loc("maxdepth")

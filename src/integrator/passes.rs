@@ -32,7 +32,7 @@ use super::{IntegratorKind, RenderOutput, RenderSettings};
 use crate::accel::Accel;
 use crate::film::Component;
 use crate::imageio::RgbImage;
-use crate::resources::MAX_PASSES;
+use crate::limits::MAX_PASSES;
 use crate::sampling::hash;
 use crate::scene::Scene;
 use std::ops::Range;
@@ -287,11 +287,11 @@ impl Partial {
             .filter(|r: &Range<u64>| r.start <= r.end)
             .ok_or_else(|| bad("photon.passes"))?;
         let pixels = w as u64 * h as u64;
-        if w == 0 || h == 0 || pixels > crate::resources::MAX_IMAGE_PIXELS {
+        if w == 0 || h == 0 || pixels > crate::limits::MAX_IMAGE_PIXELS {
             return Err(format!(
                 "{shown}: photon.resolution {w}x{h} is not a size photon renders (at most {} \
                  pixels)",
-                crate::resources::MAX_IMAGE_PIXELS
+                crate::limits::MAX_IMAGE_PIXELS
             ));
         }
         // The file's own data window (from its header) must be that size before any layer is

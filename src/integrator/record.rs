@@ -19,7 +19,7 @@ use super::{IntegratorKind, RenderSettings};
 use crate::accel::record::RecordedRays;
 use crate::accel::{Accel, BackendKind, RayKind};
 use crate::math::{Ray, Vec3};
-use crate::resources::{self, Estimate};
+use crate::memory::{self, Estimate};
 use crate::scene::Scene;
 use std::time::Instant;
 
@@ -76,9 +76,9 @@ pub fn estimate(
     threads: usize,
     n: usize,
 ) -> Estimate {
-    let mut e = resources::estimate(scene, s, IntegratorKind::Photonmap, backend, threads);
+    let mut e = memory::estimate(scene, s, IntegratorKind::Photonmap, backend, threads);
     e.parts
-        .push(("recorded rays", resources::recording_bytes(n)));
+        .push(("recorded rays", memory::recording_bytes(n)));
     e.what += &format!(", {n} recorded rays per kind");
     e
 }
@@ -96,7 +96,7 @@ pub fn record(
 ) -> Result<(Accel, Recorded), String> {
     let s = settings(base, n);
     let e = estimate(scene, &s, backend.kind(), rayon::current_num_threads(), n);
-    resources::check(&e, &resources::default_budget())?;
+    memory::check(&e, &crate::limits::default_budget())?;
     let t = Instant::now();
     let recording = Accel::recording(backend, n, seed);
     super::render(scene, &recording, &s, IntegratorKind::Photonmap, &|_, _| {});

@@ -290,7 +290,7 @@ macro_rules! settings {
     };
 }
 
-use crate::resources::{MAX_DEPTH, MAX_GATHER_SAMPLES, MAX_LOOKUP, MAX_PHOTONS, MAX_RADIUS};
+use crate::limits::{MAX_DEPTH, MAX_GATHER_SAMPLES, MAX_LOOKUP, MAX_PHOTONS, MAX_RADIUS};
 
 settings! {
     /// Photons emitted for the global map (0: none).

@@ -14,6 +14,11 @@ pub use crate::params::{
     clip_for_message, one_line, Loc, ParamSet, SceneError, MAX_LINE, MAX_MESSAGE, MAX_TOKEN,
 };
 
+/// Bytes each mesh costs beyond its triangles (the `Mesh` and its vectors' headers, the
+/// loader's record of where it was written, the backend's per-geometry objects). Measured:
+/// see BENCHMARKS.md ("Memory per mesh"); used by [`crate::memory`] and the loader's budget.
+pub const MESH_OVERHEAD_BYTES: u64 = 768;
+
 /// A triangle mesh in world space.
 #[derive(Clone, Debug, Default)]
 pub struct Mesh {
@@ -57,6 +62,17 @@ pub fn interpolate_uv(uvs: Option<&[Vec2]>, tri: [u32; 3], u: f32, v: f32) -> Ve
 }
 
 impl Mesh {
+    /// Bytes a copy of this mesh holds (its arrays plus [`MESH_OVERHEAD_BYTES`]): what an
+    /// `ObjectInstance` of it allocates in the loader.
+    pub fn bytes(&self) -> u64 {
+        let v = self.positions.len() as u64;
+        MESH_OVERHEAD_BYTES
+            + v * 12
+            + self.normals.as_ref().map_or(0, |n| n.len() as u64 * 12)
+            + self.uvs.as_ref().map_or(0, |u| u.len() as u64 * 8)
+            + self.indices.len() as u64 * 12
+    }
+
     pub fn triangle(&self, prim: u32) -> [Vec3; 3] {
         let [a, b, c] = self.indices[prim as usize];
         [

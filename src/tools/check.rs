@@ -15,12 +15,12 @@
 //! with an error is recorded and skipped, so one run lists every problem of a scene, while a
 //! render stops at the first. The `Integrator` parameters are checked as a render checks them,
 //! and the memory estimate is the one `render` checks its budget with
-//! ([`crate::resources::estimate`], for a default render: photon mapper, Embree, every core).
+//! ([`crate::memory::estimate`], for a default render: photon mapper, Embree, every core).
 
 use super::ToolError;
 use crate::accel::BackendKind;
 use crate::integrator::{IntegratorKind, RenderSettings};
-use crate::resources::{estimate, summary, Estimate};
+use crate::memory::{estimate, summary, Estimate};
 use crate::scene::loader::load_collecting;
 use crate::scene::{Scene, SceneError};
 use clap::Args;
@@ -45,7 +45,7 @@ pub struct SceneReport {
     /// `Texture` directives read (parsed, but a material that uses one is still a problem).
     pub textures: usize,
     /// The memory a default render of the scene needs (photon mapper, Embree, every core):
-    /// the model `render` checks against its budget ([`crate::resources::estimate`]).
+    /// the model `render` checks against its budget ([`crate::memory::estimate`]).
     pub memory: Estimate,
     /// Every error, in file order.
     pub problems: Vec<SceneError>,

@@ -51,7 +51,7 @@ pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
         .trim()
         .parse()
         .map_err(|_| format!("bad height in {s:?}"))?;
-    let max = crate::resources::MAX_RESOLUTION;
+    let max = crate::limits::MAX_RESOLUTION;
     if w == 0 || h == 0 || w > max || h > max {
         return Err(format!("resolution {w}x{h} out of range (1..={max} each)"));
     }
@@ -65,7 +65,7 @@ pub fn usize_in(lo: usize, hi: usize) -> impl Fn(&str) -> Result<usize, String> 
             .trim()
             .parse()
             .map_err(|_| format!("expected an integer in {lo}..={hi}, got {s:?}"))?;
-        crate::resources::check_range(v, lo, hi)
+        crate::limits::check_range(v, lo, hi)
     }
 }
 
@@ -76,7 +76,7 @@ pub fn float_in(lo: f32, hi: f32, open: bool) -> impl Fn(&str) -> Result<f32, St
             .trim()
             .parse()
             .map_err(|_| format!("expected a number, got {s:?}"))?;
-        crate::resources::check_float(v, lo, hi, open)
+        crate::limits::check_float(v, lo, hi, open)
     }
 }
 

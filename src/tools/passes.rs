@@ -8,7 +8,7 @@ use super::ToolError;
 use crate::accel::Accel;
 use crate::integrator::passes::{progress_note, render_passes, Partial, PartialHeader};
 use crate::integrator::{RenderOutput, RenderSettings};
-use crate::resources::MAX_PASSES;
+use crate::limits::MAX_PASSES;
 use crate::scene::Scene;
 use std::path::Path;
 use std::time::Instant;

@@ -4,7 +4,7 @@ use super::{float_in, parse_resolution, thread_pool, usize_in, ToolError};
 use crate::accel::{Accel, AccelOptions, BackendKind, RayKind};
 use crate::imageio::{self, ExrPixel};
 use crate::integrator::{self, IntegratorKind, RenderSettings};
-use crate::resources::{
+use crate::limits::{
     MAX_DEPTH, MAX_EXPOSURE, MAX_LIGHT_SAMPLES, MAX_PASSES, MAX_SPP, MAX_THREADS,
 };
 use crate::sampling::Pattern;
@@ -76,7 +76,7 @@ pub struct RenderOptions {
     pub exposure: f32,
     /// Memory budget (e.g. `8G`, `512M`): a render whose estimate exceeds it stops before it
     /// starts (default: 80% of physical memory, or of what an address-space limit leaves).
-    #[arg(long, value_parser = crate::resources::parse_size)]
+    #[arg(long, value_parser = crate::limits::parse_size)]
     pub max_memory: Option<u64>,
     #[command(flatten)]
     pub photon: crate::integrator::settings::PhotonOverrides,
@@ -166,7 +166,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     let t0 = Instant::now();
     let max_memory = opts
         .max_memory
-        .unwrap_or_else(|| crate::resources::default_budget().bytes);
+        .unwrap_or_else(|| crate::limits::default_budget().bytes);
     let scene = loader::load_within(&opts.scene, max_memory)?;
     let load_s = t0.elapsed().as_secs_f64();
     let mut settings = RenderSettings::from_scene(&scene)?;
@@ -198,14 +198,14 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     };
     let outputs = Outputs::plan(&exr, png.as_deref()).map_err(ToolError)?;
     let checkpoint = super::passes::plan_checkpoint(&opts.passes, &outputs)?;
-    let cli = crate::resources::FromCli {
+    let cli = crate::memory::FromCli {
         res: opts.res.is_some(),
         photons: opts.photon.global_photons.is_some() || opts.photon.caustic_photons.is_some(),
     };
     let check = |settings: &RenderSettings| {
         let (kind, backend) = (opts.integrator, opts.backend);
         let (threads, max) = (opts.threads, opts.max_memory);
-        crate::resources::check_render(&scene, settings, (kind, backend), threads, max, cli)
+        crate::memory::check_render(&scene, settings, (kind, backend), threads, max, cli)
     };
     let mut estimate = check(&settings).map_err(ToolError)?;
 
@@ -386,7 +386,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     for f in &outputs.files {
         println!("wrote {}", f.shown.display());
     }
-    println!("{}", crate::resources::report(&estimate));
+    println!("{}", crate::memory::report(&estimate));
     Ok(())
 }
 
@@ -473,7 +473,7 @@ fn print_stats(out: &crate::integrator::RenderOutput, threads: usize) {
 }
 
 /// Parses a duration: seconds as a number, or with a suffix `s`, `m` or `ms`; at most
-/// [`crate::resources::MAX_SECONDS`].
+/// [`crate::limits::MAX_SECONDS`].
 pub fn parse_duration(s: &str) -> Result<f64, String> {
     let t = s.trim();
     let (num, scale) = if let Some(v) = t.strip_suffix("ms") {
@@ -485,7 +485,7 @@ pub fn parse_duration(s: &str) -> Result<f64, String> {
     } else {
         (t, 1.0)
     };
-    let max = crate::resources::MAX_SECONDS;
+    let max = crate::limits::MAX_SECONDS;
     match num.trim().parse::<f64>() {
         Ok(v) if v.is_finite() && v > 0.0 && v * scale <= max => Ok(v * scale),
         _ => Err(format!(

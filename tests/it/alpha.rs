@@ -541,10 +541,10 @@ fn memory_estimate_counts_the_alpha_masks() {
         &format!("{FLOOR}\n{}", screen(1.0, r#""float alpha" 0.5"#)),
     );
     let without = load_world(&dir, 8, 1, &format!("{FLOOR}\n{}", screen(1.0, "")));
-    assert_eq!(photon::resources::alpha_mask_bytes(&with), 2 * 12 + 4 * 8);
-    assert_eq!(photon::resources::alpha_mask_bytes(&without), 0);
+    assert_eq!(photon::memory::alpha_mask_bytes(&with), 2 * 12 + 4 * 8);
+    assert_eq!(photon::memory::alpha_mask_bytes(&without), 0);
     let settings = RenderSettings::from_scene(&with).unwrap();
-    let e = photon::resources::estimate(
+    let e = photon::memory::estimate(
         &with,
         &settings,
         IntegratorKind::Direct,

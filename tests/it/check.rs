@@ -139,7 +139,7 @@ Texture "c" "spectrum" "imagemap" "string filename" "t.png" "float uscale" 2
     let settings = photon::integrator::RenderSettings::from_scene(&scene).unwrap();
     let kind = photon::integrator::IntegratorKind::Photonmap;
     let backend = photon::accel::BackendKind::Embree;
-    let e = photon::resources::estimate(&scene, &settings, kind, backend, threads as usize);
+    let e = photon::memory::estimate(&scene, &settings, kind, backend, threads as usize);
     assert_eq!(e.total(), r.memory.total());
     // An integrator parameter photon does not read is found as a render would find it.
     let path = dir.write(

@@ -52,7 +52,7 @@ pub fn read_capped(path: &Path, cap: u64) -> std::io::Result<Vec<u8>> {
     let too_big = |cap: u64| {
         Error::new(
             ErrorKind::InvalidData,
-            format!("larger than the limit of {}", crate::resources::human(cap)),
+            format!("larger than the limit of {}", crate::limits::human(cap)),
         )
     };
     if meta.is_dir() {
@@ -61,7 +61,7 @@ pub fn read_capped(path: &Path, cap: u64) -> std::io::Result<Vec<u8>> {
     let cap = if meta.is_file() {
         cap
     } else {
-        cap.min(crate::resources::MAX_STREAM_FILE)
+        cap.min(crate::limits::MAX_STREAM_FILE)
     };
     if meta.is_file() && meta.len() > cap {
         return Err(too_big(cap));
@@ -118,9 +118,9 @@ impl LoadBudget {
             return Err(format!(
                 "{what} needs {}, and with the {} loaded before that is more than the memory \
                  budget of {} (--max-memory)",
-                crate::resources::human(bytes),
-                crate::resources::human(held),
-                crate::resources::human(self.limit)
+                crate::limits::human(bytes),
+                crate::limits::human(held),
+                crate::limits::human(self.limit)
             ));
         }
         self.held.set(held + bytes);
@@ -158,7 +158,7 @@ pub fn gunzip_capped(gz: &[u8], cap: u64) -> std::io::Result<Vec<u8>> {
             ErrorKind::InvalidData,
             format!(
                 "decompresses to more than the limit of {}",
-                crate::resources::human(cap)
+                crate::limits::human(cap)
             ),
         ));
     }
@@ -166,9 +166,9 @@ pub fn gunzip_capped(gz: &[u8], cap: u64) -> std::io::Result<Vec<u8>> {
 }
 
 /// Loads a pbrt-v4 scene file (and everything it includes) into a [`Scene`], its data files
-/// within the default memory budget ([`crate::resources::default_budget`]).
+/// within the default memory budget ([`crate::limits::default_budget`]).
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
-    load_within(path, crate::resources::default_budget().bytes)
+    load_within(path, crate::limits::default_budget().bytes)
 }
 
 /// [`load`] with the data files' allocations held to `max_memory` bytes ([`LoadBudget`]).

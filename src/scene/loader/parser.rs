@@ -193,7 +193,7 @@ impl Builder {
             textures: Default::default(),
             images: Default::default(),
             texture_work: Default::default(),
-            budget: super::LoadBudget::new(crate::resources::default_budget().bytes),
+            budget: super::LoadBudget::new(crate::limits::default_budget().bytes),
             objects: HashMap::new(),
             object: None,
         }
@@ -295,7 +295,7 @@ impl Builder {
             Some(loc) => SceneError::at(loc, msg),
             None => SceneError::new(msg),
         };
-        let bytes = super::read_input(path, crate::resources::MAX_SCENE_FILE)
+        let bytes = super::read_input(path, crate::limits::MAX_SCENE_FILE)
             .map_err(|e| fail(format!("cannot read \"{}\": {e}", path.display())))?;
         let file = Arc::new(path.to_path_buf());
         let text = String::from_utf8(bytes).map_err(|e| not_utf8(&file, e))?;
@@ -982,7 +982,7 @@ impl Builder {
         let at_open = self.gs.ctm;
         self.note_motion(at);
         let meshes = &self.objects[name];
-        let bytes: u64 = meshes.iter().map(crate::resources::mesh_bytes).sum();
+        let bytes: u64 = meshes.iter().map(Mesh::bytes).sum();
         self.budget
             .reserve(bytes, &format!("a copy of object \"{name}\""))
             .map_err(|m| SceneError::at(at, m))?;
@@ -1605,7 +1605,7 @@ fn film(
         .zip([("xresolution", 1280), ("yresolution", 720)])
     {
         let v = params.get_int(name, default)?;
-        let max = crate::resources::MAX_RESOLUTION as i32;
+        let max = crate::limits::MAX_RESOLUTION as i32;
         if v <= 0 || v > max {
             let msg = format!("must be positive and at most {max}, got {v}");
             return Err(params.peek(name).expect("given").err(msg));
@@ -1720,13 +1720,13 @@ fn sampler(ty: &str, params: &mut ParamSet, at: &Loc) -> Result<SamplerDesc, Sce
         let x = positive_int(params, "xsamples", 4)?;
         let y = positive_int(params, "ysamples", 4)?;
         x.checked_mul(y)
-            .filter(|&n| n <= crate::resources::MAX_SPP)
+            .filter(|&n| n <= crate::limits::MAX_SPP)
             .ok_or_else(|| {
                 SceneError::at(
                     at,
                     format!(
                         "xsamples * ysamples is larger than {}",
-                        crate::resources::MAX_SPP
+                        crate::limits::MAX_SPP
                     ),
                 )
             })?
@@ -1742,7 +1742,7 @@ fn sampler(ty: &str, params: &mut ParamSet, at: &Loc) -> Result<SamplerDesc, Sce
 /// An `integer` parameter that must be positive.
 fn positive_int(params: &mut ParamSet, name: &str, default: i32) -> Result<u32, SceneError> {
     let v = params.get_int(name, default)?;
-    let max = crate::resources::MAX_SPP as i32;
+    let max = crate::limits::MAX_SPP as i32;
     if v <= 0 || v > max {
         let msg = format!("must be positive and at most {max}, got {v}");
         return Err(params.peek(name).expect("given").err(msg));

@@ -132,12 +132,12 @@ fn one_line(s: &str) -> String {
     }
 }
 
-/// Reads the PLY file at `path` (at most [`crate::resources::MAX_PLY_FILE`] bytes). A
+/// Reads the PLY file at `path` (at most [`crate::limits::MAX_PLY_FILE`] bytes). A
 /// `.ply.gz` is decompressed only as far as its header's element counts allow (a file
 /// declaring 3 vertices followed by gigabytes of zeros stops there). What parsing holds is
 /// reserved in `budget` from the declared counts before it is parsed; the mesh stays reserved.
 pub fn read_ply(path: &Path, budget: &super::LoadBudget) -> Result<ObjMesh, String> {
-    let cap = crate::resources::MAX_PLY_FILE;
+    let cap = crate::limits::MAX_PLY_FILE;
     let raw = super::read_capped(path, cap).map_err(|e| format!("cannot open: {e}"))?;
     let file_bytes = raw.len() as u64;
     budget.reserve(file_bytes, "reading it")?;

@@ -270,22 +270,22 @@ fn image_encoding(
 /// Reads an image file into linear RGB: EXR through [`crate::imageio`], PFM here, others
 /// through the `image` crate; integer images are decoded with `encoding`, float ones (EXR,
 /// PFM, float TIFF...) are taken as linear. The size in the file's header is checked against
-/// [`crate::resources::MAX_IMAGE_PIXELS`] and the decode's peak (file or decoder buffer,
+/// [`crate::limits::MAX_IMAGE_PIXELS`] and the decode's peak (file or decoder buffer,
 /// converted copy, texels) reserved in `budget` before anything is decoded; the texels (12
 /// bytes each) stay reserved.
 pub fn read_image(path: &Path, encoding: Encoding, budget: &LoadBudget) -> Result<Image, String> {
     let ext = |x: &str| path.extension().is_some_and(|e| e.eq_ignore_ascii_case(x));
     let too_many = |w: u64, h: u64| {
-        (w.saturating_mul(h) > crate::resources::MAX_IMAGE_PIXELS).then(|| {
+        (w.saturating_mul(h) > crate::limits::MAX_IMAGE_PIXELS).then(|| {
             format!(
                 "{w}x{h} pixels is more than the {} an image may have",
-                crate::resources::MAX_IMAGE_PIXELS
+                crate::limits::MAX_IMAGE_PIXELS
             )
         })
     };
     if ext("pfm") {
         // A colour PFM holds 12 bytes per pixel after a short header: the file, then texels.
-        let cap = crate::resources::MAX_IMAGE_PIXELS * 12 + 4096;
+        let cap = crate::limits::MAX_IMAGE_PIXELS * 12 + 4096;
         let len = std::fs::metadata(path).map_or(0, |m| m.len().min(cap));
         budget.reserve(2 * len, "decoding it")?;
         let image = super::read_capped(path, cap)
