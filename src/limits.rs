@@ -206,14 +206,12 @@ mod tests {
         assert!(parse_size("99999999T").is_err());
     }
 
-
     #[test]
     fn human_sizes() {
         assert_eq!(human(512), "512 B");
         assert_eq!(human(3_200_000), "3.2 MB");
         assert_eq!(human(110_000_000_000), "110 GB");
     }
-
 
     #[test]
     fn ranges() {
@@ -228,7 +226,6 @@ mod tests {
         assert!(check_float(-0.5, 0.0, 1.0, false).is_err());
         assert!(check_float(f32::INFINITY, 0.0, f32::MAX, true).is_err());
     }
-
 
     #[test]
     fn proc_fields() {

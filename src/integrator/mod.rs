@@ -85,15 +85,15 @@ impl RenderSettings {
     pub fn from_scene(scene: &Scene) -> Result<RenderSettings, SceneError> {
         let mut params = scene.integrator.params.clone();
         let max_depth = params.get_int("maxdepth", 5)?;
-        crate::limits::check_range(max_depth, 0, crate::limits::MAX_DEPTH as i32).map_err(
-            |m| SceneError {
+        crate::limits::check_range(max_depth, 0, crate::limits::MAX_DEPTH as i32).map_err(|m| {
+            SceneError {
                 loc: params
                     .loc("maxdepth")
                     .or(scene.integrator.loc.as_ref())
                     .cloned(),
                 msg: format!("\"maxdepth\" {m}"),
-            },
-        )?;
+            }
+        })?;
         // Each integrator reads its own parameters: the photon mapper's belong to a file whose
         // Integrator is "photonmap" (whichever one --integrator then renders with).
         let name = &scene.integrator.name;
@@ -270,6 +270,25 @@ pub fn prepare(
         ps.trace.pattern = settings.pattern;
         ps.trace.footprint = Some(settings.footprint());
         photonmap::prepare(scene, accel, Lights::new(scene), &ps)
+    })
+}
+
+/// The photons pass 1 of `settings` would store per photon emitted, measured by a pilot
+/// trace (`None` for integrators without pass 1). Runs on the current rayon pool.
+pub fn pilot(
+    scene: &Scene,
+    accel: &Accel,
+    settings: &RenderSettings,
+    kind: IntegratorKind,
+) -> Option<crate::photon::trace::Landings> {
+    (kind == IntegratorKind::Photonmap).then(|| {
+        let mut t = settings.photon.trace.clone();
+        (t.seed, t.pattern) = (settings.seed, settings.pattern);
+        t.footprint = Some(settings.footprint());
+        let (global, caustic, _) = photonmap::needed_maps(scene, t.receiver_alpha);
+        t.global_photons *= u64::from(global);
+        t.caustic_photons *= u64::from(caustic);
+        crate::photon::trace::pilot(scene, accel, &Lights::new(scene), &t)
     })
 }
 

@@ -17,7 +17,7 @@
 //! of the recorded camera rays.
 use super::{IntegratorKind, RenderSettings};
 use crate::accel::record::RecordedRays;
-use crate::accel::{Accel, BackendKind, RayKind};
+use crate::accel::{Accel, RayKind};
 use crate::math::{Ray, Vec3};
 use crate::memory::{self, Estimate};
 use crate::scene::Scene;
@@ -72,13 +72,14 @@ pub fn settings(base: &RenderSettings, n: usize) -> RenderSettings {
 pub fn estimate(
     scene: &Scene,
     s: &RenderSettings,
-    backend: BackendKind,
+    backend: &Accel,
     threads: usize,
     n: usize,
 ) -> Estimate {
-    let mut e = memory::estimate(scene, s, IntegratorKind::Photonmap, backend, threads);
-    e.parts
-        .push(("recorded rays", memory::recording_bytes(n)));
+    let kinds = (IntegratorKind::Photonmap, backend.kind());
+    let landings = super::pilot(scene, backend, s, IntegratorKind::Photonmap);
+    let mut e = memory::estimate(scene, s, kinds, threads, landings);
+    e.parts.push(("recorded rays", memory::recording_bytes(n)));
     e.what += &format!(", {n} recorded rays per kind");
     e
 }
@@ -95,7 +96,7 @@ pub fn record(
     seed: u64,
 ) -> Result<(Accel, Recorded), String> {
     let s = settings(base, n);
-    let e = estimate(scene, &s, backend.kind(), rayon::current_num_threads(), n);
+    let e = estimate(scene, &s, &backend, rayon::current_num_threads(), n);
     memory::check(&e, &crate::limits::default_budget())?;
     let t = Instant::now();
     let recording = Accel::recording(backend, n, seed);

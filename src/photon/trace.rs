@@ -291,6 +291,64 @@ pub fn trace(scene: &Scene, accel: &Accel, lights: &Lights, s: &TraceSettings) -
     }
 }
 
+/// Photons stored per photon emitted for each map, as a pilot trace measured them
+/// ([`pilot`]); the memory model multiplies the render's photon counts by them.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Landings {
+    pub global: f64,
+    pub caustic: f64,
+}
+
+/// Photons a pilot trace shoots for each map it measures.
+pub const PILOT_PHOTONS: u64 = 8192;
+
+/// Shoots up to [`PILOT_PHOTONS`] photons for each map `s` asks for (with the render's lights,
+/// projection maps, bounces and roulette), keeps none, and returns the photons stored per
+/// photon emitted. Deterministic (its own seed); runs on the current rayon pool.
+pub fn pilot(scene: &Scene, accel: &Accel, lights: &Lights, s: &TraceSettings) -> Landings {
+    let powers = lights.powers();
+    let targets = caustic_targets(scene, s.receiver_alpha);
+    let mut pilot = s.clone();
+    pilot.seed = hash(&[s.seed, 0x0009_1107]);
+    let rate = |kind: MapKind, wanted: u64, maps: &dyn Fn() -> Vec<ProjectionMap>| {
+        if wanted == 0 || powers.is_empty() {
+            return 0.0;
+        }
+        let counts = allocate(wanted.min(PILOT_PHOTONS), &powers);
+        let (l, _, _) = shoot(
+            scene,
+            accel,
+            lights,
+            &pilot,
+            kind,
+            &counts,
+            &maps(),
+            &targets,
+        );
+        l.len() as f64 / counts.iter().sum::<u64>().max(1) as f64
+    };
+    let full = || {
+        (0..powers.len())
+            .map(|i| ProjectionMap::full(lights.emission_domain(i)))
+            .collect()
+    };
+    let aimed = || {
+        (0..powers.len())
+            .map(|i| match s.projection_maps {
+                true => ProjectionMap::build(scene, lights, i, &targets, s.projection_resolution),
+                false => ProjectionMap::full(lights.emission_domain(i)),
+            })
+            .collect()
+    };
+    Landings {
+        global: rate(MapKind::Global, s.global_photons, &full),
+        caustic: match targets.is_empty() {
+            true => 0.0,
+            false => rate(MapKind::Caustic, s.caustic_photons, &aimed),
+        },
+    }
+}
+
 /// Builds a map from landed photons, with their surface normals when `normals` (the global
 /// map's, for the irradiance cache); `None` when empty.
 fn build_map(landings: &[Landing], normals: bool) -> Option<PhotonMap> {

@@ -21,7 +21,8 @@
 //! The baseline kd-tree is `kiddo`, a dev-dependency: `cargo bench` (the `benches/photon.rs`
 //! target) passes it in; `photon bench` itself has no baseline and leaves those columns
 //! empty, so the shipped binary does not depend on kiddo.
-use super::{thread_pool, ToolError};
+use super::job::{thread_pool, Job};
+use super::ToolError;
 use crate::accel::bvh::BvhAccel;
 use crate::accel::embree::{Device, EmbreeAccel};
 use crate::accel::record::Query;
@@ -34,7 +35,7 @@ use crate::photon::estimate::{irradiance_with, EstimateParams};
 use crate::photon::trace::{self, TraceSettings};
 use crate::photon::{KdTree, KnnResult};
 use crate::scene::generate::{short_count, sphere_scene};
-use crate::scene::{loader, Scene};
+use crate::scene::Scene;
 use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::hint::black_box;
@@ -300,18 +301,18 @@ pub fn scene_name(path: &Path) -> String {
 /// Benchmarks one scene, appending rows.
 fn bench_scene(
     name: String,
-    scene: &Scene,
+    job: &Job,
     plan: &Plan,
     baseline: &mut Option<&mut dyn KnnBaseline>,
     rows: &mut Vec<Row>,
 ) -> Result<(), ToolError> {
+    let (scene, settings) = (&job.scene, &job.settings);
     let mut rec = Recorder {
         scene: name,
         triangles: scene.triangle_count(),
         runs: plan.runs,
         rows,
     };
-    let settings = RenderSettings::from_scene(scene)?;
     let pools: Vec<(usize, rayon::ThreadPool)> = plan
         .threads
         .iter()
@@ -320,12 +321,12 @@ fn bench_scene(
     let [embree, obvhs] = bench_builds(&mut rec, scene, &pools)?;
     let (embree, rays) = pools[0]
         .1
-        .install(|| record::record(scene, embree, &settings, plan.rays, 0))
+        .install(|| record::record(scene, embree, settings, plan.rays, 0))
         .map_err(ToolError)?;
     let accels = [embree, obvhs];
     bench_rays(&mut rec, &accels, &rays, &pools);
     bench_photons(
-        &mut rec, scene, &settings, &accels, &rays, plan, &pools, baseline,
+        &mut rec, scene, settings, &accels, &rays, plan, &pools, baseline,
     )
 }
 
@@ -540,7 +541,7 @@ fn check_same_knn(ours: &[f32], theirs: &[f32], k: usize, name: &str) -> Result<
 }
 
 /// How a benchmarked scene is obtained: loaded from a file or generated.
-type SceneSource = Box<dyn Fn() -> Result<Scene, ToolError>>;
+type SceneSource = Box<dyn Fn() -> Result<Job, ToolError>>;
 
 /// Runs the benchmark without a kd-tree baseline (the `photon bench` subcommand).
 pub fn run(opts: &BenchOptions) -> Result<(), ToolError> {
@@ -575,19 +576,19 @@ pub fn run_with(
     let mut jobs: Vec<(String, SceneSource)> = Vec::new();
     for p in &plan.scenes {
         let p = p.clone();
-        jobs.push((scene_name(&p), Box::new(move || Ok(loader::load(&p)?))));
+        jobs.push((scene_name(&p), Box::new(move || Job::load(&p, None))));
     }
     for &n in &plan.generated {
         jobs.push((
             format!("sphere-{}", short_count(n)),
-            Box::new(move || Ok(sphere_scene(n))),
+            Box::new(move || Job::new(sphere_scene(n))),
         ));
     }
     for (name, load) in jobs {
-        let scene = load()?;
+        let job = load()?;
         let start = rows.len();
         let t = Instant::now();
-        bench_scene(name, &scene, &plan, &mut baseline, &mut rows)?;
+        bench_scene(name, &job, &plan, &mut baseline, &mut rows)?;
         print!("{}", table(&rows[start..]));
         println!("({:.1} s)\n", t.elapsed().as_secs_f64());
     }

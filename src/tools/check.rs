@@ -5,7 +5,7 @@
 //!
 //! ```text
 //! $ photon check scenes/cornell-glass.pbrt bathroom/scene-v4.pbrt
-//! scenes/cornell-glass.pbrt: ok | 16140 triangles, 1 lights, 5 materials, 0 textures | ~209.6 MB (film 7.1, photon maps 166.4, geometry 2.6, threads 33.6)
+//! scenes/cornell-glass.pbrt: ok | 16140 triangles, 1 lights, 5 materials, 0 textures | ~71.3 MB (process 13.6, film 7.1, photon maps 43.8, geometry 2.6, threads 4.2)
 //! bathroom/scene-v4.pbrt: 2 problems | 517308 triangles, ...
 //!   bathroom/scene-v4.pbrt:20:26: imagemap "bathroom/textures/wood.tga": No such file or directory (os error 2)
 //!   bathroom/scene-v4.pbrt:52:5: unsupported material type "coateddiffuse"
@@ -15,11 +15,12 @@
 //! with an error is recorded and skipped, so one run lists every problem of a scene, while a
 //! render stops at the first. The `Integrator` parameters are checked as a render checks them,
 //! and the memory estimate is the one `render` checks its budget with
-//! ([`crate::memory::estimate`], for a default render: photon mapper, Embree, every core).
+//! ([`crate::memory::estimate`], for a default render: photon mapper, Embree, every core),
+//! the photon maps sized by the same pilot trace (so `check` builds the Embree BVH).
 
 use super::ToolError;
-use crate::accel::BackendKind;
-use crate::integrator::{IntegratorKind, RenderSettings};
+use crate::accel::{Accel, AccelOptions, BackendKind};
+use crate::integrator::{pilot, IntegratorKind, RenderSettings};
 use crate::memory::{estimate, summary, Estimate};
 use crate::scene::loader::load_collecting;
 use crate::scene::{Scene, SceneError};
@@ -95,13 +96,13 @@ pub fn check_scene(path: &Path) -> SceneReport {
         RenderSettings::from_scene(&empty).expect("the defaults are valid")
     });
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let memory = estimate(
-        &scene,
-        &settings,
-        IntegratorKind::Photonmap,
-        BackendKind::Embree,
-        threads,
-    );
+    // The photon maps as a render measures them: a pilot trace on the scene's accelerator.
+    let kinds = (IntegratorKind::Photonmap, BackendKind::Embree);
+    let accel = Accel::build(&scene, BackendKind::Embree, AccelOptions::default());
+    let landings = accel
+        .ok()
+        .and_then(|a| pilot(&scene, &a, &settings, IntegratorKind::Photonmap));
+    let memory = estimate(&scene, &settings, kinds, threads, landings);
     SceneReport {
         path: path.to_path_buf(),
         triangles: scene.triangle_count(),

@@ -3,13 +3,14 @@
 //! included, see `integrator::render_for_time`); the result is a CSV (integrator, settings,
 //! budget, seconds, spp, rays, photons, relMSE, RMSE) and a log-log PNG plot of relMSE against
 //! seconds, one curve per method.
+use super::job::{Job, Overrides};
 use super::output::{kind_only, Outputs, Writer};
-use super::{parse_resolution, thread_pool, ToolError};
-use crate::accel::{Accel, AccelOptions, BackendKind};
+use super::{parse_resolution, ToolError};
+use crate::accel::{Accel, BackendKind};
 use crate::imageio::metrics::{compare, match_sizes, MaskOptions};
 use crate::imageio::{read_exr, write_exr, ExrPixel};
 use crate::integrator::{render_for_time, IntegratorKind, RenderSettings};
-use crate::scene::{loader, Scene};
+use crate::scene::Scene;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -115,17 +116,19 @@ pub struct Row {
 
 /// Runs every method at every budget; writes the CSV, the plot and the images.
 pub fn run(opts: &ConvergeOptions) -> Result<bool, ToolError> {
-    let scene = loader::load(&opts.scene)?;
+    let overrides = Overrides {
+        res: opts.res,
+        seed: opts.seed,
+        ..Default::default()
+    };
+    let mut job = Job::load(&opts.scene, None)?.with(&overrides);
+    (job.backend, job.threads) = (opts.backend, opts.threads);
     let reference = read_exr(&opts.reference)?;
-    let mut base = RenderSettings::from_scene(&scene)?;
-    if let Some((w, h)) = opts.res {
-        (base.width, base.height) = (w, h);
-    }
-    base.seed = opts.seed;
     std::fs::create_dir_all(&opts.out)
         .map_err(|e| ToolError(format!("{}: {e}", opts.out.display())))?;
-    let pool = thread_pool(opts.threads)?;
-    let accel = pool.install(|| Accel::build(&scene, opts.backend, AccelOptions::default()))?;
+    let pool = job.pool()?;
+    let (accel, _) = job.build(&pool)?;
+    let (scene, base) = (&job.scene, &job.settings);
     let chosen: Vec<Method> = methods()
         .into_iter()
         .filter(|m| opts.methods.is_empty() || opts.methods.iter().any(|n| n == m.name))
@@ -155,7 +158,7 @@ pub fn run(opts: &ConvergeOptions) -> Result<bool, ToolError> {
     for m in &chosen {
         for &budget in &opts.budgets {
             let row = measure(
-                &scene, &accel, &base, m, budget, &reference, mask, &opts.out, &pool,
+                scene, &accel, base, m, budget, &reference, mask, &opts.out, &pool,
             )?;
             println!(
                 "{:<22} budget {:>6.2} s: {:>7.2} s, {:>5} spp, relMSE {:.5}, RMSE {:.5}",

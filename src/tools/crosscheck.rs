@@ -23,13 +23,14 @@
 //! Exit code 1 when, for any kind, the unexplained disagreements or all disagreements exceed
 //! their fraction of the rays, or the 99.9th percentile of the relative |t| difference or the
 //! images' relMSE exceed their thresholds (defaults in `--help`).
-use super::{parse_resolution, thread_pool, ToolError};
+use super::job::{Job, Overrides};
+use super::{parse_resolution, ToolError};
 use crate::accel::record::{Query, RaySet, RecordedRays};
-use crate::accel::{Accel, AccelOptions, BackendKind, Hit, RayKind, RayQuery};
+use crate::accel::{Accel, BackendKind, Hit, RayKind, RayQuery};
 use crate::imageio::metrics::{self, MaskOptions};
 use crate::integrator::{self, record, IntegratorKind, RenderSettings};
 use crate::math::Ray;
-use crate::scene::{loader, Scene};
+use crate::scene::Scene;
 use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -588,23 +589,24 @@ pub fn describe_recording(r: &record::Recorded) -> String {
 
 /// Runs the cross-check; `Ok(false)` when a threshold is exceeded.
 pub fn run(opts: &CrosscheckOptions) -> Result<bool, ToolError> {
-    let scene = loader::load(&opts.scene)?;
-    let mut settings = RenderSettings::from_scene(&scene)?;
-    settings.seed = opts.seed;
-    let pool = thread_pool(opts.threads)?;
-    let t = Instant::now();
-    let embree =
-        pool.install(|| Accel::build(&scene, BackendKind::Embree, AccelOptions::default()))?;
-    let obvhs =
-        pool.install(|| Accel::build(&scene, BackendKind::Obvhs, AccelOptions::default()))?;
-    let build_s = t.elapsed().as_secs_f64();
+    let overrides = Overrides {
+        seed: opts.seed,
+        ..Default::default()
+    };
+    let mut job = Job::load(&opts.scene, None)?.with(&overrides);
+    job.threads = opts.threads;
+    let pool = job.pool()?;
+    let (embree, embree_s) = job.build_on(BackendKind::Embree, &pool)?;
+    let (obvhs, obvhs_s) = job.build_on(BackendKind::Obvhs, &pool)?;
+    let build_s = embree_s + obvhs_s;
+    let (scene, settings) = (&job.scene, &job.settings);
     let (embree, recorded) = pool
-        .install(|| record::record(&scene, embree, &settings, opts.rays, opts.seed))
+        .install(|| record::record(scene, embree, settings, opts.rays, opts.seed))
         .map_err(ToolError)?;
     let t = Instant::now();
     let reports = pool.install(|| {
         compare_rays(
-            &scene,
+            scene,
             embree.backend(),
             obvhs.backend(),
             &recorded.rays,
@@ -616,13 +618,13 @@ pub fn run(opts: &CrosscheckOptions) -> Result<bool, ToolError> {
         None
     } else {
         let mut s = settings.clone();
-        (s.width, s.height) = image_resolution(opts, &scene);
+        (s.width, s.height) = image_resolution(opts, scene);
         s.spp = opts.image_spp.max(1);
         s.seed = opts.seed;
         Some((
             s.width,
             s.height,
-            compare_images(&scene, [&embree, &obvhs], &s, &pool)?,
+            compare_images(scene, [&embree, &obvhs], &s, &pool)?,
         ))
     };
     let relmse = image.as_ref().map(|(_, _, (m, _))| *m);

@@ -4,6 +4,7 @@ pub mod check;
 pub mod compare;
 pub mod converge;
 pub mod crosscheck;
+pub mod job;
 pub mod merge;
 pub mod output;
 pub mod passes;
@@ -80,11 +81,4 @@ pub fn float_in(lo: f32, hi: f32, open: bool) -> impl Fn(&str) -> Result<f32, St
     }
 }
 
-/// A rayon pool of `threads` workers (0 = all cores) with flush-to-zero set on each.
-pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, ToolError> {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .start_handler(|_| crate::accel::cpu::enable_flush_denormals())
-        .build()
-        .map_err(|e| ToolError(format!("cannot start {threads} threads: {e}")))
-}
+pub use job::thread_pool;

@@ -1,14 +1,12 @@
 //! `photon render SCENE`: load, build the accelerator, render, write EXR + PNG, print stats.
+use super::job::{Job, Overrides};
 use super::output::Outputs;
-use super::{float_in, parse_resolution, thread_pool, usize_in, ToolError};
-use crate::accel::{Accel, AccelOptions, BackendKind, RayKind};
+use super::{float_in, parse_resolution, usize_in, ToolError};
+use crate::accel::{Accel, BackendKind, RayKind};
 use crate::imageio::{self, ExrPixel};
 use crate::integrator::{self, IntegratorKind, RenderSettings};
-use crate::limits::{
-    MAX_DEPTH, MAX_EXPOSURE, MAX_LIGHT_SAMPLES, MAX_PASSES, MAX_SPP, MAX_THREADS,
-};
+use crate::limits::{MAX_DEPTH, MAX_EXPOSURE, MAX_LIGHT_SAMPLES, MAX_PASSES, MAX_SPP, MAX_THREADS};
 use crate::sampling::Pattern;
-use crate::scene::loader;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -161,34 +159,34 @@ fn default_output(film_filename: Option<&str>, scene: &Path) -> PathBuf {
     PathBuf::from(stem).with_extension("exr")
 }
 
+impl RenderOptions {
+    /// The overrides of the file's settings this command line gives.
+    pub fn overrides(&self) -> Overrides {
+        Overrides {
+            res: self.res,
+            spp: self.spp,
+            max_depth: self.max_depth,
+            seed: self.seed,
+            pattern: self.pattern,
+            light_samples: Some(self.light_samples),
+            photon: self.photon.clone(),
+            alpha: self.passes.alpha,
+            progressive: self.passes.progressive,
+            pass_spp: self.passes.pass_spp,
+        }
+    }
+}
+
 pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     // Load and validate everything before any work is done.
-    let t0 = Instant::now();
-    let max_memory = opts
-        .max_memory
-        .unwrap_or_else(|| crate::limits::default_budget().bytes);
-    let scene = loader::load_within(&opts.scene, max_memory)?;
-    let load_s = t0.elapsed().as_secs_f64();
-    let mut settings = RenderSettings::from_scene(&scene)?;
-    if let Some((w, h)) = opts.res {
-        settings.width = w;
-        settings.height = h;
-    }
-    if let Some(spp) = opts.spp {
-        settings.spp = spp.max(1);
-    }
-    if let Some(d) = opts.max_depth {
-        settings.max_depth = d;
-    }
-    settings.seed = opts.seed;
-    settings.pattern = opts.pattern;
-    settings.light_samples = opts.light_samples.max(1);
-    opts.photon.apply(&mut settings.photon);
-    settings.photon.follow_depth(settings.max_depth);
+    let overrides = opts.overrides();
+    let mut job = Job::load(&opts.scene, opts.max_memory)?.with(&overrides);
+    (job.integrator, job.backend, job.threads) = (opts.integrator, opts.backend, opts.threads);
+    job.accel.robust = opts.robust;
     let exr = opts
         .output
         .clone()
-        .unwrap_or_else(|| default_output(scene.film.filename.as_deref(), &opts.scene));
+        .unwrap_or_else(|| default_output(job.scene.film.filename.as_deref(), &opts.scene));
     let png = match opts.no_png {
         true => None,
         false => opts
@@ -198,83 +196,21 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     };
     let outputs = Outputs::plan(&exr, png.as_deref()).map_err(ToolError)?;
     let checkpoint = super::passes::plan_checkpoint(&opts.passes, &outputs)?;
-    let cli = crate::memory::FromCli {
-        res: opts.res.is_some(),
-        photons: opts.photon.global_photons.is_some() || opts.photon.caustic_photons.is_some(),
-    };
-    let check = |settings: &RenderSettings| {
-        let (kind, backend) = (opts.integrator, opts.backend);
-        let (threads, max) = (opts.threads, opts.max_memory);
-        crate::memory::check_render(&scene, settings, (kind, backend), threads, max, cli)
-    };
-    let mut estimate = check(&settings).map_err(ToolError)?;
-
-    let pool = thread_pool(opts.threads)?;
-    let t1 = Instant::now();
-    let accel = pool.install(|| {
-        Accel::build(
-            &scene,
-            opts.backend,
-            AccelOptions {
-                robust: opts.robust,
-            },
-        )
-    })?;
-    let build_s = t1.elapsed().as_secs_f64();
-    println!(
-        "scene: {} | {} meshes, {} triangles, {} lights, {} materials | loaded in {:.3} s",
-        opts.scene.display(),
-        scene.meshes.len(),
-        scene.triangle_count(),
-        scene.lights.len(),
-        scene.materials.len(),
-        load_s
-    );
-    for note in &scene.notes {
-        println!("note: {note}");
-    }
-    println!(
-        "accel: {} build {:.3} s{}",
-        opts.backend,
-        build_s,
-        if opts.robust { " (robust)" } else { "" }
-    );
-    if settings.crop.is_some() {
-        let [x0, x1, y0, y1] = settings.pixel_bounds();
-        println!("film: crop window: pixels [{x0}, {x1}) x [{y0}, {y1}) of the image below");
-    }
-    if settings.imaging_ratio != 1.0 {
-        println!(
-            "film: imaging ratio {} (exposure time x iso / 100)",
-            settings.imaging_ratio
-        );
-    }
-    println!(
-        "render: {}x{}, {} spp ({:?}; file sampler \"{}\"), integrator {:?} (file asks for \"{}\"), max depth {}, {} threads",
-        settings.width,
-        settings.height,
-        settings.spp,
-        settings.pattern,
-        scene.sampler.name,
-        opts.integrator,
-        scene.integrator.name,
-        settings.max_depth,
-        pool.current_num_threads()
-    );
-
-    if let Some(a) = opts.passes.alpha {
-        settings.photon.alpha = a; // in range: checked by its parser
-    }
-    settings.photon.progressive |= opts.passes.progressive;
-    if let Some(n) = opts.passes.pass_spp {
-        if n == 0 {
-            return Err(ToolError("--pass-spp must be at least 1".into()));
-        }
-        settings.pass_spp = n;
-    }
+    let cli = overrides.from_cli();
+    // Everything but the photon maps, before the accelerator is built; then with the photon
+    // maps a pilot trace measured, before pass 1.
+    job.check_memory(&job.settings, opts.max_memory, cli)
+        .map_err(ToolError)?;
+    let pool = job.pool()?;
+    let (accel, build_s) = job.build(&pool)?;
+    job.pilot(&accel, &pool);
+    let check = |s: &RenderSettings| job.check_memory(s, opts.max_memory, cli);
+    let mut estimate = check(&job.settings).map_err(ToolError)?;
+    banner(opts, &job, build_s, pool.current_num_threads());
+    let (scene, mut settings) = (&job.scene, job.settings.clone());
     if opts.passes.active(opts.time.is_some()) {
         let outs = (&outputs, checkpoint.as_ref());
-        return super::passes::run(opts, &scene, &accel, &settings, &pool, outs);
+        return super::passes::run(opts, scene, &accel, &settings, &pool, outs);
     }
 
     // SIGINT/SIGTERM from here on stop the render: the tiles (or, with --time, the passes)
@@ -322,7 +258,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
                 }
             }
             let (out, spp) = pool.install(|| {
-                integrator::render_for_time(&scene, &accel, &settings, opts.integrator, budget)
+                integrator::render_for_time(scene, &accel, &settings, opts.integrator, budget)
             });
             println!(
                 "time budget {budget:.2} s: {spp} spp, {} + {} photons",
@@ -331,7 +267,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
             out
         }
         None => pool
-            .install(|| integrator::render(&scene, &accel, &settings, opts.integrator, &progress)),
+            .install(|| integrator::render(scene, &accel, &settings, opts.integrator, &progress)),
     };
     if let Some(b) = bar {
         b.finish_and_clear();
@@ -374,7 +310,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     );
     if opts.stats {
         print_stats(&out, pool.current_num_threads());
-        print_raw_rate(&scene, accel, &settings, &out, &pool);
+        print_raw_rate(scene, accel, &settings, &out, &pool);
     }
     let bad = out.image.count_nonfinite();
     if bad > 0 {
@@ -388,6 +324,51 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     }
     println!("{}", crate::memory::report(&estimate));
     Ok(())
+}
+
+/// Prints what is rendered: the scene, its notes, the accelerator, the film and the settings.
+fn banner(opts: &RenderOptions, job: &Job, build_s: f64, threads: usize) {
+    let (scene, settings) = (&job.scene, &job.settings);
+    println!(
+        "scene: {} | {} meshes, {} triangles, {} lights, {} materials | loaded in {:.3} s",
+        opts.scene.display(),
+        scene.meshes.len(),
+        scene.triangle_count(),
+        scene.lights.len(),
+        scene.materials.len(),
+        job.load_seconds
+    );
+    for note in &scene.notes {
+        println!("note: {note}");
+    }
+    println!(
+        "accel: {} build {:.3} s{}",
+        opts.backend,
+        build_s,
+        if opts.robust { " (robust)" } else { "" }
+    );
+    if settings.crop.is_some() {
+        let [x0, x1, y0, y1] = settings.pixel_bounds();
+        println!("film: crop window: pixels [{x0}, {x1}) x [{y0}, {y1}) of the image below");
+    }
+    if settings.imaging_ratio != 1.0 {
+        println!(
+            "film: imaging ratio {} (exposure time x iso / 100)",
+            settings.imaging_ratio
+        );
+    }
+    println!(
+        "render: {}x{}, {} spp ({:?}; file sampler \"{}\"), integrator {:?} (file asks for \"{}\"), max depth {}, {} threads",
+        settings.width,
+        settings.height,
+        settings.spp,
+        settings.pattern,
+        scene.sampler.name,
+        opts.integrator,
+        scene.integrator.name,
+        settings.max_depth,
+        threads
+    );
 }
 
 /// What a render stopped by `sig` says (one line): the image of the work it finished (`done`:

@@ -544,13 +544,8 @@ fn memory_estimate_counts_the_alpha_masks() {
     assert_eq!(photon::memory::alpha_mask_bytes(&with), 2 * 12 + 4 * 8);
     assert_eq!(photon::memory::alpha_mask_bytes(&without), 0);
     let settings = RenderSettings::from_scene(&with).unwrap();
-    let e = photon::memory::estimate(
-        &with,
-        &settings,
-        IntegratorKind::Direct,
-        BackendKind::Embree,
-        1,
-    );
+    let kinds = (IntegratorKind::Direct, BackendKind::Embree);
+    let e = photon::memory::estimate(&with, &settings, kinds, 1, None);
     assert!(e.parts.contains(&("alpha masks", 56)), "{:?}", e.parts);
 }
 

@@ -651,9 +651,9 @@ fn memory_line(stdout: &str) -> (u64, u64) {
     (nums[0], nums[1])
 }
 
-/// The resource model against the measured peak (VmHWM) of real renders: never below it, and
-/// for the film (measured constants) within a factor 1.5 above it. The photon-map part uses an
-/// upper bound of photons stored per photon emitted, so it may be loose, not low.
+/// The memory model against the measured peak (VmHWM) of real renders: never below it, and
+/// within a factor 1.5 above it for the film (measured constants), 2 for the photon maps (sized
+/// by a pilot trace with a margin).
 #[test]
 fn resource_model_bounds_the_measured_peak() {
     let d = tmp_dir("model");
@@ -684,7 +684,10 @@ fn resource_model_bounds_the_measured_peak() {
     );
     let (est, peak) = run(&["--res", "16x16", "--global-photons", "3000000"]);
     println!("3M photons: estimate {est}, peak {peak}");
-    assert!(peak <= est, "{est} vs {peak}");
+    assert!(
+        peak <= est && (est as f64) < 2.0 * peak as f64,
+        "{est} vs {peak}"
+    );
 }
 
 // Issue 22 ("Hostile input III"): graphs of textures and materials.
@@ -1269,12 +1272,23 @@ fn issue22_case_12_an_interrupted_render_keeps_its_finished_tiles() {
     let scene = write(&d, "scene.pbrt", small_scene(""));
     let out = write(&d, "out.exr", "old");
     let extra = ["--res", "256x256", "--spp", "1024", "--integrator", "path"];
-    let mut bg = Background::start(render_args(&scene, &d, &extra));
-    assert!(bg.wait_for_line("render:"));
-    // Not a timing assertion: long enough for some of the 256 tiles to finish, far from all.
-    std::thread::sleep(Duration::from_secs(3));
-    bg.signal("TERM");
-    let r = bg.finish(T);
+    // Not a timing assertion: stopped after 3 s, long enough for some of the 256 tiles to
+    // finish and far from all; on a loaded machine none may have, then again after 12, 30 s.
+    let mut r = None;
+    for wait in [3, 12, 30] {
+        let mut bg = Background::start(render_args(&scene, &d, &extra));
+        assert!(bg.wait_for_line("render:"));
+        std::thread::sleep(Duration::from_secs(wait));
+        bg.signal("TERM");
+        let got = bg.finish(T);
+        let none = got.stderr.contains(" 0 of 256 tiles");
+        r = Some(got);
+        if !none {
+            break;
+        }
+        let _ = std::fs::remove_file(saved_path(&r.as_ref().unwrap().stderr));
+    }
+    let r = r.unwrap();
     assert_eq!(r.code, Some(143), "{}", r.describe());
     let lines: Vec<&str> = r.stderr.lines().collect();
     assert_eq!(lines.len(), 1, "{}", r.describe());

@@ -1,0 +1,186 @@
+//! One render, set up the same way by every tool and test: load the scene (within a memory
+//! budget), apply the command line's overrides to the file's settings, check the memory
+//! estimate, build the accelerator, measure the photon maps' size with a pilot trace and check
+//! again, render.
+//!
+//! `render`, `converge`, `crosscheck`, `bench` and the integration tests start from
+//! [`Job::load`] (or [`Job::new`] for a scene built in memory); the order of the steps, the
+//! override rules and the thread pool live only here.
+use super::ToolError;
+use crate::accel::{Accel, AccelOptions, BackendKind};
+use crate::integrator::settings::PhotonOverrides;
+use crate::integrator::{self, IntegratorKind, RenderOutput, RenderSettings};
+use crate::memory::{Estimate, FromCli};
+use crate::photon::trace::Landings;
+use crate::sampling::Pattern;
+use crate::scene::{loader, Scene};
+use std::path::Path;
+use std::time::Instant;
+
+/// What the command line changes in the file's settings (`None`: the file's value).
+#[derive(Clone, Debug, Default)]
+pub struct Overrides {
+    /// Image size `(width, height)`.
+    pub res: Option<(u32, u32)>,
+    /// Samples per pixel.
+    pub spp: Option<u32>,
+    /// Maximum bounces (the photon mapper's photon bounces follow it unless given).
+    pub max_depth: Option<u32>,
+    /// Seed of every sample stream.
+    pub seed: u64,
+    /// Stratification of each pixel's samples.
+    pub pattern: Pattern,
+    /// Shadow rays per shading point (`None`: 1).
+    pub light_samples: Option<u32>,
+    /// The photon mapper's settings given as flags.
+    pub photon: PhotonOverrides,
+    /// The progressive schedule's alpha.
+    pub alpha: Option<f32>,
+    /// Progressive photon mapping (also switched on by the file).
+    pub progressive: bool,
+    /// Samples per pixel of each pass.
+    pub pass_spp: Option<u32>,
+}
+
+impl Overrides {
+    /// What the memory model must take from the command line rather than the file.
+    pub fn from_cli(&self) -> FromCli {
+        FromCli {
+            res: self.res.is_some(),
+            photons: self.photon.global_photons.is_some() || self.photon.caustic_photons.is_some(),
+        }
+    }
+}
+
+/// A loaded scene with its settings and how it is to be rendered.
+pub struct Job {
+    pub scene: Scene,
+    pub settings: RenderSettings,
+    pub integrator: IntegratorKind,
+    pub backend: BackendKind,
+    pub accel: AccelOptions,
+    /// Worker threads (0 = all cores).
+    pub threads: usize,
+    /// Wall time of loading the scene (0 for [`Job::new`]).
+    pub load_seconds: f64,
+    /// Photons stored per photon emitted, once [`Job::pilot`] measured them.
+    pub landings: Option<Landings>,
+}
+
+impl Job {
+    /// Loads `path` within `max_memory` bytes (default: [`crate::limits::default_budget`]) and
+    /// reads its settings; photon mapping on Embree, all cores.
+    pub fn load(path: &Path, max_memory: Option<u64>) -> Result<Job, ToolError> {
+        let t0 = Instant::now();
+        let max = max_memory.unwrap_or_else(|| crate::limits::default_budget().bytes);
+        let scene = loader::load_within(path, max)?;
+        let mut job = Job::new(scene)?;
+        job.load_seconds = t0.elapsed().as_secs_f64();
+        Ok(job)
+    }
+
+    /// A job for a scene already in memory, with the file's settings.
+    pub fn new(scene: Scene) -> Result<Job, ToolError> {
+        let settings = RenderSettings::from_scene(&scene)?;
+        Ok(Job {
+            scene,
+            settings,
+            integrator: IntegratorKind::Photonmap,
+            backend: BackendKind::Embree,
+            accel: AccelOptions::default(),
+            threads: 0,
+            load_seconds: 0.0,
+            landings: None,
+        })
+    }
+
+    /// Applies the command line's overrides to the file's settings.
+    pub fn with(mut self, o: &Overrides) -> Job {
+        let s = &mut self.settings;
+        if let Some((w, h)) = o.res {
+            (s.width, s.height) = (w, h);
+        }
+        if let Some(spp) = o.spp {
+            s.spp = spp.max(1);
+        }
+        if let Some(d) = o.max_depth {
+            s.max_depth = d;
+        }
+        s.seed = o.seed;
+        s.pattern = o.pattern;
+        s.light_samples = o.light_samples.unwrap_or(1).max(1);
+        o.photon.apply(&mut s.photon);
+        s.photon.follow_depth(s.max_depth);
+        if let Some(a) = o.alpha {
+            s.photon.alpha = a; // in range: checked by its parser
+        }
+        s.photon.progressive |= o.progressive;
+        if let Some(n) = o.pass_spp {
+            s.pass_spp = n.max(1);
+        }
+        self
+    }
+
+    /// The memory estimate of rendering `settings` (the job's, or a variant of them), an
+    /// error when it exceeds `max_memory` (default: the machine's budget). The photon maps
+    /// count once [`Job::pilot`] has run.
+    pub fn check_memory(
+        &self,
+        settings: &RenderSettings,
+        max_memory: Option<u64>,
+        cli: FromCli,
+    ) -> Result<Estimate, String> {
+        let (scene, kinds, threads) = (&self.scene, (self.integrator, self.backend), self.threads);
+        let limit = (max_memory, cli);
+        crate::memory::check_render(scene, settings, kinds, threads, self.landings, limit)
+    }
+
+    /// Measures the photons pass 1 stores per photon emitted with a pilot trace on `accel`
+    /// (nothing for integrators without pass 1), for [`Job::check_memory`].
+    pub fn pilot(&mut self, accel: &Accel, pool: &rayon::ThreadPool) {
+        let (scene, settings, kind) = (&self.scene, &self.settings, self.integrator);
+        self.landings = pool.install(|| integrator::pilot(scene, accel, settings, kind));
+    }
+
+    /// The thread pool of the job's thread count.
+    pub fn pool(&self) -> Result<rayon::ThreadPool, ToolError> {
+        thread_pool(self.threads)
+    }
+
+    /// Builds the job's accelerator on `pool`; returns it with its build time in seconds.
+    pub fn build(&self, pool: &rayon::ThreadPool) -> Result<(Accel, f64), ToolError> {
+        self.build_on(self.backend, pool)
+    }
+
+    /// Builds the accelerator of `backend` (crosscheck builds both).
+    pub fn build_on(
+        &self,
+        backend: BackendKind,
+        pool: &rayon::ThreadPool,
+    ) -> Result<(Accel, f64), ToolError> {
+        let t = Instant::now();
+        let accel = pool.install(|| Accel::build(&self.scene, backend, self.accel))?;
+        Ok((accel, t.elapsed().as_secs_f64()))
+    }
+
+    /// Renders the job's settings with its integrator on `pool`, reporting finished tiles to
+    /// `progress(done, total)`.
+    pub fn render(
+        &self,
+        accel: &Accel,
+        pool: &rayon::ThreadPool,
+        progress: &(dyn Fn(u64, u64) + Sync),
+    ) -> RenderOutput {
+        let (scene, settings, kind) = (&self.scene, &self.settings, self.integrator);
+        pool.install(|| integrator::render(scene, accel, settings, kind, progress))
+    }
+}
+
+/// A rayon pool of `threads` workers (0 = all cores) with flush-to-zero set on each.
+pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, ToolError> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .start_handler(|_| crate::accel::cpu::enable_flush_denormals())
+        .build()
+        .map_err(|e| ToolError(format!("cannot start {threads} threads: {e}")))
+}
