@@ -261,21 +261,8 @@ fn radiance_scale(mode: TransportMode, etap: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bsdf::testutil::Rng;
+    use crate::bsdf::testutil::{fresnel_reference, Rng};
     use crate::bsdf::BxdfFlags;
-
-    /// Unpolarised Fresnel reflectance from Hecht's s/p amplitude formulas (f64), with the
-    /// indices written out: the ray goes from index `n1` into index `n2`.
-    fn fresnel_reference(cos_i: f64, n1: f64, n2: f64) -> f64 {
-        let sin_t = n1 / n2 * (1.0 - cos_i * cos_i).max(0.0).sqrt();
-        if sin_t >= 1.0 {
-            return 1.0;
-        }
-        let cos_t = (1.0 - sin_t * sin_t).sqrt();
-        let rs = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t);
-        let rp = (n2 * cos_i - n1 * cos_t) / (n2 * cos_i + n1 * cos_t);
-        0.5 * (rs * rs + rp * rp)
-    }
 
     #[test]
     fn lobe_frequencies_match_fresnel() {

@@ -602,9 +602,11 @@ enum Step {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bsdf::testutil::{mean_and_stderr, sampled_albedo, spherical, Rng, SphereBins};
+    use crate::bsdf::testutil::{
+        brute_force_slab, fresnel_reference, mean_and_stderr, sampled_albedo, spherical, Rng,
+        SphereBins,
+    };
     use crate::bsdf::Bsdf;
-    use crate::math::Frame;
     use crate::sampling::warp::square_to_cosine_hemisphere;
 
     const RAD: TransportMode = TransportMode::Radiance;
@@ -787,100 +789,6 @@ mod tests {
                 assert!(m > 0.3, "{name}: {m}");
             }
         }
-    }
-
-    /// Unpolarised Fresnel reflectance from Hecht's amplitude formulas, in f64, from index
-    /// `n1` into `n2`.
-    fn hecht(cos_i: f64, n1: f64, n2: f64) -> f64 {
-        let sin_t = n1 / n2 * (1.0 - cos_i * cos_i).max(0.0).sqrt();
-        if sin_t >= 1.0 {
-            return 1.0;
-        }
-        let cos_t = (1.0 - sin_t * sin_t).sqrt();
-        let rs = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t);
-        let rp = (n2 * cos_i - n1 * cos_t) / (n2 * cos_i + n1 * cos_t);
-        0.5 * (rs * rs + rp * rp)
-    }
-
-    /// Snell's law for a flat interface: the direction `d` (propagation) continues with its
-    /// tangential part scaled by `n1 / n2`.
-    fn snell(d: [f64; 3], n1: f64, n2: f64) -> [f64; 3] {
-        let (x, y) = (d[0] * n1 / n2, d[1] * n1 / n2);
-        let z = (1.0 - x * x - y * y).max(0.0).sqrt();
-        [x, y, z.copysign(d[2])]
-    }
-
-    /// A textbook Henyey-Greenstein deflection of the propagation direction `d` (cosine
-    /// between old and new propagation direction; g > 0 forward).
-    fn hg_deflect(d: [f64; 3], g: f64, u: (f64, f64)) -> [f64; 3] {
-        let cos = if g.abs() < 1e-3 {
-            1.0 - 2.0 * u.0
-        } else {
-            let s = (1.0 - g * g) / (1.0 - g + 2.0 * g * u.0);
-            (1.0 + g * g - s * s) / (2.0 * g)
-        };
-        let sin = (1.0 - cos * cos).max(0.0).sqrt();
-        let phi = 2.0 * std::f64::consts::PI * u.1;
-        let f = Frame::from_normal(Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32));
-        let t = [f.s, f.t];
-        let mut out = [0.0; 3];
-        for k in 0..3 {
-            out[k] =
-                sin * phi.cos() * t[0][k] as f64 + sin * phi.sin() * t[1][k] as f64 + cos * d[k];
-        }
-        out
-    }
-
-    /// A photon-by-photon simulation of the slab `[eta, r, thickness, albedo, g]` (smooth coat
-    /// of index `eta` over a Lambertian
-    /// floor of reflectance `r`, medium of unit extinction, `albedo`, `g`, height
-    /// `thickness`): light arrives along `-wo`; returns the exit directions of the light that
-    /// leaves through the coat after entering it (the coat's own mirror reflection excluded),
-    /// each with weight 1 (absorption by roulette).
-    fn brute_force_slab(wo: Vec3, slab: [f64; 5], n: usize, rng: &mut Rng) -> Vec<Vec3> {
-        let [eta, r, thickness, albedo, g] = slab;
-        let mut exits = vec![];
-        let mut u = || rng.f32() as f64;
-        let cos_o = wo.z as f64;
-        for _ in 0..n {
-            if u() < hecht(cos_o, 1.0, eta) {
-                continue; // the coat's specular reflection
-            }
-            let mut d = snell([-wo.x as f64, -wo.y as f64, -cos_o], 1.0, eta);
-            let mut z = thickness;
-            loop {
-                // Free flight along d (unit extinction), vertical distance t |d.z|.
-                let t = -(1.0 - u()).ln();
-                let zn = z + t * d[2];
-                if zn > 0.0 && zn < thickness {
-                    if u() >= albedo {
-                        break; // absorbed in the medium
-                    }
-                    z = zn;
-                    d = hg_deflect(d, g, (u(), u()));
-                    continue;
-                }
-                if zn <= 0.0 {
-                    if u() >= r {
-                        break; // absorbed by the floor
-                    }
-                    let c = square_to_cosine_hemisphere(Vec2::new(u() as f32, u() as f32));
-                    d = [c.x as f64, c.y as f64, c.z as f64];
-                    z = 0.0;
-                    continue;
-                }
-                // At the coat from inside.
-                if u() < hecht(d[2].abs(), eta, 1.0) {
-                    d[2] = -d[2];
-                    z = thickness;
-                    continue;
-                }
-                let out = snell(d, eta, 1.0);
-                exits.push(Vec3::new(out[0] as f32, out[1] as f32, out[2] as f32));
-                break;
-            }
-        }
-        exits
     }
 
     /// pbrt-v4's layered BSDF against the brute-force slab: the directional albedo of the
@@ -1190,7 +1098,7 @@ mod tests {
         for theta in [0.2f32, 0.9, 1.4] {
             let wo = spherical(theta, 1.0);
             let cos_o = wo.z as f64;
-            let r = hecht(cos_o, 1.0, eta as f64);
+            let r = fresnel_reference(cos_o, 1.0, eta as f64);
             let sin_in = (1.0 - cos_o * cos_o).sqrt() / eta as f64;
             let cos_in = (1.0 - sin_in * sin_in).sqrt();
             let tr2 = (-2.0 * thickness as f64 / cos_in).exp();
@@ -1223,7 +1131,7 @@ mod tests {
         let t_in = |w: Vec3| {
             let c = w.z.max(0.0) as f64;
             let sin_in = (1.0 - c * c).sqrt() / eta;
-            1.0 - hecht((1.0 - sin_in * sin_in).sqrt(), eta, 1.0)
+            1.0 - fresnel_reference((1.0 - sin_in * sin_in).sqrt(), eta, 1.0)
         };
         let unnormalised = |w: Vec3| if w.z > 0.0 { t_in(w) * w.z as f64 } else { 0.0 };
         let z: f64 = bins.integrate(10, unnormalised).iter().sum();

@@ -1,6 +1,8 @@
 //! Test helpers for the BSDF unit tests: a small deterministic random generator
-//! (SplitMix64) and uniform sphere directions.
-use crate::math::{Vec2, Vec3};
+//! (SplitMix64) and uniform sphere directions, quadrature and chi-square tests, and f64
+//! reference optics (Fresnel, Snell, Henyey-Greenstein, a brute-force coated slab).
+use crate::math::{Frame, Vec2, Vec3};
+use crate::sampling::warp::square_to_cosine_hemisphere;
 use std::f32::consts::PI;
 
 /// SplitMix64 (Steele, Lea, Flood 2014): tiny, seedable, good enough for Monte Carlo checks.
@@ -281,6 +283,96 @@ pub(crate) fn sampled_albedo(
         .collect();
     let (m, se) = mean_and_stderr(&xs);
     (m, se, max_w)
+}
+
+/// Unpolarised Fresnel reflectance from Hecht's s/p amplitudes (f64), from index `n1` into `n2`.
+pub(crate) fn fresnel_reference(cos_i: f64, n1: f64, n2: f64) -> f64 {
+    let sin_t = n1 / n2 * (1.0 - cos_i * cos_i).max(0.0).sqrt();
+    if sin_t >= 1.0 {
+        return 1.0;
+    }
+    let cos_t = (1.0 - sin_t * sin_t).sqrt();
+    let rs = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t);
+    let rp = (n2 * cos_i - n1 * cos_t) / (n2 * cos_i + n1 * cos_t);
+    0.5 * (rs * rs + rp * rp)
+}
+
+/// Snell's law at a flat interface: the direction `d`'s tangential part scaled by `n1 / n2`.
+pub(crate) fn snell(d: [f64; 3], n1: f64, n2: f64) -> [f64; 3] {
+    let (x, y) = (d[0] * n1 / n2, d[1] * n1 / n2);
+    let z = (1.0 - x * x - y * y).max(0.0).sqrt();
+    [x, y, z.copysign(d[2])]
+}
+
+/// Textbook Henyey-Greenstein deflection of the propagation direction `d` (g > 0 forward).
+pub(crate) fn hg_deflect(d: [f64; 3], g: f64, u: (f64, f64)) -> [f64; 3] {
+    let cos = if g.abs() < 1e-3 {
+        1.0 - 2.0 * u.0
+    } else {
+        let s = (1.0 - g * g) / (1.0 - g + 2.0 * g * u.0);
+        (1.0 + g * g - s * s) / (2.0 * g)
+    };
+    let sin = (1.0 - cos * cos).max(0.0).sqrt();
+    let phi = 2.0 * std::f64::consts::PI * u.1;
+    let f = Frame::from_normal(Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32));
+    let t = [f.s, f.t];
+    let mut out = [0.0; 3];
+    for k in 0..3 {
+        out[k] = sin * phi.cos() * t[0][k] as f64 + sin * phi.sin() * t[1][k] as f64 + cos * d[k];
+    }
+    out
+}
+
+/// Photon-by-photon simulation of the slab `[eta, r, thickness, albedo, g]` lit along `-wo`.
+///
+/// The slab is a smooth coat of index `eta` over a Lambertian floor of reflectance `r`, a
+/// medium of unit extinction, `albedo` and `g`, of height `thickness`; the coat's own mirror
+/// reflection is excluded. Returns the exit directions of the light that leaves through the coat
+/// after entering it, each of weight 1 (absorption by roulette).
+pub(crate) fn brute_force_slab(wo: Vec3, slab: [f64; 5], n: usize, rng: &mut Rng) -> Vec<Vec3> {
+    let [eta, r, thickness, albedo, g] = slab;
+    let mut exits = vec![];
+    let mut u = || rng.f32() as f64;
+    let cos_o = wo.z as f64;
+    for _ in 0..n {
+        if u() < fresnel_reference(cos_o, 1.0, eta) {
+            continue; // the coat's specular reflection
+        }
+        let mut d = snell([-wo.x as f64, -wo.y as f64, -cos_o], 1.0, eta);
+        let mut z = thickness;
+        loop {
+            // Free flight along d (unit extinction), vertical distance t |d.z|.
+            let t = -(1.0 - u()).ln();
+            let zn = z + t * d[2];
+            if zn > 0.0 && zn < thickness {
+                if u() >= albedo {
+                    break; // absorbed in the medium
+                }
+                z = zn;
+                d = hg_deflect(d, g, (u(), u()));
+                continue;
+            }
+            if zn <= 0.0 {
+                if u() >= r {
+                    break; // absorbed by the floor
+                }
+                let c = square_to_cosine_hemisphere(Vec2::new(u() as f32, u() as f32));
+                d = [c.x as f64, c.y as f64, c.z as f64];
+                z = 0.0;
+                continue;
+            }
+            // At the coat from inside.
+            if u() < fresnel_reference(d[2].abs(), eta, 1.0) {
+                d[2] = -d[2];
+                z = thickness;
+                continue;
+            }
+            let out = snell(d, eta, 1.0);
+            exits.push(Vec3::new(out[0] as f32, out[1] as f32, out[2] as f32));
+            break;
+        }
+    }
+    exits
 }
 
 #[test]

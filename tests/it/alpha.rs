@@ -14,7 +14,7 @@ use crate::support as common;
 
 use common::TempDir;
 use photon::accel::{alpha_keeps, ray_hash, Accel, AccelOptions, BackendKind, Hit, RayKind};
-use photon::integrator::{self, IntegratorKind, RenderSettings};
+use photon::integrator::{IntegratorKind, RenderSettings};
 use photon::math::{Ray, Vec3};
 use photon::scene::{loader, Scene};
 use photon::texture::Texture;
@@ -183,15 +183,8 @@ fn floor_render(dir: &TempDir, screen_alpha: &str, kind: BackendKind) -> (f64, f
         d.z
     );
     let scene = load_world(dir, 40, 16, &world);
-    let accel = Accel::build(&scene, kind, AccelOptions::default()).unwrap();
-    let settings = RenderSettings::from_scene(&scene).unwrap();
-    let out = integrator::render(
-        &scene,
-        &accel,
-        &settings,
-        IntegratorKind::Direct,
-        &|_, _| {},
-    );
+    let settings = common::scene_settings(&scene, |_| {});
+    let out = common::render_on(&scene, IntegratorKind::Direct, kind, &settings);
     let px = &out.image.pixels;
     let mean = px.iter().map(|p| p[1] as f64).sum::<f64>() / px.len() as f64;
     (mean, 0.5 / PI as f64 * d.y as f64)
@@ -386,17 +379,10 @@ fn batches_with_inactive_lanes_match_single_rays() {
 
 /// Renders `scene` with the photon mapper (camera, shadow, gather and photon rays) at 24^2.
 fn photon_render(scene: &Scene, kind: BackendKind) -> Vec<[f32; 3]> {
-    let accel = Accel::build(scene, kind, AccelOptions::default()).unwrap();
-    let mut settings = RenderSettings::from_scene(scene).unwrap();
-    (settings.width, settings.height, settings.spp) = (24, 24, 2);
-    let out = integrator::render(
-        scene,
-        &accel,
-        &settings,
-        IntegratorKind::Photonmap,
-        &|_, _| {},
-    );
-    out.image.pixels
+    let settings = common::scene_settings(scene, |s| (s.width, s.height, s.spp) = (24, 24, 2));
+    common::render_on(scene, IntegratorKind::Photonmap, kind, &settings)
+        .image
+        .pixels
 }
 
 #[test]

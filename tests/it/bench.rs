@@ -2,14 +2,13 @@
 //! table, the CSV and the JSON, for a shared scene and a generated mesh. It never asserts a
 //! speed. The kiddo baseline runs too, so the harness's own check that both kd-trees find the
 //! same k-th distances is exercised.
+use crate::support::CORNELL;
 use photon::scene::generate;
 use photon::tools::bench::{run_with, BenchOptions, Row};
 use std::path::{Path, PathBuf};
 
 #[path = "../../benches/common/kiddo.rs"]
 mod kiddo;
-
-const CORNELL: &str = "../shared/scenes/cornell-box/scene-v4.pbrt";
 
 #[test]
 fn tiny_benchmark_reports_every_number() {

@@ -7,9 +7,9 @@
 //!   coats, alpha 0.001 as in Bitterli's coffee scene, and a smooth one).
 //! - Against the path tracer (another integrator): a coated floor that mirrors a lit diffuse
 //!   box, and a rough coat's highlight of a small lamp: same mean and blocks, no fireflies.
-use photon::accel::{Accel, AccelOptions, BackendKind};
+use photon::accel::BackendKind;
 use photon::camera::Camera;
-use photon::integrator::{self, IntegratorKind, RenderSettings};
+use photon::integrator::{IntegratorKind, RenderSettings};
 use photon::math::{Vec2, Vec3};
 use photon::scene::loader;
 use std::path::Path;
@@ -20,19 +20,13 @@ use common::TempDir;
 /// Renders `path` with `kind` at the file's settings; pixels in row-major order.
 fn render(path: &Path, kind: IntegratorKind, spp: Option<u32>) -> (RenderSettings, Vec<Vec3>) {
     let scene = loader::load(path).unwrap_or_else(|e| panic!("{e}"));
-    let accel = Accel::build(&scene, BackendKind::Embree, AccelOptions::default()).expect("accel");
-    let mut settings = RenderSettings::from_scene(&scene).expect("settings");
-    if let Some(spp) = spp {
-        settings.spp = spp;
-    }
-    let out = integrator::render(&scene, &accel, &settings, kind, &|_, _| {});
-    let px = out
-        .image
-        .pixels
-        .iter()
-        .map(|p| Vec3::from_array(*p))
-        .collect();
-    (settings, px)
+    let settings = common::scene_settings(&scene, |s| {
+        if let Some(spp) = spp {
+            s.spp = spp;
+        }
+    });
+    let out = common::render_on(&scene, kind, BackendKind::Embree, &settings);
+    (settings, common::pixels(&out.image))
 }
 
 /// Fresnel reflectance of a dielectric of index `eta` at incidence cosine `c` (from outside),

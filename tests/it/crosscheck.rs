@@ -4,6 +4,7 @@
 //! the render's own ray counters, independently of the recorder); the sample does not depend
 //! on the thread count; a sample too large for the memory budget is refused before any work;
 //! on the alpha scene every ray agrees and the images differ within noise.
+use crate::support::CORNELL;
 use photon::accel::bvh::BvhAccel;
 use photon::accel::record::Query;
 use photon::accel::{Accel, AccelOptions, BackendKind, Hit, RayKind, RayQuery};
@@ -14,8 +15,6 @@ use photon::scene::{loader, Light, Scene};
 use photon::tools::crosscheck::{self, failures, CrosscheckOptions, Thresholds};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering::Relaxed;
-
-const CORNELL: &str = "../shared/scenes/cornell-box/scene-v4.pbrt";
 
 fn options(scene: &str) -> CrosscheckOptions {
     CrosscheckOptions {
@@ -359,24 +358,17 @@ fn alpha_cutouts_agree_and_an_alpha_blind_backend_is_caught() {
 /// backends' images differ by much less than two seeds of one backend.
 #[test]
 fn alpha_cutouts_render_alike_on_both_backends_within_noise() {
-    use photon::imageio::metrics::{compare, MaskOptions};
-    use photon::integrator::{render, IntegratorKind};
+    use crate::support::{relmse, render_on, scene_settings};
     let scene = loader::load(Path::new(ALPHA)).unwrap();
     let image = |kind, seed| {
-        let accel = Accel::build(&scene, kind, AccelOptions::default()).unwrap();
-        let mut s = RenderSettings::from_scene(&scene).unwrap();
-        (s.width, s.height, s.spp, s.seed) = (64, 64, 8, seed);
-        render(&scene, &accel, &s, IntegratorKind::Photonmap, &|_, _| {}).image
+        let s = scene_settings(&scene, |s| {
+            (s.width, s.height, s.spp, s.seed) = (64, 64, 8, seed);
+        });
+        render_on(&scene, IntegratorKind::Photonmap, kind, &s).image
     };
     let embree = image(BackendKind::Embree, 0);
-    let relmse = |a| {
-        compare(&a, &embree, MaskOptions::default())
-            .unwrap()
-            .overall
-            .relmse
-    };
-    let backends = relmse(image(BackendKind::Obvhs, 0));
-    let seeds = relmse(image(BackendKind::Embree, 1));
+    let backends = relmse(&image(BackendKind::Obvhs, 0), &embree);
+    let seeds = relmse(&image(BackendKind::Embree, 1), &embree);
     println!("relMSE obvhs vs embree {backends:.3e}, seed 1 vs seed 0 {seeds:.3e}");
     assert!(backends < 0.25 * seeds, "{backends} vs {seeds}");
 }

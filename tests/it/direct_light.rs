@@ -25,11 +25,7 @@ Shape "trianglemesh" "point3 P" [ -5 0 -5  5 0 -5  5 0 5  -5 0 5 ] "integer indi
 "#,
         RHO[0], RHO[1], RHO[2]
     );
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("direct_light");
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(format!("{name}.pbrt"));
-    std::fs::write(&path, text).unwrap();
-    path
+    common::write_scene("direct_light", name, &text)
 }
 
 /// Renders `path` and returns, per pixel, (rendered, floor point seen through the centre).
@@ -178,7 +174,7 @@ fn blackbody_light_renders_with_its_luminance() {
     );
     for &(got, p) in &px {
         let l = got * PI / rho();
-        let lum = 0.2126 * l.x + 0.7152 * l.y + 0.0722 * l.z;
+        let lum = photon::math::luminance(l);
         let (x, y) = chromaticity(l);
         assert!(
             (lum - 3.0).abs() < 3e-3 * 3.0,

@@ -13,7 +13,7 @@ use crate::support as common;
 
 use common::TempDir;
 use photon::accel::{Accel, AccelOptions, BackendKind};
-use photon::integrator::{self, IntegratorKind, RenderSettings};
+use photon::integrator::{IntegratorKind, RenderSettings};
 use photon::light::{EnvMap, Lights};
 use photon::math::{luminance, Mat3, Vec2, Vec3};
 use photon::sampling::warp::{
@@ -302,14 +302,7 @@ fn illuminance_scales_to_the_cosine_weighted_integral() {
 
 /// Renders `scene` with `kind` and returns the image's pixels.
 fn render(scene: &Scene, kind: IntegratorKind) -> Vec<Vec3> {
-    let accel = Accel::build(scene, BackendKind::Embree, AccelOptions::default()).expect("accel");
-    let settings = RenderSettings::from_scene(scene).expect("settings");
-    let out = integrator::render(scene, &accel, &settings, kind, &|_, _| {});
-    out.image
-        .pixels
-        .iter()
-        .map(|p| Vec3::from_array(*p))
-        .collect()
+    common::pixels(&common::render_scene(scene, kind, |_| {}).image)
 }
 
 const ALBEDO: Vec3 = Vec3::new(0.7, 0.5, 0.3);
@@ -636,10 +629,7 @@ fn bad_infinite_lights_are_located_errors() {
 
 /// Renders `scene` with `kind` at `spp` samples per pixel and returns the image.
 fn render_image(scene: &Scene, kind: IntegratorKind, spp: u32) -> photon::imageio::RgbImage {
-    let accel = Accel::build(scene, BackendKind::Embree, AccelOptions::default()).expect("accel");
-    let mut settings = RenderSettings::from_scene(scene).expect("settings");
-    settings.spp = spp;
-    integrator::render(scene, &accel, &settings, kind, &|_, _| {}).image
+    common::render_scene(scene, kind, |s| s.spp = spp).image
 }
 
 /// Under an image map, in a scene where light arrives after diffuse bounces (a sphere on a

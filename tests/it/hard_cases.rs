@@ -27,13 +27,12 @@
 //! `cargo test --release --test it hard_cases:: -- --nocapture | grep '^summary'`.
 use crate::support as common;
 
-use common::CUBE;
+use common::{relmse, Rng, CUBE};
 use photon::accel::{Accel, AccelOptions, BackendKind, Hit};
 use photon::bsdf::{BsdfSample, TransportMode};
 use photon::camera::Camera;
-use photon::imageio::metrics::{compare, MaskOptions};
 use photon::imageio::RgbImage;
-use photon::integrator::{self, IntegratorKind, RenderOutput, RenderSettings};
+use photon::integrator::{IntegratorKind, RenderOutput};
 use photon::interaction::SurfaceInteraction;
 use photon::light::Lights;
 use photon::math::{spawn_origin, Ray, Vec2, Vec3};
@@ -44,22 +43,14 @@ use photon::sampling::Pattern;
 use photon::scene::{loader, Scene};
 use std::f32::consts::PI;
 use std::io::Write;
-use std::path::PathBuf;
 use std::sync::{Mutex, OnceLock};
 
 // ---------------------------------------------------------------------------------------------
 // Helpers
 
-fn tmp_dir() -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("hard_cases");
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 /// Writes `text` as `name.pbrt` under the test tmp dir and loads it.
 fn scene(name: &str, text: &str) -> Scene {
-    let path = tmp_dir().join(format!("{name}.pbrt"));
-    std::fs::write(&path, text).unwrap();
+    let path = common::write_scene("hard_cases", name, text);
     loader::load(&path).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
@@ -69,8 +60,7 @@ fn accel(scene: &Scene) -> Accel {
 
 /// Renders `scene` as its file says (resolution, spp, integrator parameters) with `kind`.
 fn render(scene: &Scene, kind: IntegratorKind) -> RenderOutput {
-    let settings = RenderSettings::from_scene(scene).unwrap();
-    integrator::render(scene, &accel(scene), &settings, kind, &|_, _| {})
+    common::render_scene(scene, kind, |_| {})
 }
 
 /// Renders and asserts that no pixel is NaN or infinite (count printed).
@@ -87,41 +77,16 @@ fn nonfinite(name: &str, img: &RgbImage) -> usize {
     n
 }
 
-/// relMSE of `a` against `b`.
-fn relmse(a: &RgbImage, b: &RgbImage) -> f64 {
-    compare(a, b, MaskOptions::default())
-        .unwrap()
-        .overall
-        .relmse
-}
-
 /// Prints one summary line and appends it to `summary.txt` (truncated once per run).
 fn summary(line: String) {
     static FILE: OnceLock<Mutex<std::fs::File>> = OnceLock::new();
-    let file = FILE
-        .get_or_init(|| Mutex::new(std::fs::File::create(tmp_dir().join("summary.txt")).unwrap()));
+    let file = FILE.get_or_init(|| {
+        Mutex::new(
+            std::fs::File::create(common::target_dir("hard_cases").join("summary.txt")).unwrap(),
+        )
+    });
     println!("summary | {line}");
     let _ = writeln!(file.lock().unwrap(), "{line}");
-}
-
-/// xorshift64* uniform in [0, 1).
-struct Rng(u64);
-
-impl Rng {
-    fn f32(&mut self) -> f32 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        ((self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32) / (1u64 << 24) as f32
-    }
-
-    /// A uniform unit vector.
-    fn dir(&mut self) -> Vec3 {
-        let z = 1.0 - 2.0 * self.f32();
-        let phi = 2.0 * PI * self.f32();
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        Vec3::new(r * phi.cos(), r * phi.sin(), z)
-    }
 }
 
 /// One scattering event done as the integrators do it: closest hit, the hit point

@@ -10,7 +10,7 @@
 //! - bit-identical images on 1 and 2 threads.
 use crate::support as common;
 
-use common::render_with;
+use common::{render_with, CORNELL};
 use photon::accel::BackendKind;
 use photon::camera::Camera;
 use photon::imageio::metrics::{compare, match_sizes, MaskOptions, Metrics};
@@ -20,7 +20,6 @@ use photon::math::{Vec2, Vec3};
 use photon::scene::{loader, FilterDesc, Scene};
 use std::path::{Path, PathBuf};
 
-const CORNELL: &str = "../shared/scenes/cornell-box/scene-v4.pbrt";
 const CORNELL_REF: &str = "../shared/scenes/cornell-box/reference-tungsten.exr";
 
 /// Renders `scene` with `kind` at `w x h`, `spp` samples, on `threads` threads (0 = all).
@@ -73,11 +72,7 @@ AttributeEnd
 "#,
         LE[0], LE[1], LE[2], RHO[0], RHO[1], RHO[2]
     );
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("path_tracer");
-    std::fs::create_dir_all(&dir).expect("tmp dir");
-    let path = dir.join(format!("{name}-{max_depth}.pbrt"));
-    std::fs::write(&path, text).expect("scene written");
-    path
+    common::write_scene("path_tracer", &format!("{name}-{max_depth}"), &text)
 }
 
 /// `Le (1 + rho + ... + rho^max_depth)`: emission after 0..=max_depth bounces.

@@ -12,7 +12,7 @@ use common::CUBE;
 use photon::accel::{Accel, AccelOptions, BackendKind};
 use photon::imageio::metrics::{compare, match_sizes, MaskOptions};
 use photon::imageio::read_exr;
-use photon::integrator::{self, IntegratorKind, RenderOutput, RenderSettings};
+use photon::integrator::{IntegratorKind, RenderOutput, RenderSettings};
 use photon::light::Lights;
 use photon::math::Vec3;
 use photon::photon::estimate::{irradiance_with, EstimateParams};
@@ -23,21 +23,15 @@ use photon::scene::{loader, Scene};
 use std::path::{Path, PathBuf};
 
 fn write_scene(name: &str, text: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("photonmap");
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(format!("{name}.pbrt"));
-    std::fs::write(&path, text).unwrap();
-    path
+    common::write_scene("photonmap", name, text)
 }
 
 fn render(scene: &Scene, settings: &RenderSettings) -> RenderOutput {
-    let accel = Accel::build(scene, BackendKind::Embree, AccelOptions::default()).unwrap();
-    integrator::render(
+    common::render_on(
         scene,
-        &accel,
-        settings,
         IntegratorKind::Photonmap,
-        &|_, _| {},
+        BackendKind::Embree,
+        settings,
     )
 }
 

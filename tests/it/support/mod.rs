@@ -1,9 +1,13 @@
 //! Helpers shared by the integration tests (a module that needs them says
 //! `use crate::support as common;`).
 //!
-//! A seeded generator for test inputs ([`Rng`]), a render of a scene at a given size and seed
-//! ([`render_with`]), the cube that several scenes are built around ([`CUBE`]), and
-//! Runs of the `photon` binary on hostile input: a run under an
+//! A seeded generator for test inputs ([`Rng`]); scene files under the target's temporary
+//! directory ([`target_dir`], [`write_scene`], [`scratch`]) or a self-removing [`TempDir`];
+//! in-process renders on the current thread pool ([`render_scene`]: the file's settings after a
+//! tweak, on Embree; [`render_on`]: given settings on a given backend; [`render_with`]: a size,
+//! seed and thread count) and their [`pixels`] and [`relmse`]; the shared [`CORNELL`] box and
+//! the cube that several scenes are built around ([`CUBE`]); and
+//! runs of the `photon` binary on hostile input: a run under an
 //! address-space cap (`prlimit --as`) and a timeout, and the checks every such run must pass
 //! (exit 0 or 2; on 2 exactly one stderr line that says where the problem is; no panic, no
 //! signal death).
@@ -53,6 +57,21 @@ pub fn scratch(group: &str, name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
+}
+
+/// `group` under the target's temporary directory, created if missing and otherwise kept as it
+/// is (the files of a group's tests accumulate there; [`scratch`] gives a fresh directory).
+pub fn target_dir(group: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(group);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Writes `text` as `name.pbrt` in [`target_dir`]`(group)` and returns its path.
+pub fn write_scene(group: &str, name: &str, text: &str) -> PathBuf {
+    let path = target_dir(group).join(format!("{name}.pbrt"));
+    std::fs::write(&path, text).unwrap();
+    path
 }
 
 /// A command running this build's `photon` binary.
@@ -318,6 +337,9 @@ impl Rng {
     }
 }
 
+/// The shared Cornell box (pbrt-v4 file), relative to the crate root.
+pub const CORNELL: &str = "../shared/scenes/cornell-box/scene-v4.pbrt";
+
 /// The six faces of the cube [-1, 1]^3 as a pbrt-v4 `trianglemesh`, wound so their normals
 /// point outwards.
 pub const CUBE: &str = r#"Shape "trianglemesh" "point3 P" [
@@ -343,6 +365,56 @@ pub fn render_with(
     settings.seed = seed;
     let pool = photon::tools::thread_pool(threads).expect("thread pool");
     pool.install(|| photon::integrator::render(scene, &accel, &settings, kind, &|_, _| {}))
+}
+
+/// The render settings of `scene` as its file gives them, after `tweak`.
+pub fn scene_settings(
+    scene: &photon::scene::Scene,
+    tweak: impl FnOnce(&mut photon::integrator::RenderSettings),
+) -> photon::integrator::RenderSettings {
+    let mut settings =
+        photon::integrator::RenderSettings::from_scene(scene).expect("integrator settings");
+    tweak(&mut settings);
+    settings
+}
+
+/// Renders `scene` with `kind` and `settings` on `backend`, on the current thread pool.
+pub fn render_on(
+    scene: &photon::scene::Scene,
+    kind: photon::integrator::IntegratorKind,
+    backend: photon::accel::BackendKind,
+    settings: &photon::integrator::RenderSettings,
+) -> photon::integrator::RenderOutput {
+    use photon::accel::{Accel, AccelOptions};
+    let accel = Accel::build(scene, backend, AccelOptions::default()).expect("accel builds");
+    photon::integrator::render(scene, &accel, settings, kind, &|_, _| {})
+}
+
+/// Renders `scene` with `kind` on Embree, on the current thread pool, at the file's settings
+/// after `tweak` (`|_| {}` for none).
+pub fn render_scene(
+    scene: &photon::scene::Scene,
+    kind: photon::integrator::IntegratorKind,
+    tweak: impl FnOnce(&mut photon::integrator::RenderSettings),
+) -> photon::integrator::RenderOutput {
+    let settings = scene_settings(scene, tweak);
+    render_on(scene, kind, photon::accel::BackendKind::Embree, &settings)
+}
+
+/// The pixels of `image` in row-major order.
+pub fn pixels(image: &photon::imageio::RgbImage) -> Vec<photon::math::Vec3> {
+    let pixels = image.pixels.iter();
+    pixels.map(|p| photon::math::Vec3::from_array(*p)).collect()
+}
+
+/// relMSE of `image` against `reference` over all pixels (`photon::imageio::metrics`, default
+/// mask options).
+pub fn relmse(image: &photon::imageio::RgbImage, reference: &photon::imageio::RgbImage) -> f64 {
+    use photon::imageio::metrics::{compare, MaskOptions};
+    compare(image, reference, MaskOptions::default())
+        .expect("images of one size")
+        .overall
+        .relmse
 }
 
 /// Renders the repository's `scene` (a path relative to the crate root) with the default
@@ -408,13 +480,8 @@ pub fn render_file(
     path: &Path,
     kind: photon::integrator::IntegratorKind,
 ) -> Vec<photon::math::Vec3> {
-    use photon::accel::{Accel, AccelOptions, BackendKind};
     let scene = photon::scene::loader::load(path).unwrap_or_else(|e| panic!("{e}"));
-    let accel = Accel::build(&scene, BackendKind::Embree, AccelOptions::default()).expect("accel");
-    let settings = photon::integrator::RenderSettings::from_scene(&scene).expect("settings");
-    let out = photon::integrator::render(&scene, &accel, &settings, kind, &|_, _| {});
-    let pixels = out.image.pixels.iter();
-    pixels.map(|p| photon::math::Vec3::from_array(*p)).collect()
+    pixels(&render_scene(&scene, kind, |_| {}).image)
 }
 
 /// Makes a FIFO at `path` (with `mkfifo`).
@@ -606,13 +673,11 @@ pub fn render_floor(
     photon::scene::Scene,
     Vec<(photon::math::Vec3, photon::math::Vec3)>,
 ) {
-    use photon::accel::{Accel, AccelOptions};
     use photon::math::{Vec2, Vec3};
     let scene = photon::scene::loader::load(path).unwrap_or_else(|e| panic!("{e}"));
-    let accel = Accel::build(&scene, backend, AccelOptions::default()).expect("accel");
-    let settings = photon::integrator::RenderSettings::from_scene(&scene).expect("settings");
+    let settings = scene_settings(&scene, |_| {});
     let kind = photon::integrator::IntegratorKind::Direct;
-    let out = photon::integrator::render(&scene, &accel, &settings, kind, &|_, _| {});
+    let out = render_on(&scene, kind, backend, &settings);
     let cam = photon::camera::Camera::new(&scene.camera, settings.width, settings.height);
     let mut px = Vec::new();
     for y in 0..settings.height {
