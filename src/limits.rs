@@ -1,7 +1,8 @@
 //! Limits on every count and size a scene file or the command line gives (a leaf: the loader,
 //! the settings and the CLI read it, it reads nothing of the crate), the memory budget a render
-//! must fit ([`default_budget`], `--max-memory`), and the range checks and size parsing the
-//! loader and the flags share.
+//! must fit ([`default_budget`], `--max-memory`), the loader's budget for the data files it
+//! decodes ([`LoadBudget`], [`read_capped`]), and the range checks and size parsing the loader
+//! and the flags share.
 //!
 //! ```text
 //! Film "rgb" "integer xresolution" [ 1024 ] "integer yresolution" [ 1024 ]   # 1..=32768 each
@@ -11,6 +12,7 @@
 //! and on the command line `photon render ... --max-memory 8G` (default: [`DEFAULT_FRACTION`]
 //! of `MemTotal` in /proc/meminfo, or of what an address-space limit leaves, whichever is
 //! smaller). The memory model the budget is checked against is [`crate::memory`].
+use std::path::Path;
 
 /// Largest image side, in pixels.
 pub const MAX_RESOLUTION: u32 = 32768;
@@ -60,6 +62,19 @@ pub const DEFAULT_FRACTION: f64 = 0.8;
 pub struct Budget {
     pub bytes: u64,
     pub source: String,
+}
+
+impl Budget {
+    /// `--max-memory` when given, else [`default_budget`] as it stands now.
+    pub fn resolve(max_memory: Option<u64>) -> Budget {
+        match max_memory {
+            Some(bytes) => Budget {
+                bytes,
+                source: "--max-memory".to_string(),
+            },
+            None => default_budget(),
+        }
+    }
 }
 
 /// `"integer NAME" v` must lie in `lo..=hi`: the message when it does not.
@@ -186,6 +201,97 @@ pub fn peak_resident() -> Option<u64> {
         &std::fs::read_to_string("/proc/self/status").ok()?,
         "VmHWM:",
     )
+}
+
+/// Reads at most `cap` bytes of `path`: a larger file (or a device such as /dev/zero that never
+/// ends) is an error without reading past the cap. A directory is an error too.
+pub fn read_capped(path: &Path, cap: u64) -> std::io::Result<Vec<u8>> {
+    use std::io::{Error, ErrorKind, Read};
+    let file = std::fs::File::open(path)?;
+    let meta = file.metadata()?;
+    let too_big = |cap: u64| {
+        Error::new(
+            ErrorKind::InvalidData,
+            format!("larger than the limit of {}", human(cap)),
+        )
+    };
+    if meta.is_dir() {
+        return Err(Error::new(ErrorKind::InvalidInput, "is a directory"));
+    }
+    let cap = if meta.is_file() {
+        cap
+    } else {
+        cap.min(MAX_STREAM_FILE)
+    };
+    if meta.is_file() && meta.len() > cap {
+        return Err(too_big(cap));
+    }
+    let mut bytes = Vec::new();
+    if meta.is_file() {
+        bytes
+            .try_reserve_exact(meta.len() as usize)
+            .map_err(|_| Error::new(ErrorKind::OutOfMemory, "not enough memory to read it"))?;
+    }
+    file.take(cap + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > cap {
+        return Err(too_big(cap));
+    }
+    Ok(bytes)
+}
+
+/// What the loader may allocate for the data files a scene names (decoded images, PLY meshes,
+/// instanced copies): every size read from a file header is reserved here before the
+/// allocation it implies, so that a 249 kB PNG declaring 16000x16000 pixels or 20,000
+/// instances of a large object is an error naming the file, not gigabytes allocated before the
+/// render's memory check. Shared by reference (a `Cell`) through the loader's contexts.
+#[derive(Debug)]
+pub struct LoadBudget {
+    limit: u64,
+    held: std::cell::Cell<u64>,
+    peak: std::cell::Cell<u64>,
+}
+
+impl LoadBudget {
+    /// A budget of `limit` bytes (the render's `--max-memory`, or the default budget).
+    pub fn new(limit: u64) -> LoadBudget {
+        LoadBudget {
+            limit,
+            held: std::cell::Cell::new(0),
+            peak: std::cell::Cell::new(0),
+        }
+    }
+
+    /// Bytes reserved now.
+    pub fn held(&self) -> u64 {
+        self.held.get()
+    }
+
+    /// The most bytes reserved at once (a decode's transient peak included).
+    pub fn peak(&self) -> u64 {
+        self.peak.get()
+    }
+
+    /// Reserves `bytes` for `what` ("decoding it", "its 20000 copies"), or says why not.
+    pub fn reserve(&self, bytes: u64, what: &str) -> Result<(), String> {
+        let held = self.held.get();
+        if held.saturating_add(bytes) > self.limit {
+            return Err(format!(
+                "{what} needs {}, and with the {} loaded before that is more than the memory \
+                 budget of {} (--max-memory)",
+                human(bytes),
+                human(held),
+                human(self.limit)
+            ));
+        }
+        self.held.set(held + bytes);
+        self.peak.set(self.peak.get().max(held + bytes));
+        Ok(())
+    }
+
+    /// Gives back `bytes` of an earlier reservation (a decode's transient peak).
+    pub fn release(&self, bytes: u64) {
+        self.held.set(self.held.get().saturating_sub(bytes));
+    }
 }
 
 #[cfg(test)]

@@ -12,7 +12,7 @@
 //! constants' measurements are in BENCHMARKS.md ("Memory model").
 use crate::accel::BackendKind;
 use crate::integrator::{IntegratorKind, RenderSettings};
-use crate::limits::{default_budget, human, peak_resident, Budget};
+use crate::limits::{human, peak_resident, Budget};
 use crate::photon::trace::Landings;
 use crate::scene::Scene;
 
@@ -127,10 +127,9 @@ pub fn estimate(
         let bytes = stored * PILOT_MARGIN * PHOTON_PEAK_BYTES as f64;
         e.parts
             .push(("photon maps", bytes.min(u64::MAX as f64) as u64));
-        e.what += &format!(
-            ", {global} + {caustic} photons x{:.2} + x{:.2} stored x {PHOTON_PEAK_BYTES} B",
-            per.global, per.caustic
-        );
+        let per = PILOT_MARGIN * stored / (global as f64 + caustic as f64).max(1.0);
+        e.what +=
+            &format!(", {global} + {caustic} photons x{per:.2} stored x {PHOTON_PEAK_BYTES} B");
     }
     let tris = scene.triangle_count() as u64;
     let meshes = scene.meshes.len() as u64;
@@ -205,29 +204,23 @@ fn blame(e: &Estimate, scene: &Scene, cli: FromCli) -> String {
     }
 }
 
-/// Checks a render against `max_memory` (bytes; default [`default_budget`]) before it starts;
-/// `threads` 0 means all cores. The message starts with where the largest part was set.
+/// Checks a render against `budget` ([`Budget::resolve`], once before anything large is
+/// allocated: what an address-space limit leaves shrinks as the render maps memory) before it
+/// starts; `threads` 0 means all cores. The message starts with where the largest part was set.
 pub fn check_render(
     scene: &Scene,
     settings: &RenderSettings,
     (kind, backend): (IntegratorKind, BackendKind),
     threads: usize,
     landings: Option<Landings>,
-    (max_memory, cli): (Option<u64>, FromCli),
+    (budget, cli): (&Budget, FromCli),
 ) -> Result<Estimate, String> {
     let threads = match threads {
         0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
         n => n,
     };
-    let budget = match max_memory {
-        Some(bytes) => Budget {
-            bytes,
-            source: "--max-memory".to_string(),
-        },
-        None => default_budget(),
-    };
     let e = estimate(scene, settings, (kind, backend), threads, landings);
-    check(&e, &budget).map_err(|m| format!("{}: {m}", blame(&e, scene, cli)))?;
+    check(&e, budget).map_err(|m| format!("{}: {m}", blame(&e, scene, cli)))?;
     Ok(e)
 }
 

@@ -1,5 +1,6 @@
 //! Image I/O: linear float images in memory, OpenEXR through OpenEXRCore ([`exr`]), 8-bit sRGB
-//! PNG through the `image` crate ([`png`]).
+//! PNG through the `image` crate ([`png`]), and the decoding of texture and environment-map
+//! files into linear texels ([`decode`]).
 //!
 //! Every writer goes through [`write_atomically`]: the image is written to a temporary file in
 //! the destination's directory and renamed over the destination only once it is complete, so a
@@ -16,6 +17,7 @@
 //! let back = read_exr(Path::new("out.exr"))?;
 //! # Ok::<(), photon::imageio::ImageError>(())
 //! ```
+pub mod decode;
 pub mod exr;
 pub mod metrics;
 pub mod png;

@@ -541,7 +541,7 @@ fn check_same_knn(ours: &[f32], theirs: &[f32], k: usize, name: &str) -> Result<
 }
 
 /// How a benchmarked scene is obtained: loaded from a file or generated.
-type SceneSource = Box<dyn Fn() -> Result<Job, ToolError>>;
+type SceneSource = Box<dyn Fn() -> Result<Job<'static>, ToolError>>;
 
 /// Runs the benchmark without a kd-tree baseline (the `photon bench` subcommand).
 pub fn run(opts: &BenchOptions) -> Result<(), ToolError> {

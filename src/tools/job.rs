@@ -10,10 +10,12 @@ use super::ToolError;
 use crate::accel::{Accel, AccelOptions, BackendKind};
 use crate::integrator::settings::PhotonOverrides;
 use crate::integrator::{self, IntegratorKind, RenderOutput, RenderSettings};
+use crate::limits::Budget;
 use crate::memory::{Estimate, FromCli};
 use crate::photon::trace::Landings;
 use crate::sampling::Pattern;
 use crate::scene::{loader, Scene};
+use std::borrow::Cow;
 use std::path::Path;
 use std::time::Instant;
 
@@ -52,9 +54,10 @@ impl Overrides {
     }
 }
 
-/// A loaded scene with its settings and how it is to be rendered.
-pub struct Job {
-    pub scene: Scene,
+/// A scene (loaded, or borrowed from the caller) with its settings and how it is to be
+/// rendered.
+pub struct Job<'a> {
+    pub scene: Cow<'a, Scene>,
     pub settings: RenderSettings,
     pub integrator: IntegratorKind,
     pub backend: BackendKind,
@@ -67,20 +70,29 @@ pub struct Job {
     pub landings: Option<Landings>,
 }
 
-impl Job {
+impl<'a> Job<'a> {
     /// Loads `path` within `max_memory` bytes (default: [`crate::limits::default_budget`]) and
     /// reads its settings; photon mapping on Embree, all cores.
-    pub fn load(path: &Path, max_memory: Option<u64>) -> Result<Job, ToolError> {
+    pub fn load(path: &Path, max_memory: Option<u64>) -> Result<Job<'static>, ToolError> {
         let t0 = Instant::now();
         let max = max_memory.unwrap_or_else(|| crate::limits::default_budget().bytes);
         let scene = loader::load_within(path, max)?;
-        let mut job = Job::new(scene)?;
+        let mut job = Job::from(Cow::Owned(scene))?;
         job.load_seconds = t0.elapsed().as_secs_f64();
         Ok(job)
     }
 
     /// A job for a scene already in memory, with the file's settings.
-    pub fn new(scene: Scene) -> Result<Job, ToolError> {
+    pub fn new(scene: Scene) -> Result<Job<'static>, ToolError> {
+        Job::from(Cow::Owned(scene))
+    }
+
+    /// A job for the caller's scene (tests keep theirs), with the file's settings.
+    pub fn borrowing(scene: &'a Scene) -> Result<Job<'a>, ToolError> {
+        Job::from(Cow::Borrowed(scene))
+    }
+
+    fn from(scene: Cow<'a, Scene>) -> Result<Job<'a>, ToolError> {
         let settings = RenderSettings::from_scene(&scene)?;
         Ok(Job {
             scene,
@@ -95,7 +107,7 @@ impl Job {
     }
 
     /// Applies the command line's overrides to the file's settings.
-    pub fn with(mut self, o: &Overrides) -> Job {
+    pub fn with(mut self, o: &Overrides) -> Job<'a> {
         let s = &mut self.settings;
         if let Some((w, h)) = o.res {
             (s.width, s.height) = (w, h);
@@ -122,16 +134,16 @@ impl Job {
     }
 
     /// The memory estimate of rendering `settings` (the job's, or a variant of them), an
-    /// error when it exceeds `max_memory` (default: the machine's budget). The photon maps
-    /// count once [`Job::pilot`] has run.
+    /// error when it exceeds `budget` (resolve it once, before the first check). The photon
+    /// maps count once [`Job::pilot`] has run.
     pub fn check_memory(
         &self,
         settings: &RenderSettings,
-        max_memory: Option<u64>,
+        budget: &Budget,
         cli: FromCli,
     ) -> Result<Estimate, String> {
         let (scene, kinds, threads) = (&self.scene, (self.integrator, self.backend), self.threads);
-        let limit = (max_memory, cli);
+        let limit = (budget, cli);
         crate::memory::check_render(scene, settings, kinds, threads, self.landings, limit)
     }
 

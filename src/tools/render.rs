@@ -199,12 +199,13 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     let cli = overrides.from_cli();
     // Everything but the photon maps, before the accelerator is built; then with the photon
     // maps a pilot trace measured, before pass 1.
-    job.check_memory(&job.settings, opts.max_memory, cli)
+    let budget = crate::limits::Budget::resolve(opts.max_memory);
+    job.check_memory(&job.settings, &budget, cli)
         .map_err(ToolError)?;
     let pool = job.pool()?;
     let (accel, build_s) = job.build(&pool)?;
     job.pilot(&accel, &pool);
-    let check = |s: &RenderSettings| job.check_memory(s, opts.max_memory, cli);
+    let check = |s: &RenderSettings| job.check_memory(s, &budget, cli);
     let mut estimate = check(&job.settings).map_err(ToolError)?;
     banner(opts, &job, build_s, pool.current_num_threads());
     let (scene, mut settings) = (&job.scene, job.settings.clone());

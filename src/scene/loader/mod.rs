@@ -40,99 +40,10 @@ pub mod shapes;
 pub mod textures;
 pub mod tokenizer;
 
+pub use crate::limits::{read_capped, LoadBudget};
+
 use super::{Scene, SceneError};
 use std::path::Path;
-
-/// Reads at most `cap` bytes of `path`: a larger file (or a device such as /dev/zero that never
-/// ends) is an error without reading past the cap. A directory is an error too.
-pub fn read_capped(path: &Path, cap: u64) -> std::io::Result<Vec<u8>> {
-    use std::io::{Error, ErrorKind, Read};
-    let file = std::fs::File::open(path)?;
-    let meta = file.metadata()?;
-    let too_big = |cap: u64| {
-        Error::new(
-            ErrorKind::InvalidData,
-            format!("larger than the limit of {}", crate::limits::human(cap)),
-        )
-    };
-    if meta.is_dir() {
-        return Err(Error::new(ErrorKind::InvalidInput, "is a directory"));
-    }
-    let cap = if meta.is_file() {
-        cap
-    } else {
-        cap.min(crate::limits::MAX_STREAM_FILE)
-    };
-    if meta.is_file() && meta.len() > cap {
-        return Err(too_big(cap));
-    }
-    let mut bytes = Vec::new();
-    if meta.is_file() {
-        bytes
-            .try_reserve_exact(meta.len() as usize)
-            .map_err(|_| Error::new(ErrorKind::OutOfMemory, "not enough memory to read it"))?;
-    }
-    file.take(cap + 1).read_to_end(&mut bytes)?;
-    if bytes.len() as u64 > cap {
-        return Err(too_big(cap));
-    }
-    Ok(bytes)
-}
-
-/// What the loader may allocate for the data files a scene names (decoded images, PLY meshes,
-/// instanced copies): every size read from a file header is reserved here before the
-/// allocation it implies, so that a 249 kB PNG declaring 16000x16000 pixels or 20,000
-/// instances of a large object is an error naming the file, not gigabytes allocated before the
-/// render's memory check. Shared by reference (a `Cell`) through the loader's contexts.
-#[derive(Debug)]
-pub struct LoadBudget {
-    limit: u64,
-    held: std::cell::Cell<u64>,
-    peak: std::cell::Cell<u64>,
-}
-
-impl LoadBudget {
-    /// A budget of `limit` bytes (the render's `--max-memory`, or the default budget).
-    pub fn new(limit: u64) -> LoadBudget {
-        LoadBudget {
-            limit,
-            held: std::cell::Cell::new(0),
-            peak: std::cell::Cell::new(0),
-        }
-    }
-
-    /// Bytes reserved now.
-    pub fn held(&self) -> u64 {
-        self.held.get()
-    }
-
-    /// The most bytes reserved at once (a decode's transient peak included).
-    pub fn peak(&self) -> u64 {
-        self.peak.get()
-    }
-
-    /// Reserves `bytes` for `what` ("decoding it", "its 20000 copies"), or says why not.
-    pub fn reserve(&self, bytes: u64, what: &str) -> Result<(), String> {
-        let held = self.held.get();
-        if held.saturating_add(bytes) > self.limit {
-            return Err(format!(
-                "{what} needs {}, and with the {} loaded before that is more than the memory \
-                 budget of {} (--max-memory)",
-                crate::limits::human(bytes),
-                crate::limits::human(held),
-                crate::limits::human(self.limit)
-            ));
-        }
-        self.held.set(held + bytes);
-        self.peak.set(self.peak.get().max(held + bytes));
-        Ok(())
-    }
-
-    /// Gives back `bytes` of an earlier reservation (a decode's transient peak).
-    pub fn release(&self, bytes: u64) {
-        self.held.set(self.held.get().saturating_sub(bytes));
-    }
-}
 
 /// Reads a scene or PLY file as [`read_capped`] does, and when its name ends in `.gz` (as
 /// pbrt-v4 decides) decompresses it, at most `cap` bytes of output too: a gzip bomb is an error

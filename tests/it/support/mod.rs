@@ -357,14 +357,28 @@ pub fn render_with(
     threads: usize,
     seed: u64,
 ) -> photon::integrator::RenderOutput {
-    use photon::accel::{Accel, AccelOptions};
-    let accel = Accel::build(scene, backend, AccelOptions::default()).expect("accel builds");
-    let mut settings =
-        photon::integrator::RenderSettings::from_scene(scene).expect("integrator settings");
-    (settings.width, settings.height, settings.spp) = (w, h, spp);
-    settings.seed = seed;
-    let pool = photon::tools::thread_pool(threads).expect("thread pool");
-    pool.install(|| photon::integrator::render(scene, &accel, &settings, kind, &|_, _| {}))
+    let overrides = photon::tools::job::Overrides {
+        res: Some((w, h)),
+        spp: Some(spp),
+        seed,
+        ..Default::default()
+    };
+    let mut job = job(scene, kind, backend).with(&overrides);
+    job.threads = threads;
+    let pool = job.pool().expect("thread pool");
+    let (accel, _) = job.build(&pool).expect("accel builds");
+    job.render(&accel, &pool, &|_, _| {})
+}
+
+/// The render job of `scene` (borrowed) with `kind` on `backend`, at the file's settings.
+pub fn job(
+    scene: &photon::scene::Scene,
+    kind: photon::integrator::IntegratorKind,
+    backend: photon::accel::BackendKind,
+) -> photon::tools::job::Job<'_> {
+    let mut job = photon::tools::job::Job::borrowing(scene).expect("integrator settings");
+    (job.integrator, job.backend) = (kind, backend);
+    job
 }
 
 /// The render settings of `scene` as its file gives them, after `tweak`.
