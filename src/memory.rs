@@ -57,7 +57,7 @@ pub const PROCESS_BYTES: u64 = 13 << 20;
 /// The factor on the photons stored per photon emitted that a pilot trace measured
 /// ([`crate::photon::trace::pilot`]): its sampling error and the roulette's spread.
 pub const PILOT_MARGIN: f64 = 1.25;
-/// Bytes per recorded ray, at most (`accel::record`): the 32-byte ray, and when every chunk
+/// Bytes per recorded ray, at most (`accel::recording`): the 32-byte ray, and when every chunk
 /// holds a single ray (photon paths) its 32-byte heap entry and its allocation's rounding and
 /// header (32).
 pub const RECORDED_RAY_BYTES: u64 = 96;
@@ -65,9 +65,9 @@ pub const RECORDED_RAY_BYTES: u64 = 96;
 /// Memory of a recording that keeps up to `per_kind` rays per (kind, query): every pair may
 /// hold `per_kind` rays plus the one chunk being inserted.
 pub fn recording_bytes(per_kind: usize) -> u64 {
-    use crate::accel::{record, RayKind};
-    let pairs = (RayKind::ALL.len() * record::Query::ALL.len()) as u64;
-    let rays = (per_kind as u64).saturating_add(record::CHUNK as u64);
+    use crate::accel::{recording, RayKind};
+    let pairs = (RayKind::ALL.len() * recording::Query::ALL.len()) as u64;
+    let rays = (per_kind as u64).saturating_add(recording::CHUNK as u64);
     pairs
         .saturating_mul(rays)
         .saturating_mul(RECORDED_RAY_BYTES)

@@ -21,22 +21,10 @@
 //!   Likewise `-0.0` direction components are handed to obvhs as `+0.0` (see `traversal_ray`).
 //!
 //! ## Build preset
-//! [`BvhAccel::build`] uses [`BvhBuildParams::slow_build`]. Measured on this (shared, noisy)
-//! 2-core machine by `tests/it/backends.rs` (`obvhs_presets`): a 131k-triangle bumpy sphere plus
-//! 300 long slivers crossing it, 100k random rays, one thread, best of three:
-//!
-//! | preset | build | closest hit | occlusion |
-//! |---|---|---|---|
-//! | `fast_build` | 69-74 ms | 0.83-0.85 Mrays/s | 1.19-1.21 Mrays/s |
-//! | `medium_build` | 92-95 ms | 0.74-0.76 Mrays/s | 1.14-1.15 Mrays/s |
-//! | `slow_build` | 125-134 ms | 2.74-2.84 Mrays/s | 3.29-3.33 Mrays/s |
-//! | `very_slow_build` | 291 ms | 2.86-2.88 Mrays/s | 3.41-3.44 Mrays/s |
-//!
-//! On the sphere alone (all triangles alike) the four presets trace within noise of each other
-//! (3.2-4.3 Mrays/s). Long triangles, common in real scenes (walls, floors), are what the slow
-//! presets' spatial splits are for: 3.5x faster traversal. `very_slow_build` ("best quality")
-//! gains another 1-4 % for 2.2x the build time of `slow_build`; `slow_build` is the trade-off
-//! we keep.
+//! [`BvhAccel::build`] uses [`BvhBuildParams::slow_build`]: its spatial splits trace scenes with
+//! long triangles (walls, floors) several times faster than the fast presets, and the best
+//! preset gains little for twice the build time (measured: BENCHMARKS.md, "Design
+//! measurements", and `tests/it/backends.rs` `obvhs_presets`).
 use super::{
     face_normals, query_interval, validate_meshes, AccelError, AccelOptions, AlphaMask, Hit,
     RayQuery,
@@ -287,7 +275,7 @@ impl BvhAccel {
 }
 
 /// Without alpha the traversal is compiled with an always-true test (the code of a scene
-/// without alpha is the code before alpha existed); with alpha, [`BvhAccel::keeps`].
+/// without alpha is the code before alpha existed); with alpha, `BvhAccel::keeps`.
 impl RayQuery for BvhAccel {
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
         match self.alpha {

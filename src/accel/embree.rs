@@ -13,7 +13,7 @@
 //! Geometry ids are mesh indices (`Scene::meshes`): meshes are attached with
 //! `rtcAttachGeometryByID`, empty meshes are skipped.
 //!
-//! A mesh with alpha (see [`super`]) gets [`alpha_filter`] as its intersection and occlusion
+//! A mesh with alpha (see [`super`]) gets `alpha_filter` as its intersection and occlusion
 //! filter callback, with its [`AlphaMask`] as the geometry's user data; other geometries have
 //! no callback, so scenes without alpha pay nothing. The [`Geometry`] holds the mask until
 //! [`SceneBuilder::attach`] hands it to the scene, and the [`CommittedScene`] keeps it as long

@@ -6,7 +6,7 @@
 //!
 //! Both answer with the same [`Hit`], so the renderer cannot tell which one answered. Hot loops
 //! dispatch through the closed enum [`Accel`], not a trait object. Every query made through
-//! [`Accel`] names the [`RayKind`] it casts, so that a recording wrapper (`record.rs`,
+//! [`Accel`] names the [`RayKind`] it casts, so that a recording wrapper (`recording.rs`,
 //! [`Accel::recording`]) can sample the rays of a real render by kind; the backends themselves
 //! ignore the kind.
 //!
@@ -31,7 +31,7 @@
 pub mod bvh;
 pub mod cpu;
 pub mod embree;
-pub mod record;
+pub mod recording;
 
 use crate::math::{Ray, Vec2, Vec3};
 use crate::scene::{interpolate_uv, Mesh, Scene};
@@ -154,7 +154,7 @@ pub trait RayQuery: Send + Sync {
 pub enum Accel {
     Embree(embree::EmbreeAccel),
     Obvhs(bvh::BvhAccel),
-    Recording(Box<record::Recording>),
+    Recording(Box<recording::Recording>),
 }
 
 impl Accel {
@@ -180,17 +180,17 @@ impl Accel {
     }
 
     /// `backend`, recording up to `capacity` rays per kind and query of the queries it answers,
-    /// chosen with `seed` (see [`record`]).
+    /// chosen with `seed` (see [`recording`]).
     pub fn recording(backend: Accel, capacity: usize, seed: u64) -> Accel {
-        Accel::Recording(Box::new(record::Recording::new(backend, capacity, seed)))
+        Accel::Recording(Box::new(recording::Recording::new(backend, capacity, seed)))
     }
 
     /// Ends a recording: the wrapped backend and what was recorded (nothing when `self` was
     /// not recording).
-    pub fn finish_recording(self) -> (Accel, record::RecordedRays) {
+    pub fn finish_recording(self) -> (Accel, recording::RecordedRays) {
         match self {
             Accel::Recording(r) => r.finish(),
-            a => (a, record::RecordedRays::default()),
+            a => (a, recording::RecordedRays::default()),
         }
     }
 

@@ -20,7 +20,7 @@ pub trait Bxdf {
 
     /// An incident direction for `wo` among `lobes`: `uc` (uniform in `[0,1)`) picks the lobe,
     /// `u` (uniform in `[0,1)^2`) the direction within it. May return a sample that is not
-    /// [`BsdfSample::is_valid`]; callers filter.
+    /// `BsdfSample::is_valid`; callers filter.
     fn sample(
         &self,
         wo: Vec3,
@@ -99,7 +99,7 @@ pub struct BsdfSample {
     pub eta: f32,
     /// `pdf` is only proportional to the density of `wi` (the layered BSDF returns the
     /// density of one random-walk path; `f / pdf` is still the right throughput weight, and
-    /// [`Bsdf::pdf`] gives the density for multiple importance sampling).
+    /// [`super::Bsdf::pdf`] gives the density for multiple importance sampling).
     pub pdf_is_proportional: bool,
     /// The GGX alpha (the smaller of the two) of the lobe that produced the sample: 0 for a
     /// delta lobe, infinity for a diffuse lobe or a walk through a coat's layer. The photon

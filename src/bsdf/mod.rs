@@ -4,7 +4,7 @@
 //! the surface towards the viewer (or the previous path vertex), `wi` towards the light (or
 //! the next vertex); both are unit vectors. Colours are linear RGB [`Vec3`]s.
 //!
-//! Each model is one file implementing the [`Bxdf`] interface ([`bxdf`]); [`Bsdf`] is the
+//! Each model is one file implementing the [`Bxdf`] interface (`bxdf.rs`); [`Bsdf`] is the
 //! closed enum over them that integrators call (one dispatch per method). The materials of
 //! a scene (`crate::material`) build them per hit:
 //!

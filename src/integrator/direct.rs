@@ -11,7 +11,7 @@
 //! Components: light reaching the camera after at most one non-delta scattering event is
 //! `direct`; light arriving through further specular/glossy bounces is `specular`.
 //!
-//! The steps of a hit ([`emission`], [`Vertex::new`], [`shadow_rays`], [`continuation`]) are
+//! The steps of a hit (`emission`, `Vertex::new`, `shadow_rays`, `continuation`) are
 //! shared with the photon mapper ([`super::photon_mapper`]), which adds its estimates between
 //! them.
 use super::wavefront::{self, add, Component, PathState, Shade, Shadow, Wave, CAMERA_DIMS};

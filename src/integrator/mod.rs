@@ -15,7 +15,7 @@ pub mod passes;
 pub mod path;
 pub mod photon_mapper;
 pub mod photonmap;
-pub mod record;
+pub mod recorded;
 pub mod settings;
 pub mod wavefront;
 

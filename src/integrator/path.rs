@@ -35,7 +35,7 @@
 //! bounce or with two or more bounces) is `indirect`. The other components stay zero.
 //!
 //! Randomness: each vertex reads its numbers from fixed dimensions of the pixel sample's
-//! [`Sampler`] stream (2 for the pixel filter, then [`DIMS_PER_VERTEX`] per vertex: light
+//! [`crate::sampling::Sampler`] stream (2 for the pixel filter, then [`DIMS_PER_VERTEX`] per vertex: light
 //! choice, light point, lobe choice, direction, roulette), so an image depends only on the
 //! scene, seed and settings, never on thread scheduling. The path tracer always takes one light
 //! sample per vertex (it ignores `RenderSettings::light_samples`).

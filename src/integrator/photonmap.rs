@@ -23,10 +23,8 @@
 //!     "float glossyalpha" [ 0.1 ]          # rough glossy surfaces receive caustic photons
 //! ```
 //! Radii are fractions of the scene's bounding-sphere radius. Gathering is stratified over the
-//! pixel's samples too, so a few gather rays per pixel sample suffice: on `cornell-spheres`
-//! 64 spp x 1 gather reached relMSE 0.0034 in 2.3 s where 16 spp x 16 gathers reached 0.0050
-//! in 2.8 s; hence the default of 2. Only what the scene needs is
-//! built: no caustic map without specular surfaces (or without a diffuse or rough glossy
+//! pixel's samples too, so a few gather rays per pixel sample suffice (hence the default of 2;
+//! measured: BENCHMARKS.md, "Design measurements"). Only what the scene needs is built: no caustic map without specular surfaces (or without a diffuse or rough glossy
 //! surface to receive its photons), no global map without diffuse ones.
 use super::{charge, RenderContext};
 use crate::accel::{Accel, Hit, RayKind};
@@ -345,7 +343,7 @@ pub fn gather_guide(
 ) -> Option<GatherGuide> {
     let map = pass.guide_map.as_ref()?;
     let t = Instant::now();
-    let frame = Frame::from_normal(si.facing_normal());
+    let frame = gather_frame(si);
     let max_r2 = pass.global_params.max_r2;
     let guide = match slot {
         Some(slot) => GuideSlot::get(slot, map, si.p, &frame, max_r2, buf),
@@ -355,9 +353,15 @@ pub fn gather_guide(
     guide
 }
 
+/// The frame the final gather at `si` samples directions in (around the shading normal on
+/// `wo`'s side); the guide, the gather and [`gather_pdf`] must use the same one.
+fn gather_frame(si: &SurfaceInteraction) -> Frame {
+    Frame::from_normal(si.facing_normal())
+}
+
 /// The solid-angle density with which the final gather at `si` picks world direction `wi`.
 pub fn gather_pdf(si: &SurfaceInteraction, guide: Option<&GatherGuide>, wi: Vec3) -> f32 {
-    let frame = Frame::from_normal(si.facing_normal());
+    let frame = gather_frame(si);
     let local = frame.to_local(wi);
     if local.z <= 0.0 {
         return 0.0;
@@ -432,7 +436,7 @@ pub fn at_diffuse(
     // where the nearest photons came from; f cos / pdf = f_d pi / q.
     let g = pass.settings.gather_samples.max(1);
     let (nx, ny) = strata(g);
-    let frame = Frame::from_normal(n);
+    let frame = gather_frame(si);
     let weight = beta * f_d * (std::f32::consts::PI / g as f32);
     let lambertian = bsdf.is_lambertian();
     let o = si.spawn(n);

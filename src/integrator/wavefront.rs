@@ -5,7 +5,7 @@
 //! Per sample index, all camera rays of the tile go to the backend as one batch (Embree's
 //! 8-wide packets for coherent rays); the integrator shades every hit, emitting shadow rays
 //! and continuation paths; the shadow rays are traced as batches of at most
-//! [`BATCH`](crate::limits::BATCH) (and whatever the integrator defers, such as final-gather
+//! [`BATCH`] (and whatever the integrator defers, such as final-gather
 //! rays, is flushed the same way); then the continuations form the next wave.
 use super::{charge, tile_pixels, RenderContext};
 use crate::accel::{Hit, RayKind};

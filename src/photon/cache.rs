@@ -8,10 +8,9 @@
 //! tangent plane, `h` the height above it and `f` the estimate's disc fraction (the flattened
 //! search of [`super::estimate`]). Without that bound the nearest agreeing point could lie
 //! anywhere within the global radius: the inside of a lamp can's wall, lit by the bulb, faces
-//! the way of the room wall beside it and served it, and the room wall glowed (veach-bidir at
-//! 128 px, 64 spp, against pbrt-v4: relMSE 0.182 -> 0.106 with the bound; a ceiling above a
-//! can's lid 2.6x -> 1.3x the path tracer in `tests/it/lamp_can.rs`). Where no point covers `p`
-//! (0.6% of lookups on veach-bidir, 0.007% on cornell-box), the caller runs the full estimate.
+//! the way of the room wall beside it and served it, and the room wall glowed (measured:
+//! BENCHMARKS.md, "Design measurements"). Where no point covers `p`, the caller runs the full
+//! estimate.
 use super::estimate::{disc_d2, irradiance_with, EstimateParams};
 use super::kdtree::{KdTree, KnnResult, TooManyPoints};
 use super::map::PhotonMap;

@@ -18,7 +18,7 @@
 //! estimate unbiased for a uniform density (Jensen's `k / (pi r^2)` is `k / (k - 1)` too high).
 use super::kdtree::KnnResult;
 use super::map::PhotonMap;
-use super::record::Photon;
+use super::stored::Photon;
 use crate::math::Vec3;
 use std::f32::consts::PI;
 
@@ -286,7 +286,7 @@ fn estimate_by(
 mod tests {
     use super::*;
     use crate::bsdf::{Bxdf, TransportMode};
-    use crate::photon::record::Photon;
+    use crate::photon::stored::Photon;
 
     const KERNELS: [Kernel; 5] = [
         Kernel::Box,

@@ -24,9 +24,8 @@
 //!   per cell) and never below `DEFENSIVE`. Every direction the cosine sampler
 //!   reaches keeps a density of at least `eps` times the cosine's, so the estimate stays
 //!   unbiased and its variance bounded; and a histogram of few photons, which is mostly noise
-//!   where indirect light is even, leans towards the plain cosine. Without the smoothing (32
-//!   photons, `eps` 0.25) the Cornell box's error tripled (masked relMSE 0.00185 -> 0.0060)
-//!   and the white furnace's pixels spread (90.8% within 5%, against 99.9% with it);
+//!   where indirect light is even, leans towards the plain cosine (without the smoothing the
+//!   Cornell box's error tripled: BENCHMARKS.md, "Design measurements");
 //! - a stratified point `u` of the square is moved by the inverse CDF of this piecewise
 //!   constant density (rows, then columns within the row), which keeps the strata; the
 //!   direction's density is `q(u') cos / pi` and the gather's weight `f pi / q(u')`.

@@ -15,13 +15,10 @@
 //! by the squared distance to each subtree's cell (updated incrementally, Arya & Mount).
 //! k-nearest results go to a reusable buffer ([`KnnResult`]): candidates within the current
 //! bound are appended, and whenever `2k` have piled up a linear-time selection keeps the `k`
-//! nearest and shrinks the bound to the farthest of them. This beat a bounded max-heap
-//! (log k sifts per candidate) by 10% at k = 50 and 1.7-2x at k = 200.
-//!
-//! Measured (1M uniform points, 100k queries, one thread): this layout answers k = 50 and
-//! k = 200 queries 2-5x faster (across runs) than Jensen's left-balanced heap layout with one
-//! point per node (kept as the ignored test `heap_layout::heap_layout_vs_implicit_layout`);
-//! leaves of 32 beat 8 and 16 by 5-30% and 64 by a little.
+//! nearest and shrinks the bound to the farthest of them, which beat a bounded max-heap. The
+//! layout beat Jensen's left-balanced heap layout with one point per node (kept as the ignored
+//! test `heap_layout::heap_layout_vs_implicit_layout`), and leaves of 32 beat 8, 16 and 64
+//! (measured: BENCHMARKS.md, "Design measurements").
 use crate::math::Vec3;
 use std::fmt;
 use std::sync::atomic::{AtomicU64, Ordering};

@@ -1,6 +1,6 @@
 //! [`PhotonMap`]: photons stored in kd-tree order beside the [`KdTree`] over their positions.
 use super::kdtree::{KdTree, KnnResult, TooManyPoints};
-use super::record::Photon;
+use super::stored::Photon;
 use crate::math::Vec3;
 
 /// A built photon map. Indices in query results are tree-order slots into [`Self::photons`].

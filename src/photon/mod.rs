@@ -1,7 +1,7 @@
 //! The photon map (Jensen): compact photon records, a balanced kd-tree over their positions
 //! and the radiance-estimate kernels.
 //!
-//! - [`record`]: [`Photon`], 20 bytes: position, shared-exponent RGB power, octahedral
+//! - [`stored`]: [`Photon`], 20 bytes: position, shared-exponent RGB power, octahedral
 //!   direction, flags;
 //! - [`kdtree`]: [`KdTree`], an implicit median-split tree with k-nearest and radius queries
 //!   into a reusable [`KnnResult`];
@@ -32,11 +32,11 @@ pub mod guide;
 pub mod kdtree;
 pub mod map;
 pub mod projection;
-pub mod record;
+pub mod stored;
 pub mod trace;
 
 pub use cache::IrradianceCache;
 pub use estimate::{EstimateParams, Kernel};
 pub use kdtree::{KdTree, KnnResult, Neighbor};
 pub use map::PhotonMap;
-pub use record::Photon;
+pub use stored::Photon;

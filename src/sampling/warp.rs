@@ -123,7 +123,7 @@ impl Distribution1D {
     }
 }
 
-/// Piecewise-constant density over [0,1]^2 on a `width x height` grid of non-negative values
+/// Piecewise-constant density over `[0,1]^2` on a `width x height` grid of non-negative values
 /// (pbrt-v4's `PiecewiseConstant2D`): a row by its sum (marginal), then a column within it
 /// (conditional). Cell `(x, y)` has density `f(x, y) / mean(f)`.
 #[derive(Clone, Debug, Default)]

@@ -5,9 +5,10 @@
 //! triangles, or those named with `--scene` / `--generated`):
 //! - **accel**: build time per backend; rays/s on the rays a real render casts, recorded
 //!   through a wrapper around Embree (a small photon-mapper render of the scene, see
-//!   [`crate::integrator::record`]; whole batches of up to 256 rays are kept, as coherent as
-//!   the render casts them): camera rays (closest hit), incoherent secondary rays of photon
-//!   paths (closest hit) and shadow rays (occlusion), for Embree's single-ray calls (`x1`),
+//!   [`crate::integrator::recorded`]; whole batches of up to 256 rays are kept, as coherent as
+//!   the render casts them): camera rays (closest hit), incoherent photon-path rays (closest
+//!   hit; the render's "secondary" count is camera-path bounces and gathers instead) and shadow
+//!   rays (occlusion), for Embree's single-ray calls (`x1`),
 //!   its 8-wide packet calls (`x8`) and obvhs, on 1 and 2 threads;
 //! - **photon**: global photons traced per second per backend and thread count; kd-tree build
 //!   time and k-nearest queries per second (k = 50, 200; unbounded radius, one thread) at the
@@ -25,9 +26,9 @@ use super::job::{thread_pool, Job};
 use super::ToolError;
 use crate::accel::bvh::BvhAccel;
 use crate::accel::embree::{Device, EmbreeAccel};
-use crate::accel::record::Query;
+use crate::accel::recording::Query;
 use crate::accel::{Accel, AccelOptions, BackendKind, RayKind};
-use crate::integrator::record::{self, DiffusePoint, Recorded};
+use crate::integrator::recorded::{self, DiffusePoint, Recorded};
 use crate::integrator::RenderSettings;
 use crate::light::Lights;
 use crate::math::{Ray, Vec3};
@@ -180,7 +181,7 @@ pub struct Row {
     /// Scene name (file stem's folder or generated name).
     pub scene: String,
     pub triangles: usize,
-    /// `build`, `camera`, `secondary`, `shadow`, `photons`, `kd build`, `knn k=50`,
+    /// `build`, `camera`, `photon paths`, `shadow`, `photons`, `kd build`, `knn k=50`,
     /// `knn k=200`, `estimate`.
     pub metric: String,
     /// `embree x1`, `embree x8`, `embree`, `obvhs`, `ours` or the baseline's name.
@@ -321,7 +322,7 @@ fn bench_scene(
     let [embree, obvhs] = bench_builds(&mut rec, scene, &pools)?;
     let (embree, rays) = pools[0]
         .1
-        .install(|| record::record(scene, embree, settings, plan.rays, 0))
+        .install(|| recorded::record(scene, embree, settings, plan.rays, 0))
         .map_err(ToolError)?;
     let accels = [embree, obvhs];
     bench_rays(&mut rec, &accels, &rays, &pools);
@@ -360,7 +361,7 @@ fn bench_builds(
     ])
 }
 
-/// Ray rates: camera, secondary (photon paths), shadow; Embree x1/x8 and obvhs; per pool.
+/// Ray rates: camera, photon paths, shadow; Embree x1/x8 and obvhs; per pool.
 fn bench_rays(
     rec: &mut Recorder,
     accels: &[Accel],
@@ -369,7 +370,7 @@ fn bench_rays(
 ) {
     let sets = [
         ("camera", RayKind::Camera, Query::Closest),
-        ("secondary", RayKind::Photon, Query::Closest),
+        ("photon paths", RayKind::Photon, Query::Closest),
         ("shadow", RayKind::Shadow, Query::Occlusion),
     ];
     for (metric, kind, query) in sets {
@@ -676,7 +677,7 @@ pub fn table(rows: &[Row]) -> String {
             );
         }
     }
-    for m in ["camera", "secondary", "shadow"] {
+    for m in ["camera", "photon paths", "shadow"] {
         for &t in &threads {
             let (x1, x8, o) = (
                 find(rows, m, "embree x1", t),

@@ -1,7 +1,7 @@
 //! `photon crosscheck SCENE`: do Embree and obvhs answer the rays of a real render alike?
 //!
 //! 1. Renders the scene (photon mapper, the file's settings made small: see
-//!    [`crate::integrator::record`]) through a recording wrapper around Embree and keeps up to
+//!    [`crate::integrator::recorded`]) through a recording wrapper around Embree and keeps up to
 //!    `--rays` of the rays it casts of each kind (camera, shadow, final gather, specular
 //!    bounce, photon path), chosen by a seeded hash of the rays; prints how many of each kind
 //!    the render cast and how many were kept.
@@ -25,10 +25,10 @@
 //! images' relMSE exceed their thresholds (defaults in `--help`).
 use super::job::{Job, Overrides};
 use super::{parse_resolution, ToolError};
-use crate::accel::record::{Query, RaySet, RecordedRays};
+use crate::accel::recording::{Query, RaySet, RecordedRays};
 use crate::accel::{Accel, BackendKind, Hit, RayKind, RayQuery};
 use crate::imageio::metrics::{self, MaskOptions};
-use crate::integrator::{self, record, IntegratorKind, RenderSettings};
+use crate::integrator::{self, recorded, IntegratorKind, RenderSettings};
 use crate::math::Ray;
 use crate::scene::Scene;
 use rayon::prelude::*;
@@ -568,7 +568,7 @@ fn compare_images(
 }
 
 /// What was recorded: the render's size and, per kind, rays kept of rays cast.
-pub fn describe_recording(r: &record::Recorded) -> String {
+pub fn describe_recording(r: &recorded::Recorded) -> String {
     let s = &r.settings;
     let kinds: Vec<String> = r
         .rays
@@ -601,7 +601,7 @@ pub fn run(opts: &CrosscheckOptions) -> Result<bool, ToolError> {
     let build_s = embree_s + obvhs_s;
     let (scene, settings) = (&job.scene, &job.settings);
     let (embree, recorded) = pool
-        .install(|| record::record(scene, embree, settings, opts.rays, opts.seed))
+        .install(|| recorded::record(scene, embree, settings, opts.rays, opts.seed))
         .map_err(ToolError)?;
     let t = Instant::now();
     let reports = pool.install(|| {

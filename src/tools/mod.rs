@@ -7,8 +7,8 @@ pub mod crosscheck;
 pub mod job;
 pub mod merge;
 pub mod output;
-pub mod passes;
 pub mod render;
+pub mod render_passes;
 
 use std::fmt;
 

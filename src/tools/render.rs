@@ -195,7 +195,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
             .or_else(|| super::output::default_png(&exr)),
     };
     let outputs = Outputs::plan(&exr, png.as_deref()).map_err(ToolError)?;
-    let checkpoint = super::passes::plan_checkpoint(&opts.passes, &outputs)?;
+    let checkpoint = super::render_passes::plan_checkpoint(&opts.passes, &outputs)?;
     let cli = overrides.from_cli();
     // Everything but the photon maps, before the accelerator is built; then with the photon
     // maps a pilot trace measured, before pass 1.
@@ -211,7 +211,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     let (scene, mut settings) = (&job.scene, job.settings.clone());
     if opts.passes.active(opts.time.is_some()) {
         let outs = (&outputs, checkpoint.as_ref());
-        return super::passes::run(opts, scene, &accel, &settings, &pool, outs);
+        return super::render_passes::run(opts, scene, &accel, &settings, &pool, outs);
     }
 
     // SIGINT/SIGTERM from here on stop the render: the tiles (or, with --time, the passes)
@@ -483,7 +483,7 @@ const RAW_RUNS: usize = 5;
 /// The fastest of [`RAW_RUNS`] replays of `rays` of `kind` through `accel` on this thread, in
 /// batches of up to 256 consecutive rays (the chunks the recording keeps): seconds per ray.
 fn replay_seconds_per_ray(accel: &Accel, kind: RayKind, rays: &[crate::math::Ray]) -> f64 {
-    use crate::accel::record::CHUNK;
+    use crate::accel::recording::CHUNK;
     let mut best = f64::INFINITY;
     for _ in 0..RAW_RUNS {
         let t = Instant::now();
@@ -501,7 +501,7 @@ fn replay_seconds_per_ray(accel: &Accel, kind: RayKind, rays: &[crate::math::Ray
 
 /// The raw rate of the same backend on the rays a render casts, outside the render loop: a
 /// small render with these settings is recorded (as `photon crosscheck` does, 20,000 rays per
-/// kind, see [`crate::integrator::record`]); each kind the render loop counts (camera, shadow,
+/// kind, see [`crate::integrator::recorded`]); each kind the render loop counts (camera, shadow,
 /// and gather + bounce as secondary) is replayed on one thread, and the per-kind costs are
 /// weighted by the render's own counts of those kinds (gather and bounce split as the recording
 /// saw them), so that the raw rate has the render's mix. Printed next to the rate measured
@@ -513,10 +513,10 @@ fn print_raw_rate(
     out: &crate::integrator::RenderOutput,
     pool: &rayon::ThreadPool,
 ) {
-    use crate::accel::record::Query;
+    use crate::accel::recording::Query;
     use std::sync::atomic::Ordering::Relaxed;
     let recorded =
-        pool.install(|| crate::integrator::record::record(scene, accel, settings, 20_000, 1));
+        pool.install(|| crate::integrator::recorded::record(scene, accel, settings, 20_000, 1));
     let (accel, rec) = match recorded {
         Ok(r) => r,
         Err(e) => {

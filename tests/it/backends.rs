@@ -558,7 +558,7 @@ fn obvhs_presets() {
 /// backend it wraps.
 #[test]
 fn parallel_queries_match_sequential() {
-    use photon::accel::record::Query;
+    use photon::accel::recording::Query;
     use photon::accel::{Accel, BackendKind, RayKind};
     use rayon::prelude::*;
     let scene = scene_of(vec![bumpy_sphere(64, 64)]);

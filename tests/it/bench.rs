@@ -45,7 +45,7 @@ fn tiny_benchmark_reports_every_number() {
             want.push(("build".into(), imp.into(), t));
             want.push(("photons".into(), imp.into(), t));
         }
-        for m in ["camera", "secondary", "shadow"] {
+        for m in ["camera", "photon paths", "shadow"] {
             for imp in ["embree x1", "embree x8", "obvhs"] {
                 want.push((m.into(), imp.into(), t));
             }

@@ -6,9 +6,9 @@
 //! on the alpha scene every ray agrees and the images differ within noise.
 use crate::support::CORNELL;
 use photon::accel::bvh::BvhAccel;
-use photon::accel::record::Query;
+use photon::accel::recording::Query;
 use photon::accel::{Accel, AccelOptions, BackendKind, Hit, RayKind, RayQuery};
-use photon::integrator::record::{self, Recorded};
+use photon::integrator::recorded::{self, Recorded};
 use photon::integrator::{self as integ, IntegratorKind, RenderSettings};
 use photon::math::{Ray, Vec3};
 use photon::scene::{loader, Light, Scene};
@@ -95,7 +95,7 @@ fn cornell_on(threads: usize) -> (Scene, Accel, Recorded) {
     let settings = RenderSettings::from_scene(&scene).unwrap();
     let pool = photon::tools::thread_pool(threads).unwrap();
     let (embree, rays) = pool
-        .install(|| record::record(&scene, embree, &settings, 20_000, 1))
+        .install(|| recorded::record(&scene, embree, &settings, 20_000, 1))
         .unwrap();
     (scene, embree, rays)
 }
@@ -294,7 +294,7 @@ fn oversized_recording_is_refused() {
     let embree = Accel::build(&scene, BackendKind::Embree, AccelOptions::default()).unwrap();
     let settings = RenderSettings::from_scene(&scene).unwrap();
     let t = std::time::Instant::now();
-    let Err(e) = record::record(&scene, embree, &settings, 100_000_000, 0) else {
+    let Err(e) = recorded::record(&scene, embree, &settings, 100_000_000, 0) else {
         panic!("10^8 rays per kind fit the budget");
     };
     println!("{e}");
@@ -327,7 +327,7 @@ fn alpha_cutouts_agree_and_an_alpha_blind_backend_is_caught() {
     assert_eq!(scene.meshes.iter().filter(|m| m.alpha.is_some()).count(), 3);
     let embree = Accel::build(&scene, BackendKind::Embree, AccelOptions::default()).unwrap();
     let settings = RenderSettings::from_scene(&scene).unwrap();
-    let (embree, rec) = record::record(&scene, embree, &settings, 20_000, 1).unwrap();
+    let (embree, rec) = recorded::record(&scene, embree, &settings, 20_000, 1).unwrap();
     let (embree, rays) = (embree.backend(), &rec.rays);
     let obvhs = BvhAccel::build(&scene, AccelOptions::default()).unwrap();
     // Every disagreement explained (an edge or grazing hit, where the striped texture's alpha

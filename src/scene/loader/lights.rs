@@ -62,7 +62,7 @@
 //!   leave through the portal, so photon gives light only to such rays (camera, gather and
 //!   shadow rays by their origin and direction, photons by their line), but samples the whole
 //!   map as without a portal (directions outside it are wasted samples). With a constant `L`,
-//!   pbrt-v4 does not normalise it to one nit (see [`portal_l_factor`]); `illuminance` with a
+//!   pbrt-v4 does not normalise it to one nit (see `portal_l_factor`); `illuminance` with a
 //!   portal is an error.
 
 use super::params::{ParamSet, ParamType};

@@ -15,8 +15,8 @@
 //! ```
 //!
 //! Modules: [`tokenizer`] (tokens with line and column), [`params`] (parameter lists with
-//! used-tracking), [`parser`] (directives and graphics state), [`materials`], [`spectra`]
-//! (pbrt-v4's named spectra as RGB), [`blackbody`] (blackbody emission as RGB), [`textures`]
+//! used-tracking), [`parser`] (directives and graphics state; materials are [`crate::material`], named spectra
+//! `material/spectra.rs`), [`blackbody`] (blackbody emission as RGB), [`textures`]
 //! (`Texture` directives, image files), [`lights`], [`shapes`] (meshes, spheres, disks,
 //! cylinders) and [`ply`] (PLY files).
 //!

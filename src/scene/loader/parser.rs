@@ -20,7 +20,7 @@
 //! [`FOREIGN_INTEGRATORS`]), the `Option`s that cannot change photon's image. `ColorSpace
 //! "srgb"` is photon's own space; other color spaces, participating media (`MakeNamedMedium`,
 //! a non-empty `MediumInterface`), curves and hair are errors. `Texture`s are parsed and
-//! stored ([`super::textures`]); materials ([`super::materials`]) and a shape's `alpha` (see
+//! stored ([`super::textures`]); materials ([`crate::material`]) and a shape's `alpha` (see
 //! [`super::shapes`]) name them.
 //!
 //! Object instancing (`ObjectBegin "tree"` ... `ObjectEnd`, `ObjectInstance "tree"`) copies

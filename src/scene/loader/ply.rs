@@ -12,7 +12,7 @@
 //! Errors (missing file, malformed header, truncated payload, bad numbers, indices out of
 //! range, polygons that are neither triangles nor quads) are returned as one-line messages;
 //! the caller prefixes the Shape's location and the file name. Stricter than the crate
-//! ([`strict`]): only `format ... 1.0`, no property declared twice in an element, no extra
+//! (`strict`): only `format ... 1.0`, no property declared twice in an element, no extra
 //! values on an ASCII line, and no data after the last element (a face count smaller than the
 //! data is an error, not silently dropped faces).
 

@@ -3,7 +3,7 @@
 //!
 //! [`record`] renders the scene with the photon mapper (the integrator that casts every kind of
 //! ray: photon paths, camera rays, shadow rays, final-gather rays and specular bounces) through
-//! a recording wrapper around the backend ([`crate::accel::record`]) and hands back the backend
+//! a recording wrapper around the backend ([`crate::accel::recording`]) and hands back the backend
 //! with the sampled rays. Nothing rebuilds a ray by hand: whatever the integrators cast is what
 //! is recorded. The render uses the scene's settings (as `RenderSettings::from_scene` reads
 //! them from the file) made small enough for the sample ([`settings`]):
@@ -16,7 +16,7 @@
 //! The diffuse points where photon-map lookups happen ([`DiffusePoint`]) are the diffuse hits
 //! of the recorded camera rays.
 use super::{IntegratorKind, RenderSettings};
-use crate::accel::record::RecordedRays;
+use crate::accel::recording::RecordedRays;
 use crate::accel::{Accel, RayKind};
 use crate::math::{Ray, Vec3};
 use crate::memory::{self, Estimate};
@@ -103,7 +103,7 @@ pub fn record(
     super::render(scene, &recording, &s, IntegratorKind::Photonmap, &|_, _| {});
     let seconds = t.elapsed().as_secs_f64();
     let (backend, rays) = recording.finish_recording();
-    let camera = rays.get(RayKind::Camera, crate::accel::record::Query::Closest);
+    let camera = rays.get(RayKind::Camera, crate::accel::recording::Query::Closest);
     let diffuse_points = diffuse_points(scene, &backend, camera);
     Ok((
         backend,
