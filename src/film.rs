@@ -12,7 +12,14 @@
 //! Box and triangle filters are sampled exactly; the Gaussian (pbrt's, `g(x) - g(radius)`)
 //! through a tabulated tabulated CDF.
 use crate::math::{Mat3, Vec2, Vec3};
-use crate::scene::FilterDesc;
+
+/// `PixelFilter`: radii in pixels.
+#[derive(Clone, Debug, PartialEq)]
+pub enum FilterDesc {
+    Box { radius: Vec2 },
+    Triangle { radius: Vec2 },
+    Gaussian { radius: Vec2, sigma: f32 },
+}
 
 /// The pixels `[x0, x1) x [y0, y1)` (returned as `[x0, x1, y0, y1]`) a render of a `w x h`
 /// image computes: all of them, or those of the film's `cropwindow` (fractions `[x0, x1, y0,

@@ -23,6 +23,7 @@ pub mod limits;
 pub mod material;
 pub mod math;
 pub mod memory;
+pub mod mesh;
 pub mod params;
 pub mod photon;
 pub mod sampling;

@@ -157,7 +157,7 @@ pub(super) fn shadow_rays<T>(
     for _ in 0..ls {
         let u_sel = path.sampler.next_1d();
         let u = path.sampler.next_2d();
-        let Some(s) = ctx.lights.sample(ctx.scene, si.p, u_sel, u) else {
+        let Some(s) = ctx.lights.sample(&ctx.scene.meshes, si.p, u_sel, u) else {
             continue;
         };
         let wi = si.frame.to_local(s.wi);

@@ -269,7 +269,7 @@ pub fn prepare(
         ps.trace.seed = settings.seed;
         ps.trace.pattern = settings.pattern;
         ps.trace.footprint = Some(settings.footprint());
-        photonmap::prepare(scene, accel, Lights::new(scene), &ps)
+        photonmap::prepare(scene, accel, scene.emitters(), &ps)
     })
 }
 
@@ -288,7 +288,7 @@ pub fn pilot(
         let (global, caustic, _) = photonmap::needed_maps(scene, t.receiver_alpha);
         t.global_photons *= u64::from(global);
         t.caustic_photons *= u64::from(caustic);
-        crate::photon::trace::pilot(scene, accel, &Lights::new(scene), &t)
+        crate::photon::trace::pilot(scene, accel, &scene.emitters(), &t)
     })
 }
 
@@ -324,7 +324,7 @@ pub fn render_prepared(
     let lights = match photons {
         Some(p) => &p.lights,
         None => {
-            own = Lights::new(scene);
+            own = scene.emitters();
             &own
         }
     };

@@ -145,7 +145,7 @@ fn light_sample(
     let mut sampler = path.sampler.clone();
     let u_sel = sampler.next_1d();
     let u = sampler.next_2d();
-    let s = ctx.lights.sample(ctx.scene, v.p, u_sel, u)?;
+    let s = ctx.lights.sample(&ctx.scene.meshes, v.p, u_sel, u)?;
     let wi = v.frame.to_local(s.wi);
     let f = bsdf.f(v.wo, wi, TransportMode::Radiance) * wi.z.abs();
     if f.max_element() <= 0.0 {

@@ -653,7 +653,10 @@ fn direct_at_gather(
     }
     let u_sel = sampler.next_1d();
     let u = sampler.next_2d();
-    let Some(s) = ctx.lights.sample_surfaceless(ctx.scene, si.p, u_sel, u) else {
+    let Some(s) = ctx
+        .lights
+        .sample_surfaceless(&ctx.scene.meshes, si.p, u_sel, u)
+    else {
         return Vec3::ZERO;
     };
     let wi = si.frame.to_local(s.wi);

@@ -5,8 +5,8 @@
 use super::Emission;
 use super::{scalar_power, LightSample};
 use crate::math::{Frame, Vec2, Vec3};
+use crate::mesh::Mesh;
 use crate::sampling::warp::{square_to_cosine_hemisphere, square_to_triangle, Distribution1D};
-use crate::scene::Mesh;
 use std::f32::consts::PI;
 
 #[derive(Clone, Debug)]

@@ -30,11 +30,36 @@ pub use point::PointLight;
 pub use spot::SpotLight;
 
 use crate::math::{luminance, Frame, Vec2, Vec3};
+use crate::mesh::Mesh;
 use crate::sampling::alias::AliasTable;
 use crate::sampling::warp::square_to_disk_concentric;
-use crate::scene::{Light, Scene};
 use std::f32::consts::PI;
 use std::sync::Arc;
+
+/// The closed set of lights. Radiometric values are linear RGB, already multiplied by `scale`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Light {
+    /// `AreaLightSource "diffuse"` on mesh `mesh`: radiance `l` leaving the side of the
+    /// geometric normal (both sides when `two_sided`).
+    Area { mesh: u32, l: Vec3, two_sided: bool },
+    /// `LightSource "point"`.
+    Point(PointLight),
+    /// `LightSource "spot"`.
+    Spot(SpotLight),
+    /// `LightSource "distant"`.
+    Distant(DistantLight),
+    /// `LightSource "infinite"`: radiance arriving from every direction at infinity, constant
+    /// or from an equal-area image, oriented by the CTM (see [`EnvMap`]).
+    Infinite { map: Arc<EnvMap> },
+}
+
+impl Light {
+    /// A light with no surface in the scene (point, spot, distant, infinite): what final-gather
+    /// hits take direct light from by shadow rays (`integrator::photonmap`).
+    pub fn is_surfaceless(&self) -> bool {
+        !matches!(self, Light::Area { .. })
+    }
+}
 
 /// A light sample seen from a receiving point.
 #[derive(Clone, Copy, Debug)]
@@ -81,19 +106,19 @@ pub struct Lights {
 }
 
 impl Lights {
-    pub fn new(scene: &Scene) -> Lights {
-        let (lo, hi) = scene.bounds();
+    /// Lights `lights` of a scene with meshes `meshes` and bounds `(lo, hi)` (empty when
+    /// `lo > hi`); see [`crate::scene::Scene::emitters`].
+    pub fn new(lights: &[Light], meshes: &[Mesh], (lo, hi): (Vec3, Vec3)) -> Lights {
         let (center, radius) = if lo.x <= hi.x {
             ((lo + hi) * 0.5, ((hi - lo) * 0.5).length().max(1e-6))
         } else {
             (Vec3::ZERO, 1.0)
         };
-        let emitters: Vec<Emitter> = scene
-            .lights
+        let emitters: Vec<Emitter> = lights
             .iter()
             .map(|l| match l {
                 Light::Area { mesh, l, two_sided } => Emitter::Area(AreaLight::new(
-                    &scene.meshes[*mesh as usize],
+                    &meshes[*mesh as usize],
                     *mesh,
                     *l,
                     *two_sided,
@@ -104,8 +129,7 @@ impl Lights {
                 Light::Infinite { map } => Emitter::Infinite(map.clone()),
             })
             .collect();
-        let envs = scene
-            .lights
+        let envs = lights
             .iter()
             .enumerate()
             .filter_map(|(i, l)| match l {
@@ -113,7 +137,7 @@ impl Lights {
                 _ => None,
             })
             .collect();
-        let mut lights = Lights {
+        let mut out = Lights {
             emitters,
             envs,
             select: AliasTable::default(),
@@ -121,17 +145,17 @@ impl Lights {
             center,
             radius,
         };
-        let powers = lights.powers();
+        let powers = out.powers();
         let surfaceless: Vec<f32> = powers
             .iter()
-            .zip(&scene.lights)
+            .zip(lights)
             .map(|(&w, l)| if l.is_surfaceless() { w } else { 0.0 })
             .collect();
-        lights.select = AliasTable::new(&powers);
+        out.select = AliasTable::new(&powers);
         if surfaceless.iter().any(|&w| w > 0.0) {
-            lights.surfaceless = AliasTable::new(&surfaceless);
+            out.surfaceless = AliasTable::new(&surfaceless);
         }
-        lights
+        out
     }
 
     /// Whether the scene has an emitting light without a surface (point, spot, distant,
@@ -144,13 +168,13 @@ impl Lights {
     /// (the sample's `pdf` includes that selection probability); `None` when there are none.
     pub fn sample_surfaceless(
         &self,
-        scene: &Scene,
+        meshes: &[Mesh],
         p: Vec3,
         u_sel: f32,
         u: Vec2,
     ) -> Option<LightSample> {
         let (i, pmf) = self.surfaceless.sample(u_sel)?;
-        self.sample_light(scene, i, pmf, p, u)
+        self.sample_light(meshes, i, pmf, p, u)
     }
 
     /// Emitted power (luminance of the RGB power, watts-like units).
@@ -197,22 +221,22 @@ impl Lights {
     }
 
     /// Picks a light in proportion to power (`u_sel`) and a point on it (`u`) as seen from `p`.
-    pub fn sample(&self, scene: &Scene, p: Vec3, u_sel: f32, u: Vec2) -> Option<LightSample> {
+    pub fn sample(&self, meshes: &[Mesh], p: Vec3, u_sel: f32, u: Vec2) -> Option<LightSample> {
         let (i, pmf) = self.select.sample(u_sel)?;
-        self.sample_light(scene, i, pmf, p, u)
+        self.sample_light(meshes, i, pmf, p, u)
     }
 
     /// A point `u` on light `i`, chosen with probability `pmf`, as seen from `p`.
     fn sample_light(
         &self,
-        scene: &Scene,
+        meshes: &[Mesh],
         i: usize,
         pmf: f32,
         p: Vec3,
         u: Vec2,
     ) -> Option<LightSample> {
         let mut s = match &self.emitters[i] {
-            Emitter::Area(a) => a.sample(&scene.meshes, p, u)?,
+            Emitter::Area(a) => a.sample(meshes, p, u)?,
             Emitter::Point(l) => l.sample(p)?,
             Emitter::Spot(l) => l.sample(p)?,
             Emitter::Distant(l) => l.sample(p, self.center, self.radius),
@@ -296,9 +320,9 @@ impl Lights {
     /// Emits a photon from light `i`: `u_pos` picks the origin, `u_dir` the direction (each in
     /// [0,1)^2, so both can be stratified over the light's photons). The flux is
     /// `Le cos / (pdf_pos pdf_dir)`: the light's power for uniform cosine-weighted sampling.
-    pub fn emit(&self, scene: &Scene, i: usize, u_pos: Vec2, u_dir: Vec2) -> Option<Emission> {
+    pub fn emit(&self, meshes: &[Mesh], i: usize, u_pos: Vec2, u_dir: Vec2) -> Option<Emission> {
         match &self.emitters[i] {
-            Emitter::Area(a) => a.emit(&scene.meshes, u_pos, u_dir),
+            Emitter::Area(a) => a.emit(meshes, u_pos, u_dir),
             Emitter::Point(l) => Some(l.emit(u_dir)),
             Emitter::Spot(l) => l.emit(u_dir),
             Emitter::Distant(l) => Some(l.emit(self.center, self.radius, u_pos)),
@@ -335,14 +359,14 @@ impl Lights {
     /// discs overlap at the origin).
     pub fn emit_caustic(
         &self,
-        scene: &Scene,
+        meshes: &[Mesh],
         i: usize,
         u_pos: Vec2,
         u_dir: Vec2,
         targets: &[(Vec3, f32)],
     ) -> Option<Emission> {
         let Emitter::Infinite(map) = &self.emitters[i] else {
-            return self.emit(scene, i, u_pos, u_dir);
+            return self.emit(meshes, i, u_pos, u_dir);
         };
         let areas: Vec<f32> = targets.iter().map(|&(_, r)| r * r).collect();
         let (t, _, rem) = crate::sampling::warp::Distribution1D::new(&areas).sample(u_pos.x)?;
@@ -395,9 +419,9 @@ impl Lights {
     }
 
     /// Bounding sphere of the points light `i` emits from (radius 0 for point and spot).
-    pub fn origin_bounds(&self, scene: &Scene, i: usize) -> (Vec3, f32) {
+    pub fn origin_bounds(&self, meshes: &[Mesh], i: usize) -> (Vec3, f32) {
         match &self.emitters[i] {
-            Emitter::Area(a) => bounding_sphere(&scene.meshes[a.mesh as usize].positions),
+            Emitter::Area(a) => bounding_sphere(&meshes[a.mesh as usize].positions),
             Emitter::Point(PointLight { pos, .. }) | Emitter::Spot(SpotLight { pos, .. }) => {
                 (*pos, 0.0)
             }

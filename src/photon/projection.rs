@@ -124,14 +124,14 @@ fn cell_may_hit(
         EmissionDomain::Direction => {
             let dirs: Vec<Vec3> = pts
                 .iter()
-                .filter_map(|&u| lights.emit(scene, i, centre, u).map(|e| e.dir))
+                .filter_map(|&u| lights.emit(&scene.meshes, i, centre, u).map(|e| e.dir))
                 .collect();
             let Some(&axis) = dirs.first() else {
                 return false;
             };
             let half =
                 dirs.iter().map(|d| angle(axis, *d)).fold(0.0, f32::max) * 1.1 + ANGLE_MARGIN;
-            let (origin, lr) = lights.origin_bounds(scene, i);
+            let (origin, lr) = lights.origin_bounds(&scene.meshes, i);
             targets.iter().any(|&(c, r)| {
                 let v = c - origin;
                 let dist = v.length();
@@ -145,7 +145,11 @@ fn cell_may_hit(
         EmissionDomain::Position => {
             let rays: Vec<(Vec3, Vec3)> = pts
                 .iter()
-                .filter_map(|&u| lights.emit(scene, i, u, centre).map(|e| (e.p, e.dir)))
+                .filter_map(|&u| {
+                    lights
+                        .emit(&scene.meshes, i, u, centre)
+                        .map(|e| (e.p, e.dir))
+                })
                 .collect();
             let Some(&(pc, dir)) = rays.first() else {
                 return false;

@@ -452,8 +452,8 @@ fn trace_one(
     };
     *restricted = u;
     let e = match kind {
-        MapKind::Global => lights.emit(scene, light, u_pos, u_dir),
-        MapKind::Caustic => lights.emit_caustic(scene, light, u_pos, u_dir, targets),
+        MapKind::Global => lights.emit(&scene.meshes, light, u_pos, u_dir),
+        MapKind::Caustic => lights.emit_caustic(&scene.meshes, light, u_pos, u_dir, targets),
     };
     let Some(e) = e else {
         return (false, 0);
@@ -606,7 +606,7 @@ fn unrestricted_efficiency(
             let mut sampler =
                 Sampler::new(s.pattern, s.seed ^ 0x5eed, i as u64, j as u32, n as u32);
             let (u_pos, u_dir) = (sampler.next_2d(), sampler.next_2d());
-            let Some(e) = lights.emit(scene, i, u_pos, u_dir) else {
+            let Some(e) = lights.emit(&scene.meshes, i, u_pos, u_dir) else {
                 continue;
             };
             let o = if e.n == Vec3::ZERO {

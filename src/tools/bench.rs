@@ -30,7 +30,6 @@ use crate::accel::recording::Query;
 use crate::accel::{Accel, AccelOptions, BackendKind, RayKind};
 use crate::integrator::recorded::{self, DiffusePoint, Recorded};
 use crate::integrator::RenderSettings;
-use crate::light::Lights;
 use crate::math::{Ray, Vec3};
 use crate::photon::estimate::{irradiance_with, EstimateParams};
 use crate::photon::trace::{self, TraceSettings};
@@ -409,7 +408,7 @@ fn bench_photons(
     pools: &[(usize, rayon::ThreadPool)],
     baseline: &mut Option<&mut dyn KnnBaseline>,
 ) -> Result<(), ToolError> {
-    let lights = Lights::new(scene);
+    let lights = scene.emitters();
     let ts = TraceSettings {
         global_photons: plan.photons,
         caustic_photons: 0,

@@ -342,7 +342,7 @@ pub fn compare_kind(
     let rays = &set.rays;
     let a = answer_all(reference, rays);
     let b = answer_all(candidate, rays);
-    let lights = crate::light::Lights::new(scene);
+    let lights = scene.emitters();
     let c = Classifier {
         scene,
         radius: lights.scene_sphere().1,

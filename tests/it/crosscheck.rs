@@ -266,7 +266,7 @@ fn recording_counts_every_ray_the_render_casts() {
     );
     // The Cornell box has no specular surface: no caustic pass, so the photon rays are the
     // global pass's own count.
-    let lights = photon::light::Lights::new(&scene);
+    let lights = scene.emitters();
     let mut trace = s.photon.trace.clone();
     trace.caustic_photons = 0;
     let maps = photon::photon::trace::trace(&scene, &embree, &lights, &trace);

@@ -14,7 +14,7 @@ use crate::support as common;
 use common::TempDir;
 use photon::accel::{Accel, AccelOptions, BackendKind};
 use photon::integrator::{IntegratorKind, RenderSettings};
-use photon::light::{EnvMap, Lights};
+use photon::light::EnvMap;
 use photon::math::{luminance, Mat3, Vec2, Vec3};
 use photon::sampling::warp::{
     equal_area_sphere_to_square, equal_area_square_to_sphere, square_to_uniform_sphere,
@@ -443,7 +443,7 @@ fn photons_carry_the_environment_power() {
     let mut trace = settings.photon.trace.clone();
     trace.global_photons = 200_000;
     trace.caustic_photons = 0;
-    let maps = photon::photon::trace::trace(&scene, &accel, &Lights::new(&scene), &trace);
+    let maps = photon::photon::trace::trace(&scene, &accel, &scene.emitters(), &trace);
     let global = maps.global.expect("photons landed");
     let direct: Vec3 = global
         .photons()
@@ -524,7 +524,7 @@ fn lights_are_selected_by_power() {
         &dir,
         &format!("{CAMERA}WorldBegin\n{}{}", quad(0.0, 1.0), quad(1.0, 3.0)),
     );
-    let lights = Lights::new(&scene);
+    let lights = scene.emitters();
     assert!((lights.selection_pmf(0) - 0.25).abs() < 1e-6);
     assert!((lights.selection_pmf(1) - 0.75).abs() < 1e-6);
     let n = 10_000;
@@ -532,7 +532,7 @@ fn lights_are_selected_by_power() {
         .filter(|&k| {
             let u = (k as f32 + 0.5) / n as f32;
             let s = lights
-                .sample(&scene, Vec3::new(0.5, 0.5, 0.5), u, Vec2::splat(0.5))
+                .sample(&scene.meshes, Vec3::new(0.5, 0.5, 0.5), u, Vec2::splat(0.5))
                 .unwrap();
             s.wi.y > 0.0
         })
@@ -679,7 +679,7 @@ fn photon_mapper_agrees_with_the_path_tracer_under_an_image_map() {
 fn aimed_caustic_photons_keep_the_power_through_each_target() {
     let dir = TempDir::new("envlight-aimed");
     let scene = furnace_scene(&dir, true, 1, "");
-    let lights = Lights::new(&scene);
+    let lights = scene.emitters();
     let targets = [(Vec3::ZERO, 0.5f32), (Vec3::new(0.4, 0.1, 0.0), 0.3)];
     let n = 400_000u64;
     let mut through = [Vec3::ZERO; 2];
@@ -687,7 +687,7 @@ fn aimed_caustic_photons_keep_the_power_through_each_target() {
         let u_pos = Vec2::new(rnd(3, k), rnd(4, k));
         let u_dir = Vec2::new(rnd(5, k), rnd(6, k));
         let e = lights
-            .emit_caustic(&scene, 0, u_pos, u_dir, &targets)
+            .emit_caustic(&scene.meshes, 0, u_pos, u_dir, &targets)
             .expect("a photon");
         for (t, &(c, r)) in targets.iter().enumerate() {
             // The ray from e.p along e.dir meets the sphere (c, r) ahead of it.
@@ -719,7 +719,7 @@ fn portal_photons_carry_the_flux_through_the_portal() {
         &dir,
         &format!("WorldBegin\n{}\nLightSource \"infinite\" \"rgb L\" [ 2 2 2 ] \"point3 portal\" [ -0.5 1 -0.25  0.5 1 -0.25  0.5 1 0.25  -0.5 1 0.25 ]\n", common::CUBE),
     );
-    let lights = Lights::new(&scene);
+    let lights = scene.emitters();
     let i = scene
         .lights
         .iter()
@@ -731,7 +731,7 @@ fn portal_photons_carry_the_flux_through_the_portal() {
         let (a, b) = ((k % 1000) as f32, (k / 1000) as f32);
         let u_pos = Vec2::new(rnd(1, k), rnd(2, k));
         let u_dir = Vec2::new((a + rnd(3, k)) / 1000.0, (b + rnd(4, k)) / 1000.0);
-        if let Some(e) = lights.emit(&scene, i, u_pos, u_dir) {
+        if let Some(e) = lights.emit(&scene.meshes, i, u_pos, u_dir) {
             // Every admitted photon crosses the portal's plane y = 1 inside the rectangle.
             let t = (1.0 - e.p.y) / e.dir.y;
             let q = e.p + e.dir * t;

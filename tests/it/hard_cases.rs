@@ -34,7 +34,6 @@ use photon::camera::Camera;
 use photon::imageio::RgbImage;
 use photon::integrator::{IntegratorKind, RenderOutput};
 use photon::interaction::SurfaceInteraction;
-use photon::light::Lights;
 use photon::math::{spawn_origin, Ray, Vec2, Vec3};
 use photon::photon::estimate::{irradiance_with, EstimateParams};
 use photon::photon::trace::{self, TraceSettings};
@@ -289,7 +288,7 @@ fn lone_floor_case((s, y0, tilt): (f32, f32, f32)) -> Result<(), String> {
         ),
     );
     let acc = accel(&sc);
-    let lights = Lights::new(&sc);
+    let lights = sc.emitters();
     let settings = TraceSettings {
         global_photons: 20_000,
         caustic_photons: 0,
@@ -696,7 +695,7 @@ LightSource "point" "rgb I" [ 1 1 1 ] "point3 from" [ 0.01 0.02 0.03 ]
         ),
     );
     let acc = accel(&sc);
-    let lights = Lights::new(&sc);
+    let lights = sc.emitters();
     let max_bounces = 200u32;
     let n = 20_000u64;
     let settings = TraceSettings {

@@ -22,6 +22,7 @@ mod hard_cases;
 mod hostile;
 mod kdtree;
 mod lamp_can;
+mod layers;
 mod parser;
 mod passes;
 mod path_tracer;

@@ -13,7 +13,6 @@ use photon::accel::{Accel, AccelOptions, BackendKind};
 use photon::imageio::metrics::{compare, match_sizes, MaskOptions};
 use photon::imageio::read_exr;
 use photon::integrator::{IntegratorKind, RenderOutput, RenderSettings};
-use photon::light::Lights;
 use photon::math::Vec3;
 use photon::photon::estimate::{irradiance_with, EstimateParams};
 use photon::photon::trace::{self, TraceSettings};
@@ -173,7 +172,7 @@ LightSource "point" "rgb I" [ 1 1 1 ] "point3 from" [ 0 1 0 ]
     );
     let scene = loader::load(&write_scene("roulette", &text)).unwrap();
     let accel = Accel::build(&scene, BackendKind::Embree, AccelOptions::default()).unwrap();
-    let lights = Lights::new(&scene);
+    let lights = scene.emitters();
     let maps = trace::trace(&scene, &accel, &lights, &trace_settings(400_000, 0, false));
     let global = maps.global.expect("global map");
     let (mut received, mut reflected) = (Vec3::ZERO, Vec3::ZERO);
@@ -224,7 +223,7 @@ LightSource "distant" "rgb L" [ 1 1 1 ] "point3 from" [ 0 1 0 ] "point3 to" [ 0 
         );
         let scene = loader::load(&write_scene("ball", &text)).unwrap();
         let accel = Accel::build(&scene, BackendKind::Embree, AccelOptions::default()).unwrap();
-        let lights = Lights::new(&scene);
+        let lights = scene.emitters();
         let maps = trace::trace(
             &scene,
             &accel,
