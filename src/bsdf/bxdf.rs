@@ -177,6 +177,11 @@ impl BxdfFlags {
         self.contains(BxdfFlags::DIFFUSE)
     }
 
+    /// A lobe on the far side of the surface (light passes through).
+    pub fn has_transmission(self) -> bool {
+        self.contains(BxdfFlags::TRANSMISSION)
+    }
+
     /// A rough, non-Lambertian lobe: direct lighting uses MIS with BSDF sampling.
     pub fn has_glossy(self) -> bool {
         self.contains(BxdfFlags::GLOSSY)

@@ -162,6 +162,7 @@ fn shade(
     // Direct light: at diffuse points MIS against the final gather's rays (multi-sample
     // power heuristic).
     let ls = v.ls;
+    let front = photonmap::gather_front_share(&v.bsdf, si.wo);
     shadow_rays(
         ctx,
         &mut path,
@@ -170,7 +171,7 @@ fn shade(
         covered_here,
         |light_pdf, wi| {
             if gather_n > 0 {
-                let gather_pdf = photonmap::gather_pdf(si, guide.as_ref(), wi);
+                let gather_pdf = photonmap::gather_pdf(si, guide.as_ref(), front, wi);
                 crate::sampling::power_heuristic(
                     ls as f32 * light_pdf,
                     gather_n as f32 * gather_pdf,

@@ -359,15 +359,59 @@ fn gather_frame(si: &SurfaceInteraction) -> Frame {
     Frame::from_normal(si.facing_normal())
 }
 
+/// The value of a diffuse point's BSDF (local `wo`) from the far side of its surface towards
+/// `wo`: a diffuse transmitter's `T / pi`, zero for a reflector and for a coated surface.
+/// Photon estimates weigh the irradiance arriving on the far side by it.
+pub fn far_side_value(bsdf: &Bsdf, wo: Vec3) -> Vec3 {
+    if bsdf.has_coat() || !bsdf.flags().has_transmission() {
+        return Vec3::ZERO;
+    }
+    bsdf.f(
+        wo,
+        Vec3::new(0.0, 0.0, -wo.z.signum()),
+        TransportMode::Radiance,
+    )
+}
+
+/// The share of a diffuse point's gather rays sent into `wo`'s hemisphere: 1, except for a
+/// diffuse transmitter, which sends the rest to its far side in proportion to its largest
+/// transmitted against its largest reflected value (as its own sampling does).
+pub fn gather_front_share(bsdf: &Bsdf, wo: Vec3) -> f32 {
+    let t = far_side_value(bsdf, wo).max_element();
+    if !(t > 0.0) {
+        return 1.0;
+    }
+    let r = bsdf
+        .f(
+            wo,
+            Vec3::new(0.0, 0.0, wo.z.signum()),
+            TransportMode::Radiance,
+        )
+        .max_element()
+        .max(0.0);
+    let share = r / (r + t);
+    if share.is_finite() {
+        share
+    } else {
+        1.0
+    }
+}
+
 /// The solid-angle density with which the final gather at `si` picks world direction `wi`.
-pub fn gather_pdf(si: &SurfaceInteraction, guide: Option<&GatherGuide>, wi: Vec3) -> f32 {
+/// `front`: the share of gather rays on `wo`'s side ([`gather_front_share`]).
+pub fn gather_pdf(
+    si: &SurfaceInteraction,
+    guide: Option<&GatherGuide>,
+    front: f32,
+    wi: Vec3,
+) -> f32 {
     let frame = gather_frame(si);
     let local = frame.to_local(wi);
     if local.z <= 0.0 {
-        return 0.0;
+        return (1.0 - front) * (-local.z).max(0.0) / std::f32::consts::PI;
     }
     let q = guide.map_or(1.0, |g| g.pdf(cosine_hemisphere_to_square(local)));
-    q * local.z / std::f32::consts::PI
+    front * q * local.z / std::f32::consts::PI
 }
 
 /// Photon-map radiance at the diffuse point `si` (BSDF `bsdf`), and its gather rays pushed to
@@ -401,13 +445,19 @@ pub fn at_diffuse(
     // (stochastic) BSDF, evaluated at a few photons drawn by power (`radiance_sampled`).
     let coated = bsdf.has_coat();
     let u_photon = if coated { sampler.next_1d() } else { 0.0 };
+    // A diffuse transmitter also passes on what lands on its far side.
+    let f_t = far_side_value(bsdf, si.wo);
     let estimate = |map: &PhotonMap, params: &EstimateParams, buf: &mut KnnResult| {
         let t = Instant::now();
         let l = if coated {
             let f = |wi: Vec3| bsdf.f_body(si.wo, si.frame.to_local(wi), TransportMode::Radiance);
             radiance_sampled(map, p, n, params, buf, (BODY_SAMPLES, u_photon), f).0
         } else {
-            f_d * irradiance_with(map, p, n, params, buf).0
+            let mut l = f_d * irradiance_with(map, p, n, params, buf).0;
+            if f_t != Vec3::ZERO {
+                l += f_t * irradiance_with(map, p, -n, params, buf).0;
+            }
+            l
         };
         charge(counters, t);
         beta * l
@@ -433,23 +483,33 @@ pub fn at_diffuse(
         return out;
     }
     // Final gathering: stratified directions, cosine-weighted and (when guided) moved towards
-    // where the nearest photons came from; f cos / pdf = f_d pi / q.
+    // where the nearest photons came from; f cos / pdf = f_d pi / q. A diffuse transmitter
+    // sends the share `1 - front` of its strata (in u.x) to its far side, cosine-weighted.
     let g = pass.settings.gather_samples.max(1);
     let (nx, ny) = strata(g);
     let frame = gather_frame(si);
     let weight = beta * f_d * (std::f32::consts::PI / g as f32);
     let lambertian = bsdf.is_lambertian();
-    let o = si.spawn(n);
+    let front = gather_front_share(bsdf, si.wo);
     for k in 0..g {
         let j = sampler.next_2d();
-        let u = Vec2::new(
+        let mut u = Vec2::new(
             ((k % nx) as f32 + j.x) / nx as f32,
             ((k / nx) as f32 + j.y) / ny as f32,
         );
-        let (u, q) = guide.map_or((u, 1.0), |gd| gd.sample(u));
-        let local = crate::sampling::warp::square_to_cosine_hemisphere(u);
+        let (local, q, pdf) = if u.x < front {
+            u.x = (u.x / front).min(crate::sampling::ONE_MINUS_EPSILON);
+            let (u, q) = guide.map_or((u, 1.0), |gd| gd.sample(u));
+            let local = crate::sampling::warp::square_to_cosine_hemisphere(u);
+            (local, q, front * q * local.z / std::f32::consts::PI)
+        } else {
+            u.x = ((u.x - front) / (1.0 - front)).min(crate::sampling::ONE_MINUS_EPSILON);
+            let l = crate::sampling::warp::square_to_cosine_hemisphere(u);
+            let pdf = (1.0 - front) * l.z / std::f32::consts::PI;
+            (Vec3::new(l.x, l.y, -l.z), 1.0, pdf)
+        };
         let d = frame.to_world(local);
-        let pdf = q * local.z / std::f32::consts::PI;
+        let o = si.spawn(if local.z < 0.0 { -n } else { n });
         let w = if lambertian {
             weight / q
         } else {
@@ -610,11 +670,17 @@ fn reflected(
                 Vec3::new(0.0, 0.0, wo.z.signum()),
                 TransportMode::Radiance,
             );
-            let e = cached_irradiance(pass, global, si.p, si.facing_normal(), buf);
+            let n = si.facing_normal();
+            let mut e = f_d * cached_irradiance(pass, global, si.p, n, buf);
+            // A diffuse transmitter (a curtain) passes on what lands on its far side.
+            let f_t = far_side_value(&bsdf, wo);
+            if f_t != Vec3::ZERO {
+                e += f_t * cached_irradiance(pass, global, si.p, -n, buf);
+            }
             let direct = direct_at_gather(ctx, &si, &mut g.sampler, |wi| {
                 bsdf.f(wo, wi, TransportMode::Radiance)
             });
-            return throughput * (f_d * e + direct);
+            return throughput * (e + direct);
         }
         // Specular or glossy: follow one sampled direction.
         let Some(bs) = bsdf.sample(

@@ -13,6 +13,7 @@ mod check;
 mod cli;
 mod coated;
 mod crosscheck;
+mod curtains;
 mod direct_light;
 mod envlight;
 mod exr;
