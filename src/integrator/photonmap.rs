@@ -378,7 +378,7 @@ pub fn far_side_value(bsdf: &Bsdf, wo: Vec3) -> Vec3 {
 /// transmitted against its largest reflected value (as its own sampling does).
 pub fn gather_front_share(bsdf: &Bsdf, wo: Vec3) -> f32 {
     let t = far_side_value(bsdf, wo).max_element();
-    if !(t > 0.0) {
+    if t.is_nan() || t <= 0.0 {
         return 1.0;
     }
     let r = bsdf
