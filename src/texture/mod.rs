@@ -33,12 +33,11 @@
 //!   (TGA, JPEG) are always sRGB and float images (EXR, PFM) linear, whatever `encoding` says.
 //! - `imagemap`: scale times the lookup, then `invert` gives max(0, 1 - v); a float imagemap
 //!   reads the first (red) channel of an RGB image, as pbrt-v4 does.
-//! - `checkerboard` (2D): `tex1` where floor(s) + floor(t) is even, else `tex2`, box-filtered
-//!   over the lookup's footprint (pbrt-v4 filters it too): with half-widths
-//!   `ds = 1.5 max(|ds/dx|, |ds/dy|)` (and `dt` alike), the fraction of odd cells in s is
-//!   `ps = (F(s + ds) - F(s - ds)) / 2ds` with `F(x) = floor(x/2) + 2 max(x/2 - floor(x/2) - 1/2, 0)`
-//!   (the integral of the 0/1 square wave), and the value is `(1 - p) tex1 + p tex2` with
-//!   `p = ps + pt - 2 ps pt` (odd cells are where exactly one of s, t is odd); `mix`: (1 - amount) tex1 + amount tex2;
+//! - `checkerboard` (2D): `tex1` where floor(s) + floor(t) is even, else `tex2`, filtered over
+//!   the lookup's footprint as pbrt-v4 does: a tent of radius `rs = 1.5 max(|ds/dx|, |ds/dy|)`
+//!   in s (and `rt` alike in t) gives the share `ps` of odd cells in s (`odd_fraction`), and
+//!   the value is `(1 - p) tex1 + p tex2` with `p = ps + pt - 2 ps pt` (odd cells are where
+//!   exactly one of s, t is odd); `mix`: (1 - amount) tex1 + amount tex2;
 //!   `scale`: tex times scale; `constant`: value.
 //!
 //! Float textures are [`Texture`]s whose three channels are equal.
@@ -366,16 +365,25 @@ impl ImageMap {
     }
 }
 
-/// The fraction of `[s - ds, s + ds]` where floor(s) is odd (`ds = 0`: 1 if it is).
-fn odd_fraction(s: f32, ds: f32) -> f32 {
-    if ds <= 0.0 || !ds.is_finite() {
-        return (s.floor() as i64).rem_euclid(2) as f32;
+/// The share of odd cells (floor odd) seen through a tent filter of radius `r` centred at `s`
+/// (`r = 0`: 1 if floor(s) is odd), as pbrt-v4's checkerboard filters. The square wave
+/// `c` (+1 on even cells, -1 on odd ones) integrated twice is
+/// `D(x) = x/2 + y (1 - 2|y|)` with `y = x/2 - floor(x/2) - 1/2`, the tent-filtered wave is the
+/// second difference `(D(s + r) - 2 D(s) + D(s - r)) / r^2`, and the odd share `(1 - that) / 2`.
+/// In f64: the second difference of values near `s/2` loses `log2(s / r^2)` bits (pbrt-v4's
+/// f32 gives noise for `s` in the thousands at fine footprints).
+fn odd_fraction(s: f32, r: f32) -> f32 {
+    let parity = |x: f64| (x.floor() as i64).rem_euclid(2) as f32;
+    let (s, r) = (f64::from(s), f64::from(r));
+    if r <= 0.0 || !r.is_finite() || (s - r).floor() == (s + r).floor() {
+        return parity(s);
     }
-    let f = |x: f32| {
-        let h = (x / 2.0).floor();
-        h + 2.0 * (x / 2.0 - h - 0.5).max(0.0)
+    let d = |x: f64| {
+        let y = x / 2.0 - (x / 2.0).floor() - 0.5;
+        x / 2.0 + y * (1.0 - 2.0 * y.abs())
     };
-    ((f(s + ds) - f(s - ds)) / (2.0 * ds)).clamp(0.0, 1.0)
+    let c = (d(s + r) - 2.0 * d(s) + d(s - r)) / (r * r);
+    ((1.0 - c) / 2.0).clamp(0.0, 1.0) as f32
 }
 
 /// A material parameter: a constant or a texture (spectrum: RGB; float: three equal channels).
@@ -773,14 +781,14 @@ mod tests {
     }
 
     #[test]
-    fn checkerboard_is_box_filtered_over_the_footprint() {
+    fn checkerboard_is_tent_filtered_over_the_footprint() {
         let c = |v: f32| Arc::new(Texture::Constant(Vec3::splat(v)));
         let checks = Texture::Checkerboard {
             mapping: UvMapping::default(),
             tex1: c(1.0),
             tex2: c(0.0),
         };
-        // Half-width 1.5 |d/dx|: 0.5 for a step of 1/3.
+        // Tent radius 1.5 |d/dx|: 0.5 for a step of 1/3.
         let at = |u: f32, v: f32, dx: f32, dy: f32| {
             checks
                 .eval_at(&TexCoord {
@@ -793,28 +801,39 @@ mod tests {
         let third = 1.0 / 3.0;
         assert_eq!(at(0.5, 0.5, 0.0, 0.0), 1.0);
         assert_eq!(at(1.5, 0.5, 0.0, 0.0), 0.0);
-        // s in [0.5, 1.5]: half odd; [0.25, 1.25]: a quarter odd.
+        // A tent centred on a cell edge sees half of each cell.
         assert!((at(1.0, 0.5, third, 0.0) - 0.5).abs() < 1e-6);
-        assert!((at(0.75, 0.5, third, 0.0) - 0.75).abs() < 1e-6);
-        // [0.25, 1.25]^2: exactly one of s, t odd on 2 x 0.25 x 0.75 of the area.
-        assert!((at(0.75, 0.75, third, third) - 0.625).abs() < 1e-6);
+        // Centred at 0.75 with radius 0.5: the odd cell [1, 1.25] holds the tent's last
+        // quarter, 1/8 of its weight (a box would give 1/4).
+        assert!((at(0.75, 0.5, third, 0.0) - 0.875).abs() < 1e-6);
+        // The same in t: exactly one of s, t odd with weight 2 (1/8)(7/8).
+        assert!((at(0.75, 0.75, third, third) - 0.78125).abs() < 1e-6);
         // A footprint of many cells averages to one half.
         assert!((at(0.3, 0.7, 40.3, 25.1) - 0.5).abs() < 0.02);
-        // Brute force over a footprint that is not symmetric about a cell edge.
-        let (u, v, ds, dt) = (0.37f32, 1.81f32, 0.8f32, 0.45f32);
-        let n = 400;
-        let mut sum = 0.0;
-        for i in 0..n {
-            for j in 0..n {
-                let s = u - ds + 2.0 * ds * (i as f32 + 0.5) / n as f32;
-                let t = v - dt + 2.0 * dt * (j as f32 + 0.5) / n as f32;
-                sum += checks.eval(Vec2::new(s, t)).x;
+        // Brute force (f64 tent weights on a grid) over footprints not symmetric about a cell
+        // edge, one of them far from the origin, where an f32 second difference is noise.
+        let tent_odd = |s: f64, r: f64| {
+            let n = 20000;
+            let (mut odd, mut total) = (0.0, 0.0);
+            for i in 0..n {
+                let t = -r + 2.0 * r * (i as f64 + 0.5) / n as f64;
+                let w = r - t.abs();
+                total += w;
+                if ((s + t).floor() as i64).rem_euclid(2) == 1 {
+                    odd += w;
+                }
             }
+            odd / total
+        };
+        for (u, v, rs, rt) in [
+            (0.37f32, 1.81f32, 0.8f32, 0.45f32),
+            (4097.9, -3000.05, 0.2, 0.1),
+            (2.2, 0.4, 3.7, 0.05),
+        ] {
+            let (ps, pt) = (tent_odd(u as f64, rs as f64), tent_odd(v as f64, rt as f64));
+            let brute = 1.0 - (ps + pt - 2.0 * ps * pt);
+            let got = at(u, v, rs / 1.5, rt / 1.5) as f64;
+            assert!((got - brute).abs() < 1e-3, "({u}, {v}): {got} vs {brute}");
         }
-        let brute = sum / (n * n) as f32;
-        assert!(
-            (at(u, v, ds / 1.5, dt / 1.5) - brute).abs() < 0.01,
-            "{brute}"
-        );
     }
 }
