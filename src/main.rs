@@ -8,6 +8,7 @@ use photon::tools::converge::{self, ConvergeOptions};
 use photon::tools::crosscheck::{self, CrosscheckOptions};
 use photon::tools::merge::{self, MergeOptions};
 use photon::tools::render::{self, RenderOptions};
+use std::io::Write;
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -67,7 +68,7 @@ fn parse() -> Result<Cli, ExitCode> {
                 .collect();
             let line = lines.join(" ");
             let line = line.strip_prefix("error: ").unwrap_or(&line);
-            eprintln!("photon: {}", one_line(line));
+            let _ = writeln!(std::io::stderr(), "photon: {}", one_line(line));
             ExitCode::from(2)
         }
     })
@@ -96,7 +97,7 @@ fn main() -> ExitCode {
     // A render stopped by SIGINT/SIGTERM has saved what it finished; report the signal.
     if let Some(sig) = photon::interrupt::requested() {
         if let Err(e) = &result {
-            eprintln!("photon: {}", one_line(&e.to_string()));
+            let _ = writeln!(std::io::stderr(), "photon: {}", one_line(&e.to_string()));
         }
         return ExitCode::from(sig.exit_code());
     }
@@ -104,7 +105,7 @@ fn main() -> ExitCode {
         Ok(true) => ExitCode::SUCCESS,
         Ok(false) => ExitCode::from(1),
         Err(e) => {
-            eprintln!("photon: {}", one_line(&e.to_string()));
+            let _ = writeln!(std::io::stderr(), "photon: {}", one_line(&e.to_string()));
             match photon::interrupt::requested() {
                 Some(sig) => ExitCode::from(sig.exit_code()),
                 None => ExitCode::from(2),

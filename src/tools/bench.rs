@@ -562,8 +562,8 @@ pub fn run_with(
         .collect();
     let outputs = super::output::Outputs::plan_files(&files).map_err(ToolError)?;
     let plan = opts.plan();
-    println!("{}", machine());
-    println!(
+    say!("{}", machine());
+    say!(
         "plan: {} rays per kind, {} runs (median), {} photons, {} queries, threads {:?}{}",
         plan.rays,
         plan.runs,
@@ -589,8 +589,8 @@ pub fn run_with(
         let start = rows.len();
         let t = Instant::now();
         bench_scene(name, &job, &plan, &mut baseline, &mut rows)?;
-        print!("{}", table(&rows[start..]));
-        println!("({:.1} s)\n", t.elapsed().as_secs_f64());
+        say_part!("{}", table(&rows[start..]));
+        say!("({:.1} s)\n", t.elapsed().as_secs_f64());
     }
     let texts: Vec<String> = (outputs.files.iter())
         .map(|f| match f.flag.as_str() {

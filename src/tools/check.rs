@@ -120,7 +120,7 @@ pub fn run(opts: &CheckOptions) -> Result<(), ToolError> {
     let mut bad = 0;
     for path in &opts.scenes {
         let report = check_scene(path);
-        println!("{report}");
+        say!("{report}");
         bad += usize::from(!report.problems.is_empty());
     }
     if bad > 0 {

@@ -56,9 +56,9 @@ pub fn run(opts: &CompareOptions) -> Result<bool, ToolError> {
         out.commit(vec![writer])?;
     }
     if opts.json {
-        println!("{}", to_json(&m));
+        say!("{}", to_json(&m));
     } else {
-        println!("{}", summary(&m));
+        say!("{}", summary(&m));
     }
     Ok(opts.max_relmse.is_none_or(|t| m.overall.relmse <= t))
 }

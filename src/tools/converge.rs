@@ -160,15 +160,20 @@ pub fn run(opts: &ConvergeOptions) -> Result<bool, ToolError> {
             let row = measure(
                 scene, &accel, base, m, budget, &reference, mask, &opts.out, &pool,
             )?;
-            println!(
+            say!(
                 "{:<22} budget {:>6.2} s: {:>7.2} s, {:>5} spp, relMSE {:.5}, RMSE {:.5}",
-                row.method, row.budget, row.seconds, row.spp, row.relmse, row.rmse
+                row.method,
+                row.budget,
+                row.seconds,
+                row.spp,
+                row.relmse,
+                row.rmse
             );
             rows.push(row);
         }
     }
     for line in trend_lines(&rows) {
-        println!("{line}");
+        say!("{line}");
     }
     let title = scene_title(&opts.scene);
     let writers: Vec<Writer> = vec![
@@ -178,7 +183,7 @@ pub fn run(opts: &ConvergeOptions) -> Result<bool, ToolError> {
     Outputs::plan_files(&[("--out", &csv), ("--out", &png)])
         .map_err(ToolError)?
         .commit(writers)?;
-    println!("wrote {} and {}", csv.display(), png.display());
+    say!("wrote {} and {}", csv.display(), png.display());
     Ok(true)
 }
 

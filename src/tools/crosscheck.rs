@@ -636,10 +636,10 @@ pub fn run(opts: &CrosscheckOptions) -> Result<bool, ToolError> {
     };
     let fails = failures(&reports, relmse, &th);
     if opts.json {
-        println!("{}", to_json(&reports, relmse, &fails));
+        say!("{}", to_json(&reports, relmse, &fails));
         return Ok(fails.is_empty());
     }
-    println!(
+    say!(
         "crosscheck {}: {} triangles; reference embree, candidate obvhs; seed {}; \
          builds {:.2} s, recording {:.2} s, comparing {:.2} s",
         opts.scene.display(),
@@ -649,15 +649,15 @@ pub fn run(opts: &CrosscheckOptions) -> Result<bool, ToolError> {
         recorded.seconds,
         compare_s
     );
-    println!("{}", describe_recording(&recorded));
-    print!("{}", table(&reports));
+    say!("{}", describe_recording(&recorded));
+    say_part!("{}", table(&reports));
     for r in &reports {
         for e in &r.examples {
-            println!("  unexplained {}: {e}", r.kind.map_or("?", |k| k.name()));
+            say!("  unexplained {}: {e}", r.kind.map_or("?", |k| k.name()));
         }
     }
     if let Some((w, h, (m, secs))) = image {
-        println!(
+        say!(
             "image: {w}x{h}, {} spp, photon mapper, seed {}: relMSE(obvhs vs embree) {m:.3e} \
              (renders {:.2} s / {:.2} s)",
             opts.image_spp.max(1),
@@ -666,16 +666,19 @@ pub fn run(opts: &CrosscheckOptions) -> Result<bool, ToolError> {
             secs[1]
         );
     }
-    println!(
+    say!(
         "thresholds: unexplained <= {} and disagreeing <= {} of each kind's rays, rel |dt| \
          p99.9 <= {}, image relMSE <= {}",
-        th.max_unexplained, th.max_disagree, th.max_t_rel, th.max_relmse
+        th.max_unexplained,
+        th.max_disagree,
+        th.max_t_rel,
+        th.max_relmse
     );
     if fails.is_empty() {
-        println!("PASS");
+        say!("PASS");
     } else {
         for f in &fails {
-            println!("FAIL: {f}");
+            say!("FAIL: {f}");
         }
     }
     Ok(fails.is_empty())

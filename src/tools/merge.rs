@@ -54,7 +54,7 @@ pub fn run(opts: &MergeOptions) -> Result<(), ToolError> {
         }));
     }
     outputs.commit(writers)?;
-    println!(
+    say!(
         "merged {} parts: passes {}..{} -> {}",
         parts.len(),
         merged.passes.start,
@@ -62,7 +62,7 @@ pub fn run(opts: &MergeOptions) -> Result<(), ToolError> {
         opts.output.display()
     );
     if let Some(png) = &png {
-        println!("wrote {}", png.display());
+        say!("wrote {}", png.display());
     }
     Ok(())
 }

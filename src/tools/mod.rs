@@ -1,4 +1,32 @@
 //! The subcommands of the `photon` binary, one module each, callable from tests too.
+
+/// `println!` that a closed or failing standard output does not stop: `photon render | head
+/// -1` loses the rest of the text, not the render (`println!` panics on EPIPE).
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
+
+/// `print!` that a closed or failing standard output does not stop (see `say!`).
+macro_rules! say_part {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let mut out = std::io::stdout();
+        let _ = write!(out, $($arg)*);
+        let _ = out.flush();
+    }};
+}
+
+/// `eprintln!` that a closed or failing standard error does not stop (see `say!`).
+macro_rules! say_err {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+
 pub mod bench;
 pub mod check;
 pub mod compare;

@@ -252,18 +252,22 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
                 estimate = check(&settings).map_err(|e| ToolError(format!("--time: {e}")))?;
                 let t = &settings.photon.trace;
                 if (t.global_photons, t.caustic_photons) != wanted {
-                    println!(
+                    say!(
                         "time budget: {} + {} photons would not fit the memory budget: {} + {}",
-                        wanted.0, wanted.1, t.global_photons, t.caustic_photons
+                        wanted.0,
+                        wanted.1,
+                        t.global_photons,
+                        t.caustic_photons
                     );
                 }
             }
             let (out, spp) = pool.install(|| {
                 integrator::render_for_time(scene, &accel, &settings, opts.integrator, budget)
             });
-            println!(
+            say!(
                 "time budget {budget:.2} s: {spp} spp, {} + {} photons",
-                settings.photon.trace.global_photons, settings.photon.trace.caustic_photons
+                settings.photon.trace.global_photons,
+                settings.photon.trace.caustic_photons
             );
             out
         }
@@ -291,10 +295,10 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
         return Err(ToolError(message));
     }
     for note in &out.notes {
-        println!("{note}");
+        say!("{note}");
     }
     let rays = out.counters.total();
-    println!(
+    say!(
         "rendered in {:.3} s: {} rays ({:.2} Mrays/s): camera {}, secondary {}, shadow {}",
         out.seconds,
         rays,
@@ -315,22 +319,22 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     }
     let bad = out.image.count_nonfinite();
     if bad > 0 {
-        eprintln!("photon: warning: {bad} non-finite pixel values");
+        say_err!("photon: warning: {bad} non-finite pixel values");
     }
 
     // Outputs: written to temporary files and renamed together (see `output`).
     outputs.write(&out.image, &layers, pixel, opts.exposure)?;
     for f in &outputs.files {
-        println!("wrote {}", f.shown.display());
+        say!("wrote {}", f.shown.display());
     }
-    println!("{}", crate::memory::report(&estimate));
+    say!("{}", crate::memory::report(&estimate));
     Ok(())
 }
 
 /// Prints what is rendered: the scene, its notes, the accelerator, the film and the settings.
 fn banner(opts: &RenderOptions, job: &Job, build_s: f64, threads: usize) {
     let (scene, settings) = (&job.scene, &job.settings);
-    println!(
+    say!(
         "scene: {} | {} meshes, {} triangles, {} lights, {} materials | loaded in {:.3} s",
         opts.scene.display(),
         scene.meshes.len(),
@@ -340,9 +344,9 @@ fn banner(opts: &RenderOptions, job: &Job, build_s: f64, threads: usize) {
         job.load_seconds
     );
     for note in &scene.notes {
-        println!("note: {note}");
+        say!("note: {note}");
     }
-    println!(
+    say!(
         "accel: {} build {:.3} s{}",
         opts.backend,
         build_s,
@@ -350,15 +354,15 @@ fn banner(opts: &RenderOptions, job: &Job, build_s: f64, threads: usize) {
     );
     if settings.crop.is_some() {
         let [x0, x1, y0, y1] = settings.pixel_bounds();
-        println!("film: crop window: pixels [{x0}, {x1}) x [{y0}, {y1}) of the image below");
+        say!("film: crop window: pixels [{x0}, {x1}) x [{y0}, {y1}) of the image below");
     }
     if settings.imaging_ratio != 1.0 {
-        println!(
+        say!(
             "film: imaging ratio {} (exposure time x iso / 100)",
             settings.imaging_ratio
         );
     }
-    println!(
+    say!(
         "render: {}x{}, {} spp ({:?}; file sampler \"{}\"), integrator {:?} (file asks for \"{}\"), max depth {}, {} threads",
         settings.width,
         settings.height,
@@ -431,7 +435,7 @@ fn print_stats(out: &crate::integrator::RenderOutput, threads: usize) {
     let lookup_s = c.lookup_ns.load(Relaxed) as f64 * 1e-9;
     let shading_s = (thread_s - ray_s - lookup_s).max(0.0);
     let pct = |x: f64| 100.0 * x / thread_s;
-    println!(
+    say!(
         "time split: photon tracing {:.3} s, map building {:.3} s, render loop {:.3} s x {} threads = ray queries {:.3} s ({:.1}%), photon lookups {:.3} s ({:.1}%), shading and sampling {:.3} s ({:.1}%)",
         out.photon_seconds,
         out.map_build_seconds,
@@ -447,7 +451,7 @@ fn print_stats(out: &crate::integrator::RenderOutput, threads: usize) {
     let rays = (c.camera_rays.load(Relaxed)
         + c.secondary_rays.load(Relaxed)
         + c.shadow_rays.load(Relaxed)) as f64;
-    println!(
+    say!(
         "ray rate inside the render: {:.2} Mrays/s per thread while querying, {:.2} Mrays/s of render-loop wall time",
         rays / ray_s.max(1e-9) / 1e6,
         rays / loop_s / 1e6
@@ -520,7 +524,7 @@ fn print_raw_rate(
     let (accel, rec) = match recorded {
         Ok(r) => r,
         Err(e) => {
-            println!("raw rate: not measured: {e}");
+            say!("raw rate: not measured: {e}");
             return;
         }
     };
@@ -565,7 +569,7 @@ fn print_raw_rate(
     }
     let raw = rays / seconds.max(1e-12) / 1e6;
     let inside = c.total() as f64 / (c.ray_ns.load(Relaxed) as f64 * 1e-9).max(1e-9) / 1e6;
-    println!(
+    say!(
         "raw rate on {replayed} recorded camera/shadow/gather/bounce rays, 1 thread, batches of <= 256, weighted by the render's counts: {raw:.2} Mrays/s; inside the render {inside:.2} Mrays/s per thread ({:.0}% of raw)",
         100.0 * inside / raw.max(1e-9)
     );

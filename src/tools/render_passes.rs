@@ -83,7 +83,7 @@ pub fn run(
                     p.passes.end
                 )));
             }
-            println!(
+            say!(
                 "resuming {}: passes {}..{} done",
                 file.display(),
                 p.passes.start,
@@ -102,7 +102,7 @@ pub fn run(
         (None, Some(_)) => MAX_PASSES,
         (None, None) => start_pass + settings.spp.div_ceil(pass_spp).max(1) as u64,
     };
-    println!(
+    say!(
         "passes: {}..{} of {} spp each, {} photon maps{}",
         acc.passes.end,
         if until_budget {
@@ -143,7 +143,7 @@ pub fn run(
                     let now = t0.elapsed().as_secs_f64();
                     longest = longest.max(now - last);
                     last = now;
-                    eprintln!(
+                    say_err!(
                     "pass {} done: {:.3} s, of which photon tracing {:.1}% and map building {:.1}%",
                     acc.passes.end - 1,
                     out.seconds,
@@ -173,7 +173,7 @@ pub fn run(
     // signal while writing aborts the writes and removes their temporaries).
     let signal = crate::interrupt::take();
     if let Some(sig) = signal {
-        eprintln!(
+        say_err!(
             "photon: {} received: keeping passes {}..{}",
             sig.name(),
             acc.passes.start,
@@ -219,7 +219,7 @@ pub fn plan_checkpoint(
 /// Prints a failed checkpoint write as a one-line warning, unless it is the one printed last.
 fn warn_once(last: &mut String, e: &str) {
     if last != e {
-        eprintln!("photon: warning: {e}; the render goes on without this checkpoint");
+        say_err!("photon: warning: {e}; the render goes on without this checkpoint");
         *last = e.to_string();
     }
 }
@@ -227,11 +227,11 @@ fn warn_once(last: &mut String, e: &str) {
 /// The statistics lines of a render in passes.
 fn report(settings: &RenderSettings, acc: &Partial, totals: &RenderOutput, seconds: f64) {
     for note in &totals.notes {
-        println!("{note}");
+        say!("{note}");
     }
-    println!("{}", progress_note(settings, acc));
+    say!("{}", progress_note(settings, acc));
     let rays = totals.counters.total();
-    println!(
+    say!(
         "rendered in {seconds:.3} s: {rays} rays ({:.2} Mrays/s), {} photons emitted; per-pass overhead: photon tracing {:.1}%, map building {:.1}% of the time",
         rays as f64 / seconds.max(1e-9) / 1e6,
         totals.photons_emitted,
@@ -249,7 +249,7 @@ fn save(
     warned: &mut String,
 ) -> Result<(), ToolError> {
     if acc.passes.is_empty() {
-        eprintln!("photon: no pass finished: nothing written");
+        say_err!("photon: no pass finished: nothing written");
         return Ok(());
     }
     if let Some(c) = checkpoint {
@@ -257,7 +257,7 @@ fn save(
         match write_partial(c, acc) {
             Err(OutputError::Bad(e)) => warn_once(warned, &e),
             Err(e) => return Err(e.into()),
-            Ok(()) => println!("wrote checkpoint {}", c.files[0].shown.display()),
+            Ok(()) => say!("wrote checkpoint {}", c.files[0].shown.display()),
         }
     }
     let mean = acc.mean().0;
@@ -272,7 +272,7 @@ fn save(
     }
     outputs.commit(writers)?;
     for f in &outputs.files {
-        println!(
+        say!(
             "wrote {} (passes {}..{})",
             f.shown.display(),
             acc.passes.start,

@@ -202,3 +202,33 @@ fn photon_settings_have_one_range_in_the_file_and_on_the_command_line() {
         "(0, 1)",
     );
 }
+
+/// `photon render ... | head -1`: standard output closed after the first line. The banner's
+/// later lines are lost, the render is not (it panicked with exit 101 on the EPIPE and wrote
+/// nothing).
+#[test]
+fn a_closed_standard_output_does_not_stop_the_render() {
+    use std::process::Stdio;
+    let dir = tmp("closed-stdout");
+    let exr = dir.join("out.exr");
+    let mut child = photon()
+        .args([
+            "render",
+            "scenes/cornell-glass.pbrt",
+            "--res",
+            "16x12",
+            "--spp",
+            "1",
+        ])
+        .args(["--threads", "1", "-o"])
+        .arg(&exr)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("photon runs");
+    drop(child.stdout.take()); // the reader is gone before the first line
+    let out = child.wait_with_output().expect("photon finishes");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "stderr: {stderr}");
+    assert!(exr.is_file(), "no image written");
+}
