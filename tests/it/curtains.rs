@@ -7,7 +7,6 @@
 //! on the side the point is seen from, weighted by the reflectance: a final-gather ray from
 //! the room that hit the curtain read the curtain's dim room side and nothing of its lit back,
 //! and the room came out at 0.45-0.6 of the path tracer's (bedroom: 0.84 overall).
-use photon::integrator::IntegratorKind;
 
 use crate::support as common;
 use common::TempDir;
@@ -57,19 +56,7 @@ AttributeEnd
 #[test]
 fn light_through_a_diffuse_transmitter_against_the_path_tracer() {
     let dir = TempDir::new("curtain-room");
-    let reference = common::render_file(
-        &dir.write("path.pbrt", scene("path", 1024)),
-        IntegratorKind::Path,
-    );
-    let image = common::render_file(
-        &dir.write("pm.pbrt", scene("photonmap", 64)),
-        IntegratorKind::Photonmap,
-    );
-    let (mean, blocks) = common::block_ratios(&image, &reference, 32, 4);
-    let (lo, hi) = blocks
-        .iter()
-        .fold((f64::MAX, 0.0f64), |(lo, hi), &b| (lo.min(b), hi.max(b)));
-    println!("mean ratio {mean:.4}, blocks {lo:.3}..{hi:.3}");
+    let (mean, lo, hi) = common::photonmap_against_path(&dir, scene, 1024, 64);
     assert!((mean - 1.0).abs() < 0.03, "mean ratio {mean}");
     assert!(lo > 0.85 && hi < 1.15, "blocks {lo}..{hi}");
 }

@@ -17,7 +17,6 @@
 //!   scene (blocks 0.94-1.06) but darkens `tests/windows.rs` (mean 0.996 -> 0.954 at 100k
 //!   photons, 1.03 -> 1.01 at 4M): there, sparse photons make discs wider than a table's
 //!   underside or the room, and those leaked photons were what filled them.
-use photon::integrator::IntegratorKind;
 
 use crate::support as common;
 use common::TempDir;
@@ -61,15 +60,7 @@ LightSource "point" "point3 from" [ -1.75 1.75 0 ] "rgb I" [ 2 2 2 ]
 #[ignore = "open: the edge leak (module docs), blocks by the can 1.8-2.1x"]
 fn lamp_can_beside_a_wall_against_the_path_tracer() {
     let dir = TempDir::new("lamp-can");
-    let path = dir.write("path.pbrt", scene("path", 8192));
-    let reference = common::render_file(&path, IntegratorKind::Path);
-    let pm = dir.write("pm.pbrt", scene("photonmap", 256));
-    let image = common::render_file(&pm, IntegratorKind::Photonmap);
-    let (mean, blocks) = common::block_ratios(&image, &reference, 32, 4);
-    let (lo, hi) = blocks
-        .iter()
-        .fold((f64::MAX, 0.0f64), |(lo, hi), &b| (lo.min(b), hi.max(b)));
-    println!("mean ratio {mean:.4}, blocks {lo:.3}..{hi:.3}: {blocks:.3?}");
+    let (mean, lo, hi) = common::photonmap_against_path(&dir, scene, 8192, 256);
     assert!((mean - 1.0).abs() < 0.03, "mean ratio {mean}");
     assert!(lo > 0.85 && hi < 1.15, "blocks {lo}..{hi}");
 }

@@ -7,7 +7,6 @@
 //! a metre); the final gather read that from the cache everywhere: the image came out 1.85x
 //! the path tracer's (classroom: 1.19x). Gather hits now take the sun's and sky's direct light
 //! by a shadow ray and the photons only for the rest.
-use photon::integrator::IntegratorKind;
 
 use crate::support as common;
 use common::TempDir;
@@ -107,23 +106,12 @@ Shape "trianglemesh" "point3 P" [ 1.0 0.45 1.75  1.4 0.45 1.75  1.4 0.45 2.09999
 
 /// Mean and the 4x4 block means of the photon mapper (100k photons emitted, 64 spp) against
 /// the path tracer (2048 spp): measured mean -0.4%, blocks 0.83-1.19 (before: mean +88%,
-/// blocks up to 4.3x).
+/// blocks up to 4.3x). At 1M photons instead of 100k both this code and baa8b18 give mean
+/// 0.966 with a block at 0.73: the 100k result holds by errors that cancel (issue 17).
 #[test]
 fn sun_and_sky_through_a_window_against_the_path_tracer() {
     let dir = TempDir::new("windows-room");
-    let reference = common::render_file(
-        &dir.write("path.pbrt", scene("path", 2048)),
-        IntegratorKind::Path,
-    );
-    let image = common::render_file(
-        &dir.write("pm.pbrt", scene("photonmap", 64)),
-        IntegratorKind::Photonmap,
-    );
-    let (mean, blocks) = common::block_ratios(&image, &reference, 32, 4);
-    let (lo, hi) = blocks
-        .iter()
-        .fold((f64::MAX, 0.0f64), |(lo, hi), &b| (lo.min(b), hi.max(b)));
-    println!("mean ratio {mean:.4}, blocks {lo:.3}..{hi:.3}");
+    let (mean, lo, hi) = common::photonmap_against_path(&dir, scene, 2048, 64);
     assert!((mean - 1.0).abs() < 0.03, "mean ratio {mean}");
     assert!(lo > 0.8 && hi < 1.2, "blocks {lo}..{hi}");
 }

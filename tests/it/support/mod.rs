@@ -487,6 +487,30 @@ pub fn block_ratios(
     (mean, blocks)
 }
 
+/// The photon mapper against our path tracer on one scene: `scene(integrator, spp)` is
+/// written into `dir` and rendered with `path_spp` and `photonmap_spp` samples; returns the
+/// mean luminance ratio and the smallest and largest ratio of the 4x4 blocks (32 px wide
+/// images), after printing them.
+#[allow(dead_code)]
+pub fn photonmap_against_path(
+    dir: &TempDir,
+    scene: impl Fn(&str, u32) -> String,
+    path_spp: u32,
+    photonmap_spp: u32,
+) -> (f64, f64, f64) {
+    use photon::integrator::IntegratorKind;
+    let path = dir.write("path.pbrt", scene("path", path_spp));
+    let reference = render_file(&path, IntegratorKind::Path);
+    let pm = dir.write("pm.pbrt", scene("photonmap", photonmap_spp));
+    let image = render_file(&pm, IntegratorKind::Photonmap);
+    let (mean, blocks) = block_ratios(&image, &reference, 32, 4);
+    let (lo, hi) = blocks
+        .iter()
+        .fold((f64::MAX, 0.0f64), |(lo, hi), &b| (lo.min(b), hi.max(b)));
+    println!("mean ratio {mean:.4}, blocks {lo:.3}..{hi:.3}: {blocks:.3?}");
+    (mean, lo, hi)
+}
+
 /// The pixels of the scene file at `path` rendered with `kind` and the file's own settings
 /// (Embree).
 #[allow(dead_code)]
