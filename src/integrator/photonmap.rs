@@ -87,6 +87,8 @@ impl Default for PhotonSettings {
                 pattern: Pattern::Stratified,
                 receiver_alpha: trace::RECEIVER_ALPHA,
                 footprint: None,
+                aimed: true,
+                store_surfaceless_direct: false,
             },
             global_lookup: 100,
             global_radius: 0.1,
@@ -254,10 +256,7 @@ pub fn prepare(
     // lookup blurs over the cache's spacing, a bias that does not shrink with the radii (on
     // cornell-glass at 64x64, 32 -> 128 passes: 0.0013 -> 0.00083 with it, 0.00115 -> 0.00047
     // without, at the same speed).
-    // Gather hits take the surfaceless lights' direct light by a shadow ray ([`direct_at_gather`]):
-    // their photon estimates, the cache's included, leave those photons out.
     let gather_params = EstimateParams {
-        exclude_flags: Photon::SURFACELESS,
         min_photons: 1,
         ..global_params
     };
@@ -703,8 +702,8 @@ fn reflected(
 
 /// Direct light of the lights without a surface (point, spot, distant, infinite) at a gather
 /// ray's diffuse hit `si`: one shadow ray to one of them picked by power, weighted by `f(wi)`
-/// (the BSDF's diffuse part, local `wi`) `|cos| / pdf`; the photon estimates there leave out
-/// the photons stored straight from them (`SURFACELESS`). Such lights reach a room through its
+/// (the BSDF's diffuse part, local `wi`) `|cos| / pdf`; the global map holds no photon stored
+/// straight from them (`photon::trace`). Such lights reach a room through its
 /// windows: a few of their photons enter, in sharp patches that blur and leak at any photon
 /// count a render can afford, while a shadow ray is exact (noise-free for the sun). Area
 /// lights keep their direct photons, which are dense around them and cost no ray.
@@ -762,7 +761,6 @@ fn cached_irradiance(
         return e;
     }
     let params = EstimateParams {
-        exclude_flags: Photon::SURFACELESS,
         min_photons: 1,
         ..pass.global_params
     };
@@ -792,6 +790,16 @@ pub fn describe(pass: &PhotonPass) -> Vec<String> {
             100.0 * st.caustic_efficiency,
             100.0 * st.caustic_efficiency_unrestricted,
             st.marked_fraction.iter().map(|f| (f * 1000.0).round() / 1000.0).collect::<Vec<_>>()
+        ));
+    }
+    if let Some(a) = &st.aim {
+        lines.push(format!(
+            "aimed global photons: {:.0}% of the distant and infinite lights' at the sphere of radius {:.3} around ({:.3}, {:.3}, {:.3}) that the camera sees",
+            100.0 * a.share,
+            a.radius,
+            a.center.x,
+            a.center.y,
+            a.center.z
         ));
     }
     if st.global_per_light.len() > 1 || st.caustic_per_light.len() > 1 {

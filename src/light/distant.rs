@@ -1,8 +1,7 @@
 //! Distant (directional) light: `LightSource "distant"`; irradiance on a surface facing it
 //! is `L`.
 use super::{scalar_power, Emission, LightSample};
-use crate::math::{Frame, Vec2, Vec3};
-use crate::sampling::warp::square_to_disk_concentric;
+use crate::math::Vec3;
 use std::f32::consts::PI;
 
 /// `LightSource "distant"`: radiance `l` arriving along unit `dir` (the direction the light
@@ -34,19 +33,15 @@ impl DistantLight {
         }
     }
 
-    /// A photon from a uniform point of the disc of radius `radius` that faces the light,
-    /// centred on the scene and placed outside it; flux `L pi radius^2`.
-    pub fn emit(&self, center: Vec3, radius: f32, u_pos: Vec2) -> Emission {
-        let dir = self.dir;
-        let d = square_to_disk_concentric(u_pos) * radius;
-        let frame = Frame::from_normal(dir);
-        let p = center - dir * (2.0 * radius) + frame.s * d.x + frame.t * d.y;
+    /// A photon leaving `p` (outside the scene, see [`super::Lights::emit_aimed`]), drawn
+    /// with density `1 / area` over the plane facing the light; flux `L area`.
+    pub fn emit(&self, p: Vec3, area: f32) -> Emission {
         Emission {
             p,
             n: Vec3::ZERO,
             err: Vec3::ZERO,
-            dir,
-            flux: self.l * (PI * radius * radius),
+            dir: self.dir,
+            flux: self.l * area,
         }
     }
 }

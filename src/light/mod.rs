@@ -33,6 +33,7 @@ use crate::math::{luminance, Frame, Vec2, Vec3};
 use crate::mesh::Mesh;
 use crate::sampling::alias::AliasTable;
 use crate::sampling::warp::square_to_disk_concentric;
+use crate::sampling::ONE_MINUS_EPSILON;
 use std::f32::consts::PI;
 use std::sync::Arc;
 
@@ -308,6 +309,15 @@ pub struct Emission {
     pub flux: Vec3,
 }
 
+/// A sphere that the photons of the distant and infinite lights favour, and the share of
+/// them it gets (see `photon::aim` and [`Lights::disc_origin`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aim {
+    pub center: Vec3,
+    pub radius: f32,
+    pub share: f32,
+}
+
 /// Which 2D sample of an emission a projection map restricts: the direction (area, point and
 /// spot lights) or the position (distant lights: every photon travels the same way).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -321,24 +331,84 @@ impl Lights {
     /// [0,1)^2, so both can be stratified over the light's photons). The flux is
     /// `Le cos / (pdf_pos pdf_dir)`: the light's power for uniform cosine-weighted sampling.
     pub fn emit(&self, meshes: &[Mesh], i: usize, u_pos: Vec2, u_dir: Vec2) -> Option<Emission> {
+        self.emit_aimed(meshes, i, u_pos, u_dir, None)
+    }
+
+    /// As [`Self::emit`]; a distant or infinite light draws the origin from the mixture of
+    /// [`Self::disc_origin`] with `aim` (the other lights ignore it).
+    pub fn emit_aimed(
+        &self,
+        meshes: &[Mesh],
+        i: usize,
+        u_pos: Vec2,
+        u_dir: Vec2,
+        aim: Option<&Aim>,
+    ) -> Option<Emission> {
         match &self.emitters[i] {
             Emitter::Area(a) => a.emit(meshes, u_pos, u_dir),
             Emitter::Point(l) => Some(l.emit(u_dir)),
             Emitter::Spot(l) => l.emit(u_dir),
-            Emitter::Distant(l) => Some(l.emit(self.center, self.radius, u_pos)),
-            Emitter::Infinite(map) => self.emit_env(map, u_pos, u_dir),
+            Emitter::Distant(l) => {
+                let (p, area) = self.disc_origin(l.dir, u_pos, aim)?;
+                Some(l.emit(p, area))
+            }
+            Emitter::Infinite(map) => self.emit_env(map, u_pos, u_dir, aim),
         }
+    }
+
+    /// The origin of a photon of a light without a surface travelling along unit `dir`, on
+    /// the plane `2R` upstream of the scene's centre (`R` its radius), and the inverse of its
+    /// density on that plane: uniform on the disc of radius `R` that covers the scene, or with
+    /// `aim` a mixture: with probability `aim.share` (taken from `u.x`, which keeps the
+    /// strata) uniform on the disc that `aim`'s sphere casts, else on the scene's disc; the
+    /// density is the mixture's at the origin, so the flux stays unbiased wherever the discs
+    /// overlap. `None` for a degenerate density.
+    pub fn disc_origin(&self, dir: Vec3, u: Vec2, aim: Option<&Aim>) -> Option<(Vec3, f32)> {
+        let frame = Frame::from_normal(dir);
+        let base = self.center - dir * (2.0 * self.radius);
+        let big = self.radius;
+        let at = |d: Vec2| base + frame.s * d.x + frame.t * d.y;
+        let Some(aim) = aim.filter(|a| a.share > 0.0 && a.share < 1.0 && a.radius > 0.0) else {
+            return Some((at(square_to_disk_concentric(u) * big), PI * big * big));
+        };
+        let off = aim.center - self.center;
+        let a = Vec2::new(off.dot(frame.s), off.dot(frame.t));
+        let small = aim.radius;
+        let d = if u.x < aim.share {
+            let v = Vec2::new((u.x / aim.share).min(ONE_MINUS_EPSILON), u.y);
+            a + square_to_disk_concentric(v) * small
+        } else {
+            let v = Vec2::new(
+                ((u.x - aim.share) / (1.0 - aim.share)).min(ONE_MINUS_EPSILON),
+                u.y,
+            );
+            square_to_disk_concentric(v) * big
+        };
+        // A hair of slack for points drawn on a disc's rim.
+        let inside = |q: Vec2, r: f32| q.length_squared() <= r * r * (1.0 + 1e-5);
+        let mut pdf = 0.0;
+        if inside(d, big) {
+            pdf += (1.0 - aim.share) / (PI * big * big);
+        }
+        if inside(d - a, small) {
+            pdf += aim.share / (PI * small * small);
+        }
+        (pdf > 0.0 && pdf.is_finite()).then(|| (at(d), 1.0 / pdf))
     }
 
     /// A photon from an infinite light (pbrt-v4's `SampleLe`): a direction from the map's
     /// distribution (`u_dir`), an origin uniform on the disc of the scene's radius `R` that
     /// faces it, outside the scene (`u_pos`); flux `Le pi R^2 / pdf_dir`.
-    fn emit_env(&self, map: &EnvMap, u_pos: Vec2, u_dir: Vec2) -> Option<Emission> {
+    fn emit_env(
+        &self,
+        map: &EnvMap,
+        u_pos: Vec2,
+        u_dir: Vec2,
+        aim: Option<&Aim>,
+    ) -> Option<Emission> {
         let (w, le, pdf) = map.sample(u_dir)?;
         let dir = -w;
-        let d = square_to_disk_concentric(u_pos) * self.radius;
-        let frame = Frame::from_normal(dir);
-        let p = self.center - dir * (2.0 * self.radius) + frame.s * d.x + frame.t * d.y;
+        let (p, area) = self.disc_origin(dir, u_pos, aim)?;
         if !map.admits_photon(p, dir) {
             return None; // counted as emitted: a portal light's photons enter only through it
         }
@@ -347,7 +417,7 @@ impl Lights {
             n: Vec3::ZERO,
             err: Vec3::ZERO,
             dir,
-            flux: finite_flux(le, PI as f64 * (self.radius as f64).powi(2) / pdf as f64),
+            flux: finite_flux(le, area as f64 / pdf as f64),
         })
     }
 
@@ -407,6 +477,19 @@ impl Lights {
         }
     }
 
+    /// Centre and radius of the scene's bounding sphere.
+    pub fn bounds(&self) -> (Vec3, f32) {
+        (self.center, self.radius)
+    }
+
+    /// Whether a distant or infinite light shines (their photons can be aimed, see
+    /// [`Self::disc_origin`]).
+    pub fn has_distant_or_infinite(&self) -> bool {
+        self.emitters
+            .iter()
+            .any(|e| matches!(e, Emitter::Distant(_) | Emitter::Infinite(_)))
+    }
+
     /// Whether every photon of light `i` leaves with the same direction warp (so a cell of the
     /// direction domain maps to one cone of world directions): false for curved area lights.
     pub fn fixed_direction_frame(&self, i: usize) -> bool {
@@ -458,4 +541,61 @@ pub fn bounding_sphere(points: &[Vec3]) -> (Vec3, f32) {
     let c = (lo + hi) * 0.5;
     let r = points.iter().map(|p| (*p - c).length()).fold(0.0, f32::max);
     (c, r)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The aimed mixture's inverse density weighs origins by the area they stand for: over
+    /// a stratified grid of draws, `sum(area) / n` over the origins in a square of the
+    /// emission plane is the square's area, for a square inside the aimed disc, one across
+    /// its rim and one outside it (where only a quarter of the draws go); without an aim,
+    /// every origin stands for `pi R^2`.
+    #[test]
+    fn aimed_origins_weigh_to_the_area_they_cover() {
+        let lights = Lights::new(&[], &[], (Vec3::splat(-10.0), Vec3::splat(10.0)));
+        let (center, radius) = lights.bounds();
+        let dir = Vec3::new(0.3, -1.0, 0.2).normalize();
+        let frame = Frame::from_normal(dir);
+        let base = center - dir * (2.0 * radius);
+        let aim = Aim {
+            center: Vec3::new(3.0, 1.0, -2.0),
+            radius: 2.0,
+            share: 0.75,
+        };
+        let off = aim.center - center;
+        let a = Vec2::new(off.dot(frame.s), off.dot(frame.t));
+        // (lower corner, side) in the plane's (s, t) coordinates.
+        let squares = [
+            (a - Vec2::splat(0.5), 1.0),
+            (a + Vec2::new(1.5, -0.5), 1.0),
+            (Vec2::new(-12.0, -12.0), 4.0),
+        ];
+        let n = 512;
+        let mut sums = [0.0f64; 3];
+        for j in 0..n {
+            for i in 0..n {
+                let u = Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
+                let (p, area) = lights.disc_origin(dir, u, Some(&aim)).expect("a density");
+                let q = Vec2::new((p - base).dot(frame.s), (p - base).dot(frame.t));
+                for (k, &(lo, side)) in squares.iter().enumerate() {
+                    let r = q - lo;
+                    if r.x >= 0.0 && r.y >= 0.0 && r.x < side && r.y < side {
+                        sums[k] += area as f64 / (n * n) as f64;
+                    }
+                }
+            }
+        }
+        for (k, &(_, side)) in squares.iter().enumerate() {
+            let want = (side * side) as f64;
+            assert!(
+                (sums[k] / want - 1.0).abs() < 0.03,
+                "square {k}: {} for area {want}",
+                sums[k]
+            );
+        }
+        let (_, area) = lights.disc_origin(dir, Vec2::new(0.3, 0.7), None).unwrap();
+        assert!((area - PI * radius * radius).abs() < 1e-3 * area);
+    }
 }

@@ -8,6 +8,7 @@
 //! - [`map`]: [`PhotonMap`], the photons in tree order beside their tree;
 //! - [`estimate`]: [`Kernel`] and [`estimate::irradiance`] with leak guards (side, disc,
 //!   minimum count);
+//! - [`aim`]: where the distant and infinite lights aim their global photons;
 //! - [`cache`]: [`IrradianceCache`], Christensen's precomputed irradiance for final gathering.
 //!
 //! ```
@@ -26,6 +27,7 @@
 //! assert_eq!(used, 49);
 //! assert!(e.x > 0.0 && r2 < 0.04);
 //! ```
+pub mod aim;
 pub mod cache;
 pub mod estimate;
 pub mod guide;

@@ -46,10 +46,6 @@ impl Photon {
     pub const GLOSSY: u8 = 4;
     /// Flag bit: a caustic photon stored on a rough glossy surface (not a diffuse one).
     pub const ON_GLOSSY: u8 = 8;
-    /// Flag bit (with [`Photon::DIRECT`]): stored straight from a light without a surface
-    /// (point, spot, distant, infinite), whose direct light final-gather hits take by shadow
-    /// rays instead.
-    pub const SURFACELESS: u8 = 16;
 
     /// A photon at `pos` carrying RGB `power`, travelling along the unit vector `dir`
     /// (direction of travel, i.e. pointing into the surface it hit), with free-form `flags`.

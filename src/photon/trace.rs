@@ -34,6 +34,7 @@
 //! - Photons trapped by total internal reflection end at `max_bounces`.
 //! - Caustic photons of infinite lights start only where they can reach a specular object
 //!   ([`Lights::emit_caustic`]): a disc of the scene's radius would waste almost all of them.
+use super::aim::Aim;
 use super::projection::ProjectionMap;
 use super::{Photon, PhotonMap};
 use crate::accel::{Accel, RayKind};
@@ -66,6 +67,13 @@ pub struct TraceSettings {
     pub receiver_alpha: f32,
     /// The render's image for texture footprints (`None`: the file's film and sampler).
     pub footprint: Option<crate::camera::Footprint>,
+    /// Distant and infinite lights aim most global photons at what the camera sees
+    /// ([`super::aim`]).
+    pub aimed: bool,
+    /// Keep the global photons stored straight from a light without a surface (point, spot,
+    /// distant, infinite). The renderer reads none of them (its camera and gather points take
+    /// that light by shadow rays), so it leaves them out; tests of the tracer weigh them.
+    pub store_surfaceless_direct: bool,
 }
 
 /// The default of [`TraceSettings::receiver_alpha`]: lobes at least this wide get caustic
@@ -101,6 +109,8 @@ pub struct TraceStats {
     pub caustic_per_light: Vec<u64>,
     /// Per light: fraction of the emission domain marked by its projection map.
     pub marked_fraction: Vec<f32>,
+    /// Where the distant and infinite lights aimed their global photons.
+    pub aim: Option<Aim>,
     pub rays: u64,
     pub trace_seconds: f64,
     pub build_seconds: f64,
@@ -181,6 +191,16 @@ pub fn caustic_targets(scene: &Scene, min_alpha: f32) -> Vec<(Vec3, f32)> {
         .collect()
 }
 
+/// Where the distant and infinite lights aim their global photons (see [`super::aim`]):
+/// `None` when `s` turns aiming off, no such light shines or the camera sees most of the
+/// scene.
+fn global_aim(scene: &Scene, accel: &Accel, lights: &Lights, s: &TraceSettings) -> Option<Aim> {
+    if !s.aimed || s.global_photons == 0 || !lights.has_distant_or_infinite() {
+        return None;
+    }
+    super::aim::region_of_interest(scene, accel, lights.bounds())
+}
+
 /// Splits `total` photons among lights in proportion to `powers` (largest remainders get the
 /// leftovers, deterministic).
 pub fn allocate(total: u64, powers: &[f32]) -> Vec<u64> {
@@ -208,6 +228,8 @@ pub fn trace(scene: &Scene, accel: &Accel, lights: &Lights, s: &TraceSettings) -
     let mut stats = TraceStats::default();
     let powers = lights.powers();
     let targets = caustic_targets(scene, s.receiver_alpha);
+    let aim = global_aim(scene, accel, lights, s);
+    stats.aim = aim;
     let global = if s.global_photons > 0 {
         let counts = allocate(s.global_photons, &powers);
         stats.global_emitted = counts.iter().sum();
@@ -224,6 +246,7 @@ pub fn trace(scene: &Scene, accel: &Accel, lights: &Lights, s: &TraceSettings) -
             &counts,
             &full,
             &targets,
+            aim.as_ref(),
         );
         stats.rays += rays;
         l
@@ -253,6 +276,7 @@ pub fn trace(scene: &Scene, accel: &Accel, lights: &Lights, s: &TraceSettings) -
             &counts,
             &maps,
             &targets,
+            None,
         );
         stats.rays += rays;
         stats.caustic_efficiency = first_specular as f64 / stats.caustic_emitted.max(1) as f64;
@@ -310,11 +334,13 @@ pub fn pilot(scene: &Scene, accel: &Accel, lights: &Lights, s: &TraceSettings) -
     let targets = caustic_targets(scene, s.receiver_alpha);
     let mut pilot = s.clone();
     pilot.seed = hash(&[s.seed, 0x0009_1107]);
+    let aim = global_aim(scene, accel, lights, s);
     let rate = |kind: MapKind, wanted: u64, maps: &dyn Fn() -> Vec<ProjectionMap>| {
         if wanted == 0 || powers.is_empty() {
             return 0.0;
         }
         let counts = allocate(wanted.min(PILOT_PHOTONS), &powers);
+        let aim = (kind == MapKind::Global).then_some(aim.as_ref()).flatten();
         let (l, _, _) = shoot(
             scene,
             accel,
@@ -324,6 +350,7 @@ pub fn pilot(scene: &Scene, accel: &Accel, lights: &Lights, s: &TraceSettings) -
             &counts,
             &maps(),
             &targets,
+            aim,
         );
         l.len() as f64 / counts.iter().sum::<u64>().max(1) as f64
     };
@@ -374,6 +401,7 @@ fn shoot(
     counts: &[u64],
     maps: &[ProjectionMap],
     targets: &[(Vec3, f32)],
+    aim: Option<&Aim>,
 ) -> (Vec<Landing>, u64, u64) {
     let work: Vec<(usize, u64, u64)> = counts
         .iter()
@@ -407,6 +435,7 @@ fn shoot(
                     n,
                     map,
                     targets,
+                    aim,
                     &mut sampler,
                     &mut out,
                 );
@@ -438,6 +467,7 @@ fn trace_one(
     count: u64,
     map: &ProjectionMap,
     targets: &[(Vec3, f32)],
+    aim: Option<&Aim>,
     sampler: &mut Sampler,
     out: &mut Vec<Landing>,
 ) -> (bool, u64) {
@@ -452,7 +482,7 @@ fn trace_one(
     };
     *restricted = u;
     let e = match kind {
-        MapKind::Global => lights.emit(&scene.meshes, light, u_pos, u_dir),
+        MapKind::Global => lights.emit_aimed(&scene.meshes, light, u_pos, u_dir, aim),
         MapKind::Caustic => lights.emit_caustic(&scene.meshes, light, u_pos, u_dir, targets),
     };
     let Some(e) = e else {
@@ -507,15 +537,20 @@ fn trace_one(
             });
         }
         if flags.has_diffuse() {
+            // Nothing reads the photons stored straight from a light without a surface (point,
+            // spot, distant, infinite): camera and gather points take that light by shadow rays
+            // (`integrator::photonmap::direct_at_gather`). Left out, they no longer crowd the
+            // searches that skip them (a sunlit floor holds most photons of a room).
             let store = match kind {
-                MapKind::Global => true,
+                MapKind::Global => {
+                    bounce > 0
+                        || s.store_surfaceless_direct
+                        || !scene.lights[light].is_surfaceless()
+                }
                 MapKind::Caustic => sharp_chain && bounce > 0,
             };
             if store && power.max_element() > 0.0 {
                 let flags = match (bounce, sharp_chain, caustic_chain) {
-                    (0, _, _) if scene.lights[light].is_surfaceless() => {
-                        Photon::DIRECT | Photon::SURFACELESS
-                    }
                     (0, _, _) => Photon::DIRECT,
                     (_, true, _) => Photon::CAUSTIC,
                     (_, false, true) => Photon::GLOSSY,

@@ -443,6 +443,7 @@ fn photons_carry_the_environment_power() {
     let mut trace = settings.photon.trace.clone();
     trace.global_photons = 200_000;
     trace.caustic_photons = 0;
+    trace.store_surfaceless_direct = true;
     let maps = photon::photon::trace::trace(&scene, &accel, &scene.emitters(), &trace);
     let global = maps.global.expect("photons landed");
     let direct: Vec3 = global

@@ -299,6 +299,8 @@ fn lone_floor_case((s, y0, tilt): (f32, f32, f32)) -> Result<(), String> {
         pattern: Pattern::Stratified,
         receiver_alpha: photon::photon::trace::RECEIVER_ALPHA,
         footprint: None,
+        aimed: true,
+        store_surfaceless_direct: true,
     };
     let maps = trace::trace(&sc, &acc, &lights, &settings);
     let global = maps.global.expect("photons on the floor");
@@ -708,6 +710,8 @@ LightSource "point" "rgb I" [ 1 1 1 ] "point3 from" [ 0.01 0.02 0.03 ]
         pattern: Pattern::Stratified,
         receiver_alpha: photon::photon::trace::RECEIVER_ALPHA,
         footprint: None,
+        aimed: true,
+        store_surfaceless_direct: true,
     };
     let t = std::time::Instant::now();
     let maps = trace::trace(&sc, &acc, &lights, &settings);

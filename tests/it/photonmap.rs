@@ -45,6 +45,8 @@ fn trace_settings(global: u64, caustic: u64, projection_maps: bool) -> TraceSett
         pattern: Pattern::Stratified,
         receiver_alpha: photon::photon::trace::RECEIVER_ALPHA,
         footprint: None,
+        aimed: true,
+        store_surfaceless_direct: true,
     }
 }
 

@@ -14,7 +14,7 @@ use common::TempDir;
 fn scene(integrator: &str, spp: u32) -> String {
     // The photon mapper's parameters only on its own Integrator line.
     let photons = if integrator == "photonmap" {
-        r#" "integer globalphotons" [ 100000 ] "integer causticphotons" [ 0 ]"#
+        r#" "integer globalphotons" [ 1000000 ] "integer causticphotons" [ 0 ]"#
     } else {
         ""
     };
