@@ -281,13 +281,19 @@ def cmd_table(a):
         for integ in integs:
             try:
                 src = pbrt_variant(scene, a.res, integ)
-                t = []
-                for spp in (4, 32):
-                    dt, _ = run_timed([a.pbrt, "--nthreads", "2", "--spp", str(spp), "--outfile",
-                                       os.path.join(a.out, "timing.exr"), src])
-                    t.append(dt)
-                b = max((t[1] - t[0]) / 28, 1e-6)
-                spp = max(1, int((a.seconds - (t[0] - 4 * b)) / b))
+                # Seconds per sample from timings at 4 and n spp, n raised 8x while start-up
+                # hides the difference (dragon: 4 and 32 spp took the same time, and the
+                # estimate asked for 29M spp).
+                def timed(spp):
+                    return run_timed([a.pbrt, "--nthreads", "2", "--spp", str(spp), "--outfile",
+                                      os.path.join(a.out, "timing.exr"), src])[0]
+                t0, n = timed(4), 32
+                t1 = timed(n)
+                while t1 - t0 < 0.25 * t0 and n < 4096:
+                    n *= 8
+                    t1 = timed(n)
+                b = max((t1 - t0) / (n - 4), 1e-6)
+                spp = max(1, int((a.seconds - max(t0 - 4 * b, 0.0)) / b))
                 errs, secs = [], []
                 for seed in range(a.seeds):
                     out = os.path.join(a.out, f"{name}-pbrt-{integ}-{seed}.exr")
