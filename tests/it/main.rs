@@ -31,4 +31,5 @@ mod photonmap;
 mod regression;
 mod render_scenes;
 mod textures;
+mod thin_tubes;
 mod windows;

@@ -1,0 +1,63 @@
+//! Thin geometry: forty horizontal tubes 1 cm in radius, 15 cm above the floor of a room lit by
+//! a ceiling panel. The photon mapper against our path tracer.
+//!
+//! A gather ray that hits a tube reads an estimate whose disc (several cm, the k-nearest
+//! radius) is mostly empty: the tube curves out of the flattened search within a few
+//! millimetres, so the photons of its thin strip are divided by the whole disc's area. The
+//! floor below, gathering from the tubes, comes out dark. The same room without the tubes
+//! matches (mean 0.9975, every block 0.99-1.00), so the tubes alone make the error. Bitterli's
+//! classroom has thirty chairs of such tubes, and its photon-mapped mean falls from 1.0005 of
+//! pbrt-v4's at 200k photons to 0.963 at the 30 s budget's 1.5M (BENCHMARKS.md, issue 17,
+//! fourth session).
+
+use crate::support as common;
+use common::TempDir;
+
+fn scene(integrator: &str, spp: u32) -> String {
+    let photons = if integrator == "photonmap" {
+        r#" "integer globalphotons" [ 200000 ] "integer causticphotons" [ 0 ]"#
+    } else {
+        ""
+    };
+    let mut s = format!(
+        r#"LookAt 0 1.6 -1.9  0 0.2 0.5  0 1 0
+Camera "perspective" "float fov" [ 60 ]
+Film "rgb" "integer xresolution" [ 32 ] "integer yresolution" [ 24 ]
+PixelFilter "box" "float xradius" [ 0.5 ] "float yradius" [ 0.5 ]
+Sampler "independent" "integer pixelsamples" [ {spp} ]
+Integrator "{integrator}" "integer maxdepth" [ 5 ]{photons}
+WorldBegin
+AttributeBegin
+AreaLightSource "diffuse" "rgb L" [ 8 8 8 ]
+Shape "trianglemesh" "point3 P" [ -0.5 2.49 -0.5  0.5 2.49 -0.5  0.5 2.49 0.5  -0.5 2.49 0.5 ] "integer indices" [ 0 1 2 0 2 3 ]
+AttributeEnd
+Material "diffuse" "rgb reflectance" [ 0.7 0.7 0.7 ]
+Shape "trianglemesh" "point3 P" [ -2 0 -2  2 0 -2  2 0 2  -2 0 2 ] "integer indices" [ 0 2 1 0 3 2 ]
+Shape "trianglemesh" "point3 P" [ -2 2.5 -2  2 2.5 -2  2 2.5 2  -2 2.5 2 ] "integer indices" [ 0 1 2 0 2 3 ]
+Shape "trianglemesh" "point3 P" [ -2 0 2  2 0 2  2 2.5 2  -2 2.5 2 ] "integer indices" [ 0 1 2 0 2 3 ]
+Shape "trianglemesh" "point3 P" [ -2 0 -2  2 0 -2  2 2.5 -2  -2 2.5 -2 ] "integer indices" [ 0 2 1 0 3 2 ]
+Shape "trianglemesh" "point3 P" [ 2 0 -2  2 0 2  2 2.5 2  2 2.5 -2 ] "integer indices" [ 0 2 1 0 3 2 ]
+Shape "trianglemesh" "point3 P" [ -2 0 -2  -2 0 2  -2 2.5 2  -2 2.5 -2 ] "integer indices" [ 0 1 2 0 2 3 ]
+Material "diffuse" "rgb reflectance" [ 0.8 0.8 0.8 ]
+"#
+    );
+    for i in 0..40 {
+        let z = -1.0 + i as f32 * 0.05;
+        s += &format!(
+            "AttributeBegin\nTranslate -1 0.15 {z:.3}\nRotate 90 0 1 0\nShape \"cylinder\" \"float radius\" [ 0.01 ] \"float zmin\" [ 0 ] \"float zmax\" [ 2 ]\nAttributeEnd\n"
+        );
+    }
+    s
+}
+
+/// Mean and the 4x4 block means of the photon mapper (200k photons, 64 spp) against the path
+/// tracer (2048 spp). Measured: mean 0.949, blocks 0.885-0.981 (at 64x48: 0.948; with 2M
+/// photons 0.964, blocks 0.91-0.99).
+#[test]
+#[ignore = "open: thin geometry's estimates divide by an empty disc (module docs), mean 0.95"]
+fn thin_tubes_above_a_floor_against_the_path_tracer() {
+    let dir = TempDir::new("thin-tubes");
+    let (mean, lo, hi) = common::photonmap_against_path(&dir, scene, 2048, 64);
+    assert!((mean - 1.0).abs() < 0.03, "mean ratio {mean}");
+    assert!(lo > 0.9 && hi < 1.1, "blocks {lo}..{hi}");
+}
