@@ -477,11 +477,6 @@ impl Lights {
         }
     }
 
-    /// Centre and radius of the scene's bounding sphere.
-    pub fn bounds(&self) -> (Vec3, f32) {
-        (self.center, self.radius)
-    }
-
     /// Whether a distant or infinite light shines (their photons can be aimed, see
     /// [`Self::disc_origin`]).
     pub fn has_distant_or_infinite(&self) -> bool {
@@ -555,7 +550,7 @@ mod tests {
     #[test]
     fn aimed_origins_weigh_to_the_area_they_cover() {
         let lights = Lights::new(&[], &[], (Vec3::splat(-10.0), Vec3::splat(10.0)));
-        let (center, radius) = lights.bounds();
+        let (center, radius) = lights.scene_sphere();
         let dir = Vec3::new(0.3, -1.0, 0.2).normalize();
         let frame = Frame::from_normal(dir);
         let base = center - dir * (2.0 * radius);

@@ -198,7 +198,7 @@ fn global_aim(scene: &Scene, accel: &Accel, lights: &Lights, s: &TraceSettings) 
     if !s.aimed || s.global_photons == 0 || !lights.has_distant_or_infinite() {
         return None;
     }
-    super::aim::region_of_interest(scene, accel, lights.bounds())
+    super::aim::region_of_interest(scene, accel, lights.scene_sphere())
 }
 
 /// Splits `total` photons among lights in proportion to `powers` (largest remainders get the

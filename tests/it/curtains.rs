@@ -17,6 +17,7 @@ fn scene(integrator: &str, spp: u32) -> String {
     } else {
         ""
     };
+    let room = common::CLOSED_ROOM;
     format!(
         r#"LookAt 1.8 1.7 -1.7  -1 0.8 0.8  0 1 0
 Camera "perspective" "float fov" [ 75 ]
@@ -27,13 +28,7 @@ Integrator "{integrator}" "integer maxdepth" [ 8 ]{photons}
 WorldBegin
 Material "diffuse" "rgb reflectance" [ 0.6 0.6 0.6 ]
 #  room 4 x 2.5 x 4: x, z in [-2, 2], y in [0, 2.5]
-Shape "trianglemesh" "point3 P" [ -2 0 -2  2 0 -2  2 0 2  -2 0 2 ] "integer indices" [ 0 2 1 0 3 2 ]
-Shape "trianglemesh" "point3 P" [ -2 2.5 -2  2 2.5 -2  2 2.5 2  -2 2.5 2 ] "integer indices" [ 0 1 2 0 2 3 ]
-Shape "trianglemesh" "point3 P" [ -2 0 2  2 0 2  2 2.5 2  -2 2.5 2 ] "integer indices" [ 0 1 2 0 2 3 ]
-Shape "trianglemesh" "point3 P" [ -2 0 -2  2 0 -2  2 2.5 -2  -2 2.5 -2 ] "integer indices" [ 0 2 1 0 3 2 ]
-Shape "trianglemesh" "point3 P" [ 2 0 -2  2 0 2  2 2.5 2  2 2.5 -2 ] "integer indices" [ 0 2 1 0 3 2 ]
-Shape "trianglemesh" "point3 P" [ -2 0 -2  -2 0 2  -2 2.5 2  -2 2.5 -2 ] "integer indices" [ 0 1 2 0 2 3 ]
-Material "diffuse" "rgb reflectance" [ 0.5 0.35 0.2 ]
+{room}Material "diffuse" "rgb reflectance" [ 0.5 0.35 0.2 ]
 #  a low box on the floor
 Shape "trianglemesh" "point3 P" [ 0 0.5 -0.5  1 0.5 -0.5  1 0.5 0.5  0 0.5 0.5
                                   0 0 -0.5  1 0 -0.5  1 0 0.5  0 0 0.5 ]

@@ -19,6 +19,7 @@ fn scene(integrator: &str, spp: u32) -> String {
     } else {
         ""
     };
+    let room = common::CLOSED_ROOM;
     let mut s = format!(
         r#"LookAt 0 1.6 -1.9  0 0.2 0.5  0 1 0
 Camera "perspective" "float fov" [ 60 ]
@@ -32,13 +33,7 @@ AreaLightSource "diffuse" "rgb L" [ 8 8 8 ]
 Shape "trianglemesh" "point3 P" [ -0.5 2.49 -0.5  0.5 2.49 -0.5  0.5 2.49 0.5  -0.5 2.49 0.5 ] "integer indices" [ 0 1 2 0 2 3 ]
 AttributeEnd
 Material "diffuse" "rgb reflectance" [ 0.7 0.7 0.7 ]
-Shape "trianglemesh" "point3 P" [ -2 0 -2  2 0 -2  2 0 2  -2 0 2 ] "integer indices" [ 0 2 1 0 3 2 ]
-Shape "trianglemesh" "point3 P" [ -2 2.5 -2  2 2.5 -2  2 2.5 2  -2 2.5 2 ] "integer indices" [ 0 1 2 0 2 3 ]
-Shape "trianglemesh" "point3 P" [ -2 0 2  2 0 2  2 2.5 2  -2 2.5 2 ] "integer indices" [ 0 1 2 0 2 3 ]
-Shape "trianglemesh" "point3 P" [ -2 0 -2  2 0 -2  2 2.5 -2  -2 2.5 -2 ] "integer indices" [ 0 2 1 0 3 2 ]
-Shape "trianglemesh" "point3 P" [ 2 0 -2  2 0 2  2 2.5 2  2 2.5 -2 ] "integer indices" [ 0 2 1 0 3 2 ]
-Shape "trianglemesh" "point3 P" [ -2 0 -2  -2 0 2  -2 2.5 2  -2 2.5 -2 ] "integer indices" [ 0 1 2 0 2 3 ]
-Material "diffuse" "rgb reflectance" [ 0.8 0.8 0.8 ]
+{room}Material "diffuse" "rgb reflectance" [ 0.8 0.8 0.8 ]
 "#
     );
     for i in 0..40 {
