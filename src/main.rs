@@ -25,7 +25,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Render a pbrt-v4 scene to a linear EXR (with per-component layers) and a PNG preview.
-    Render(RenderOptions),
+    Render(Box<RenderOptions>),
     /// Compare an EXR with a reference: relMSE, RMSE, MAE, max error, PSNR (exit 1 above
     /// --max-relmse).
     Compare(CompareOptions),

@@ -11,7 +11,7 @@
 //! the way of the room wall beside it and served it, and the room wall glowed (measured:
 //! BENCHMARKS.md, "Design measurements"). Where no point covers `p`, the caller runs the full
 //! estimate.
-use super::estimate::{disc_d2, irradiance_with, EstimateParams};
+use super::estimate::{disc_d2, fill, irradiance_by_bounce, EstimateParams};
 use super::kdtree::{KdTree, KnnResult, TooManyPoints};
 use super::map::PhotonMap;
 use crate::math::Vec3;
@@ -23,14 +23,28 @@ pub const CACHE_SPACING: usize = 4;
 /// Smallest cosine between a cache point's normal and the query's.
 const MIN_NORMAL_COS: f32 = 0.9;
 
-/// One cache point: what a lookup reads of it, in one 28-byte record (a lookup's filter
+/// Bounce limits a cache point keeps an irradiance for (see [`IrradianceCache::build`]).
+pub const LEVELS: usize = 3;
+
+/// One cache point: what a lookup reads of it, in one 56-byte record (a lookup's filter
 /// touches one record per candidate).
 #[derive(Clone, Copy, Debug)]
 struct CachePoint {
     normal: Vec3,
     /// Squared radius of the estimate.
     r2: f32,
-    irradiance: Vec3,
+    /// From the photons within each of the build's bounce limits.
+    irradiance: [Vec3; LEVELS],
+    /// How much of its disc the estimate's photons filled ([`fill`]).
+    fill: f32,
+}
+
+/// What a cache lookup returns: the irradiance and how much of its disc the photons behind it
+/// filled ([`fill`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cached {
+    pub irradiance: Vec3,
+    pub fill: f32,
 }
 
 /// Precomputed irradiance at a subset of the photon positions.
@@ -44,10 +58,12 @@ pub struct IrradianceCache {
 
 impl IrradianceCache {
     /// The irradiance at every [`CACHE_SPACING`]-th photon of `global` (a map with normals:
-    /// none without), estimated with `params`.
+    /// none without), estimated with `params`, once for each bounce limit of `limits`
+    /// (level `i` sums the photons stored at bounce `limits[i]` or earlier; `u8::MAX`: all).
     pub fn build(
         global: &PhotonMap,
         params: &EstimateParams,
+        limits: [u8; LEVELS],
     ) -> Result<IrradianceCache, TooManyPoints> {
         let (photons, normals) = (global.photons(), global.normals());
         let len = if normals.len() == photons.len() {
@@ -61,15 +77,24 @@ impl IrradianceCache {
             .map_init(KnnResult::new, |buf, i| {
                 let p = photons[i].pos();
                 let normal = normals[i];
-                let (irradiance, _, r2) = irradiance_with(global, p, normal, params, buf);
+                let (irradiance, _, r2) =
+                    irradiance_by_bounce(global, p, normal, params, buf, limits);
                 let point = CachePoint {
                     normal,
                     r2,
                     irradiance,
+                    fill: fill(global, p, normal, r2, buf),
                 };
                 (p, point)
             })
             .unzip();
+        if std::env::var_os("PHOTON_FILL_HIST").is_some() {
+            let mut h = [0usize; 10];
+            for c in &points {
+                h[((c.fill * 10.0) as usize).min(9)] += 1;
+            }
+            eprintln!("fill histogram (0.1 bins): {h:?}");
+        }
         let (tree, order) = KdTree::build(&positions)?;
         let points = order.iter().map(|&i| points[i as usize]).collect();
         Ok(IrradianceCache {
@@ -88,10 +113,17 @@ impl IrradianceCache {
         self.points.is_empty()
     }
 
-    /// The irradiance of the nearest cache point within `max_r2` of `p` whose normal agrees
-    /// with `n` and whose own estimate covered `p` (see the module docs); `None` when there
-    /// is none.
-    pub fn lookup(&self, p: Vec3, n: Vec3, max_r2: f32, buf: &mut KnnResult) -> Option<Vec3> {
+    /// The irradiance (of bounce limit `level`, see [`Self::build`]; at most `LEVELS - 1`) of
+    /// the nearest cache point within `max_r2` of `p` whose normal agrees with `n` and whose
+    /// own estimate covered `p` (see the module docs); `None` when there is none.
+    pub fn lookup(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        max_r2: f32,
+        level: usize,
+        buf: &mut KnnResult,
+    ) -> Option<Cached> {
         let (points, stretch) = (&self.points[..], self.stretch);
         self.tree.knn_by(p, 1, max_r2, buf, |i, off, d2| {
             let c = &points[i as usize];
@@ -101,13 +133,18 @@ impl IrradianceCache {
             (disc_d2(stretch, d2, off.dot(c.normal)) <= c.r2).then_some(d2)
         });
         let nb = buf.neighbors().first()?;
-        Some(self.points[nb.idx as usize].irradiance)
+        let c = &self.points[nb.idx as usize];
+        Some(Cached {
+            irradiance: c.irradiance[level.min(LEVELS - 1)],
+            fill: c.fill,
+        })
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::photon::estimate::irradiance_with;
     use crate::photon::Photon;
 
     /// `n x n` photons of `power` on the square `[0, side]^2` at height `z`, arriving from
@@ -135,13 +172,14 @@ mod tests {
         let photons: Vec<Photon> = wall.iter().chain(&can).copied().collect();
         let global = PhotonMap::with_normals(&photons, |_| Vec3::Z).unwrap();
         let params = EstimateParams::new(20, 1.0);
-        let cache = IrradianceCache::build(&global, &params).unwrap();
+        let cache = IrradianceCache::build(&global, &params, [u8::MAX; LEVELS]).unwrap();
         let mut buf = KnnResult::new();
         let p = Vec3::new(1.0, 0.25, 0.0);
         let (wall_e, _, _) = irradiance_with(&global, p, Vec3::Z, &params, &mut buf);
         let e = cache
-            .lookup(p, Vec3::Z, 1.0, &mut buf)
-            .expect("a wall cache point covers p");
+            .lookup(p, Vec3::Z, 1.0, 0, &mut buf)
+            .expect("a wall cache point covers p")
+            .irradiance;
         // The wall alone: 400 photons of 0.01 over 4 m^2 = 1.0; the can: 1600 of 1.0 over
         // 0.25 m^2 = 6400.
         assert!((wall_e.x - 1.0).abs() < 0.25, "full estimate {wall_e:?}");
@@ -151,7 +189,10 @@ mod tests {
         );
         // On the can itself, the can's own value.
         let q = Vec3::new(1.0, 0.25, 0.1);
-        let e = cache.lookup(q, Vec3::Z, 1.0, &mut buf).expect("covered");
+        let e = cache
+            .lookup(q, Vec3::Z, 1.0, 0, &mut buf)
+            .expect("covered")
+            .irradiance;
         assert!(e.x > 3000.0, "on the can {e:?}");
     }
 }

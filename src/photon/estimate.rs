@@ -81,6 +81,8 @@ pub struct EstimateParams {
     /// Progressive shrinking: only the photons within `shrink2 * r^2` of the k-nearest radius
     /// `r` count, with the kernel over that smaller disc (1: Jensen's estimate).
     pub shrink2: f32,
+    /// Photons stored at a later bounce ([`Photon::bounce`]) are left out; `u8::MAX`: none.
+    pub max_bounce: u8,
 }
 
 impl EstimateParams {
@@ -94,6 +96,7 @@ impl EstimateParams {
             disc_fraction: 0.25,
             exclude_flags: 0,
             shrink2: 1.0,
+            max_bounce: u8::MAX,
         }
     }
 }
@@ -236,6 +239,67 @@ pub fn radiance_sampled(
     (out * (total / m as f32), used, r2)
 }
 
+/// How much of its disc the last estimate's photons fill: the area of the ellipse of their
+/// spread in the tangent plane of `n` at `p` (`4 pi sqrt(det C)`, `C` the covariance of their
+/// offsets: `pi r^2` for photons uniform in a disc of radius `r`) over `pi r2`, at most 1.
+/// Photons that fill a strip (a thin tube's, a surface's edge) give much less: a strip of width
+/// `2a` across the disc gives `4 a / (3 r)`. Fewer than [`FILL_MIN_PHOTONS`] photons give 1 (no
+/// judgement). `buf` holds the photons of the estimate that returned `r2`.
+pub fn fill(map: &PhotonMap, p: Vec3, n: Vec3, r2: f32, buf: &KnnResult) -> f32 {
+    let nbs = buf.neighbors();
+    if nbs.len() < FILL_MIN_PHOTONS || !(r2 > 0.0 && r2.is_finite()) {
+        return 1.0;
+    }
+    let frame = crate::math::Frame::from_normal(n);
+    let (mut sx, mut sy, mut sxx, mut syy, mut sxy) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    for nb in nbs {
+        let o = frame.to_local(map.photon(nb.idx).pos() - p);
+        let (x, y) = (o.x as f64, o.y as f64);
+        sx += x;
+        sy += y;
+        sxx += x * x;
+        syy += y * y;
+        sxy += x * y;
+    }
+    let m = nbs.len() as f64;
+    let (mx, my) = (sx / m, sy / m);
+    let (cxx, cyy, cxy) = (sxx / m - mx * mx, syy / m - my * my, sxy / m - mx * my);
+    let det = (cxx * cyy - cxy * cxy).max(0.0);
+    ((4.0 * det.sqrt() / r2 as f64) as f32).min(1.0)
+}
+
+/// [`irradiance_with`] at once for several bounce limits: entry `i` sums only the photons
+/// stored at bounce `limits[i]` or earlier ([`Photon::bounce`]; `u8::MAX`: all), over the
+/// disc of one search of all of them (given the radius, the photons inside are uniform in it,
+/// and so are those of any bounce). Returns (irradiances, photons used, squared radius).
+pub fn irradiance_by_bounce<const N: usize>(
+    map: &PhotonMap,
+    p: Vec3,
+    n: Vec3,
+    params: &EstimateParams,
+    buf: &mut KnnResult,
+    limits: [u8; N],
+) -> ([Vec3; N], usize, f32) {
+    search(map, p, n, params, buf, true);
+    let mut used = 0;
+    let mut r2 = 0.0;
+    let out = limits.map(|l| {
+        let (e, u, r) = kernel_sum(map, params, buf, |ph| {
+            if ph.bounce() <= l {
+                ph.power()
+            } else {
+                Vec3::ZERO
+            }
+        });
+        (used, r2) = (u, r);
+        e
+    });
+    (out, used, r2)
+}
+
+/// Fewest photons [`fill`] judges.
+pub const FILL_MIN_PHOTONS: usize = 8;
+
 fn estimate_by(
     map: &PhotonMap,
     p: Vec3,
@@ -245,13 +309,39 @@ fn estimate_by(
     side: bool,
     value: impl Fn(&Photon) -> Vec3,
 ) -> (Vec3, usize, f32) {
+    search(map, p, n, params, buf, side);
+    kernel_sum(map, params, buf, value)
+}
+
+/// The guarded k-nearest search of the estimates, into `buf`.
+fn search(
+    map: &PhotonMap,
+    p: Vec3,
+    n: Vec3,
+    params: &EstimateParams,
+    buf: &mut KnnResult,
+    side: bool,
+) {
     let stretch = params.stretch();
     map.knn_by(p, params.k, params.max_r2, buf, |ph, off, d2| {
-        if ph.flags() & params.exclude_flags != 0 || (side && !ph.arrives_against(n)) {
+        if ph.flags() & params.exclude_flags != 0
+            || ph.bounce() > params.max_bounce
+            || (side && !ph.arrives_against(n))
+        {
             return None;
         }
         Some(disc_d2(stretch, d2, off.dot(n)))
     });
+}
+
+/// The kernel-weighted sum of `value(photon)` over the photons of the last [`search`] in
+/// `buf`: (sum, photons used, squared radius of the kernel's disc).
+fn kernel_sum(
+    map: &PhotonMap,
+    params: &EstimateParams,
+    buf: &KnnResult,
+    value: impl Fn(&Photon) -> Vec3,
+) -> (Vec3, usize, f32) {
     let r2 = buf.r2();
     // When full, the farthest photon (the heap top) only defines the radius.
     let skip = usize::from(buf.is_full());
@@ -345,6 +435,88 @@ mod tests {
             }
         }
         PhotonMap::new(&photons).unwrap()
+    }
+
+    #[test]
+    fn fill_is_one_over_a_full_disc_and_small_over_a_strip() {
+        // Photons everywhere on the plane: they fill the disc (mean over queries near 1).
+        let map = uniform_plane(10.0, 400, Vec3::ONE, false);
+        let mut buf = KnnResult::new();
+        let mut s = 3u64;
+        let mut mean = 0.0;
+        for _ in 0..200 {
+            let p = Vec3::new(2.0 + 6.0 * rng(&mut s), 2.0 + 6.0 * rng(&mut s), 0.0);
+            let (_, _, r2) = irradiance(&map, p, Vec3::Z, 100, 1.0, Kernel::Box, &mut buf);
+            let f = fill(&map, p, Vec3::Z, r2, &buf);
+            assert!(f > 0.7, "a full disc at {p:?}: fill {f}");
+            mean += f / 200.0;
+        }
+        assert!(
+            (mean - 1.0).abs() < 0.05,
+            "mean fill over full discs {mean}"
+        );
+        // Only a strip 2a = 0.04 wide (a tube seen from above): 4 a / (3 r) of the disc.
+        let strip: Vec<Photon> = (0..4000)
+            .map(|_| {
+                let (x, y) = (10.0 * rng(&mut s), 0.04 * rng(&mut s) - 0.02);
+                Photon::new(Vec3::new(x, y, 0.0), Vec3::ONE, -Vec3::Z, 0)
+            })
+            .collect();
+        let map = PhotonMap::new(&strip).unwrap();
+        let p = Vec3::new(5.0, 0.0, 0.0);
+        let (_, _, r2) = irradiance(&map, p, Vec3::Z, 100, 1.0, Kernel::Box, &mut buf);
+        let (f, expect) = (
+            fill(&map, p, Vec3::Z, r2, &buf),
+            4.0 * 0.02 / (3.0 * r2.sqrt()),
+        );
+        assert!(
+            (f / expect - 1.0).abs() < 0.2,
+            "strip: fill {f}, expected {expect}"
+        );
+        // Too few photons to judge: 1.
+        let (_, _, r2) = irradiance(&map, p, Vec3::Z, 5, 1.0, Kernel::Box, &mut buf);
+        assert_eq!(fill(&map, p, Vec3::Z, r2, &buf), 1.0);
+    }
+
+    #[test]
+    fn bounce_limits_sum_only_the_photons_stored_by_then() {
+        // Bounces 0, 1, 2 in turn on a uniform plane: limits 2, 1, 0 keep 3/3, 2/3, 1/3.
+        let mut s = 5u64;
+        let photons: Vec<Photon> = (0..300_000)
+            .map(|i| {
+                let p = Vec3::new(10.0 * rng(&mut s), 10.0 * rng(&mut s), 0.0);
+                Photon::new(p, Vec3::ONE, -Vec3::Z, 0).with_bounce(i % 3)
+            })
+            .collect();
+        let map = PhotonMap::new(&photons).unwrap();
+        let mut buf = KnnResult::new();
+        let params = EstimateParams::new(300, 1.0);
+        let mut sums = [0.0f32; 4];
+        for _ in 0..300 {
+            let p = Vec3::new(1.0 + 8.0 * rng(&mut s), 1.0 + 8.0 * rng(&mut s), 0.0);
+            let (e, _, _) =
+                irradiance_by_bounce(&map, p, Vec3::Z, &params, &mut buf, [u8::MAX, 2, 1, 0]);
+            let (full, _, _) = irradiance_with(&map, p, Vec3::Z, &params, &mut buf);
+            assert_eq!(e[0], full, "no limit is the plain estimate");
+            for (acc, e) in sums.iter_mut().zip(e) {
+                *acc += e.x / 300.0;
+            }
+        }
+        let expect = 300_000.0 / 100.0;
+        for (sum, share) in sums.iter().zip([1.0, 1.0, 2.0 / 3.0, 1.0 / 3.0]) {
+            assert!((sum / (expect * share) - 1.0).abs() < 0.03, "{sums:?}");
+        }
+        // The search's own limit leaves later photons out of the search itself.
+        let p = Vec3::new(5.0, 5.0, 0.0);
+        let params = EstimateParams {
+            max_bounce: 0,
+            ..params
+        };
+        irradiance_with(&map, p, Vec3::Z, &params, &mut buf);
+        assert!(buf
+            .neighbors()
+            .iter()
+            .all(|nb| map.photon(nb.idx).bounce() == 0));
     }
 
     #[test]

@@ -5,7 +5,7 @@
 //! | 0..12 | position | 3 x `f32` |
 //! | 12..17 | power (RGB) | shared exponent "rgb11e7": three 11-bit mantissas, one 7-bit exponent |
 //! | 17..19 | incoming direction | octahedral map, 8 + 8 bits, nearest of the 4 neighbouring codes |
-//! | 19 | flags | 8 free bits ([`Photon::CAUSTIC`], ...) |
+//! | 19 | flags | bits 0-3: [`Photon::CAUSTIC`], ...; bits 4-7: the bounce ([`Photon::bounce`]) |
 //!
 //! The kd-tree keeps its split axes in its own array, so the record needs no axis field.
 //!
@@ -83,10 +83,29 @@ impl Photon {
         decode_dir_unnormalized(self.dir).dot(n) < 0.0
     }
 
-    /// The flag byte given to [`Photon::new`].
+    /// The flag byte given to [`Photon::new`] (with the bounce in its high bits, see
+    /// [`Photon::with_bounce`]).
     #[inline]
     pub fn flags(&self) -> u8 {
         self.flags
+    }
+
+    /// Largest bounce stored: [`Photon::bounce`] `MAX_BOUNCE` means this many or more.
+    pub const MAX_BOUNCE: u8 = 15;
+
+    /// The photon with its bounce recorded: stored at its `b`-th surface hit, 0 straight
+    /// from the light (at most [`Photon::MAX_BOUNCE`], which stands for it and any more).
+    /// Kept in the flag byte's high four bits, which the flags leave free.
+    pub fn with_bounce(mut self, b: u32) -> Self {
+        let b = b.min(Self::MAX_BOUNCE as u32) as u8;
+        self.flags = (self.flags & 0x0f) | (b << 4);
+        self
+    }
+
+    /// The bounce given to [`Photon::with_bounce`] (0 when none was).
+    #[inline]
+    pub fn bounce(&self) -> u8 {
+        self.flags >> 4
     }
 
     /// True when every bit of `flag` is set.
@@ -221,6 +240,25 @@ mod tests {
         *state ^= *state << 25;
         *state ^= *state >> 27;
         ((state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32) / (1u64 << 24) as f32
+    }
+
+    #[test]
+    fn bounce_rides_in_the_high_bits_and_saturates() {
+        let p = Photon::new(
+            Vec3::ONE,
+            Vec3::ONE,
+            Vec3::Z,
+            Photon::CAUSTIC | Photon::ON_GLOSSY,
+        );
+        assert_eq!(p.bounce(), 0);
+        for b in [0u32, 1, 7, 14, 15] {
+            let q = p.with_bounce(b);
+            assert_eq!(q.bounce() as u32, b);
+            assert!(q.has(Photon::CAUSTIC | Photon::ON_GLOSSY) && !q.has(Photon::DIRECT));
+            assert_eq!(q.flags() & 0x0f, Photon::CAUSTIC | Photon::ON_GLOSSY);
+        }
+        assert_eq!(p.with_bounce(16).bounce(), Photon::MAX_BOUNCE);
+        assert_eq!(p.with_bounce(9).with_bounce(2).bounce(), 2);
     }
 
     #[test]

@@ -532,7 +532,8 @@ fn trace_one(
             && is_receiver(&bsdf, s.receiver_alpha)
         {
             out.push(Landing {
-                photon: Photon::new(si.p, power, dir, Photon::CAUSTIC | Photon::ON_GLOSSY),
+                photon: Photon::new(si.p, power, dir, Photon::CAUSTIC | Photon::ON_GLOSSY)
+                    .with_bounce(bounce),
                 normal: facing,
             });
         }
@@ -557,7 +558,7 @@ fn trace_one(
                     _ => 0,
                 };
                 out.push(Landing {
-                    photon: Photon::new(si.p, power, dir, flags),
+                    photon: Photon::new(si.p, power, dir, flags).with_bounce(bounce),
                     normal: facing,
                 });
             }
