@@ -253,7 +253,7 @@ def pbrt_variant(scene, res, integ):
 def cmd_table(a):
     os.makedirs(a.out, exist_ok=True)
     log = open(os.path.join(a.out, "table.jsonl"), "a")
-    integs = a.integrators.split(",")
+    integs = [i for i in a.integrators.split(",") if i]  # "": photon only
     print("| scene | photon relMSE | photon 3x3-median relMSE | photon mean ratio | photon s | " +
           " | ".join(f"pbrt {i} relMSE (spp, s)" for i in integs) + " | best pbrt / photon |")
     print("|---|---|---|---|---|" + "---|" * len(integs) + "---|")
