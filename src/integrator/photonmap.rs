@@ -262,6 +262,8 @@ pub fn prepare(
         ..EstimateParams::new(k.max(1), r2 as f32)
     };
     let global_params = params(s.global_lookup, r2(s.global_radius));
+    let global_params =
+        (maps.global.as_ref()).map_or(global_params, |m| typical_radius_params(m, &global_params));
     let caustic_params = params(s.caustic_lookup, r2(s.caustic_radius));
     let t = Instant::now();
     // Progressive passes estimate at the gather hits themselves: the cache's nearest-point
@@ -322,7 +324,11 @@ const RADIUS_PROBES: usize = 64;
 /// `params` with the largest radius cut to twice the median k-nearest radius around
 /// [`RADIUS_PROBES`] of `map`'s own photons (spread over the tree order, so over space), for
 /// the maps read at every camera point (glossy caustics, caustics, caustics on glossy
-/// receivers). A map whose photons gather in a few places never fills a search elsewhere, so
+/// receivers) and the global map read at every gather hit. The global map of a scene lit by
+/// a sky holds few photons (only those that bounced: teapot, 4187 of 1.5M emitted), and each
+/// gather hit away from them walked the whole map: 657 spp in 30 s, 951 with the cut
+/// (relMSE 0.00070 -> 0.00061); classroom 170 -> 330 spp (0.080 -> 0.077), living-room-2
+/// 0.030 -> 0.024; dense maps (the Cornell boxes) render the same. A map whose photons gather in a few places never fills a search elsewhere, so
 /// each lookup there walked every photon within the largest radius: on classroom at 128 px
 /// the glossy lookups took half the render (109 spp in 30 s where 396 ran before the sun's
 /// photons were aimed into the room, 217 with the cut); on spaceship the caustic lookups

@@ -277,25 +277,26 @@ fn spheres_relmse(dir: &Path, name: &str, extra: &[&str]) -> f64 {
 }
 
 /// With few photons (5000 per map) and the global map looked at directly, Jensen's fixed
-/// maps stop improving: their error at 64 passes is their error at 16 (the bias floor).
-/// Progressive passes, at the same photon count per pass, fall well below that floor.
-/// Measured: fixed 0.0485 (16 passes), 0.0445 (64); progressive 0.0104 (16), 0.0037 (64),
-/// 0.0015 (256).
+/// maps stop improving: their error at 256 passes is about their error at 64 (the bias
+/// floor). Progressive passes, at the same photon count per pass, fall well below that floor.
+/// Measured: fixed 0.0288 (16 passes), 0.0241 (64), 0.0229 (256); progressive 0.0104 (16),
+/// 0.0037 (64). (Before the global lookups' radius was cut to the map's own typical radius
+/// the floor was higher and came sooner: fixed 0.0485 (16), 0.0445 (64).)
 #[test]
 fn progressive_falls_below_the_fixed_map_floor() {
     let dir = tmp("floor");
-    let fixed16 = spheres_relmse(&dir, "f16.exr", &["--passes", "16"]);
     let fixed64 = spheres_relmse(&dir, "f64.exr", &["--passes", "64"]);
+    let fixed256 = spheres_relmse(&dir, "f256.exr", &["--passes", "256"]);
     let prog16 = spheres_relmse(&dir, "p16.exr", &["--passes", "16", "--progressive"]);
     let prog64 = spheres_relmse(&dir, "p64.exr", &["--passes", "64", "--progressive"]);
-    println!("fixed {fixed16:.5} / {fixed64:.5}, progressive {prog16:.5} / {prog64:.5}");
+    println!("fixed {fixed64:.5} / {fixed256:.5}, progressive {prog16:.5} / {prog64:.5}");
     assert!(
-        fixed64 > 0.85 * fixed16,
-        "the fixed maps have no floor here: {fixed16} -> {fixed64}"
+        fixed256 > 0.85 * fixed64,
+        "the fixed maps have no floor here: {fixed64} -> {fixed256}"
     );
     assert!(
-        prog64 < 0.2 * fixed64,
-        "progressive {prog64} vs floor {fixed64}"
+        prog64 < 0.2 * fixed256,
+        "progressive {prog64} vs floor {fixed256}"
     );
     assert!(
         prog64 < 0.6 * prog16,
