@@ -30,7 +30,7 @@ use super::{charge, RenderContext};
 use crate::accel::{Accel, Hit, RayKind};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::interaction::SurfaceInteraction;
-use crate::light::Lights;
+use crate::light::{LightSample, Lights};
 use crate::math::{Frame, Ray, Vec2, Vec3};
 use crate::photon::cache::{Cached, IrradianceCache, LEVELS};
 use crate::photon::estimate::{irradiance_with, radiance_sampled, radiance_with, EstimateParams};
@@ -636,19 +636,7 @@ pub fn gather_radiance(
     let mis = |light_pdf: f32| {
         crate::sampling::power_heuristic(n_g * g.pdf, g.light_samples as f32 * light_pdf)
     };
-    let mut direct = Vec3::ZERO;
-    if hit.is_none() {
-        direct = ctx.lights.escaped(g.ray.o, g.ray.d, mis);
-    }
-    if let Some(h) = hit {
-        let mesh = &ctx.scene.meshes[h.mesh as usize];
-        if let Some(li) = mesh.area_light {
-            let p = mesh.point(h.prim, h.u, h.v);
-            let ng = mesh.geometric_normal(h.prim, h.u, h.v);
-            let le = ctx.lights.le(li as usize, ng, -g.ray.d);
-            direct = le * mis(ctx.lights.pdf_area(li as usize, g.ray.o, p, ng));
-        }
-    }
+    let direct = emitted(ctx, &g.ray, hit.as_ref(), mis);
     (direct, reflected(ctx, pass, global, g, hit, buf))
 }
 
@@ -709,7 +697,8 @@ fn reflected(
     let mut from_thin: Option<f32> = None;
     for _ in 0..=GATHER_SPECULAR_BOUNCES + THIN_CONTINUATIONS {
         if let Some(pdf) = from_thin.take() {
-            out += throughput * emitted_mis(ctx, &ray, hit.as_ref(), pdf);
+            let mis = |light_pdf: f32| crate::sampling::power_heuristic(pdf, light_pdf);
+            out += throughput * emitted(ctx, &ray, hit.as_ref(), mis);
         }
         let Some(h) = hit else { return out };
         let mut si = SurfaceInteraction::new(scene, &h, &ray);
@@ -823,7 +812,7 @@ const _: () = assert!(
 /// Direct light at a thin point `si` from one light of any kind picked by power: one shadow
 /// ray, weighted by `f(wi)` (local `wi`) `|cos| / pdf` and, for lights a cosine-drawn
 /// direction can reach, by the power heuristic against that direction (its half is
-/// [`emitted_mis`]). Without the heuristic a thin point beside a lamp's bulb made fireflies
+/// [`emitted`]). Without the heuristic a thin point beside a lamp's bulb made fireflies
 /// (dining-room: two pixels 0.67 and 0.94 where pbrt-v4 has 0.05 and 0.16).
 fn direct_mis(
     ctx: &RenderContext,
@@ -833,34 +822,18 @@ fn direct_mis(
 ) -> Vec3 {
     let u_sel = sampler.next_1d();
     let u = sampler.next_2d();
-    let Some(s) = ctx.lights.sample(&ctx.scene.meshes, si.p, u_sel, u) else {
-        return Vec3::ZERO;
-    };
-    let wi = si.frame.to_local(s.wi);
-    let mut value = f(wi) * (wi.z.abs() / s.pdf);
-    if value.max_element() <= 0.0 || !value.is_finite() {
-        return Vec3::ZERO;
-    }
-    if !s.delta {
-        let cos_pdf = wi.z.abs() / std::f32::consts::PI;
-        value *= crate::sampling::power_heuristic(s.pdf, cos_pdf);
-    }
-    ctx.counters
-        .shadow_rays
-        .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    if ctx.accel.occluded(RayKind::Shadow, &si.shadow_ray(&s)) {
-        return Vec3::ZERO;
-    }
-    value * s.li
+    let s = ctx.lights.sample(&ctx.scene.meshes, si.p, u_sel, u);
+    shadow_ray_value(ctx, si, s, f, true)
 }
 
-/// The other half of [`direct_mis`]: the light a direction drawn with density `pdf` at a thin
-/// point finds straight away (an emitter `hit`, or the infinite lights when it leaves the
-/// scene), weighted by the power heuristic against the shadow ray.
-fn emitted_mis(ctx: &RenderContext, ray: &Ray, hit: Option<&Hit>, pdf: f32) -> Vec3 {
-    let mis = |light_pdf: f32| crate::sampling::power_heuristic(pdf, light_pdf);
+/// The light a ray finds straight away: the emitter it hit, or the infinite lights when it
+/// left the scene (`hit` `None`), each times `weight(pdf)` where `pdf` is the density with
+/// which a shadow ray would have picked that point ([`Lights::pdf_area`],
+/// [`Lights::escaped`]): the BSDF-sampling half of MIS at gather origins and at thin points
+/// ([`direct_mis`]).
+fn emitted(ctx: &RenderContext, ray: &Ray, hit: Option<&Hit>, weight: impl Fn(f32) -> f32) -> Vec3 {
     let Some(h) = hit else {
-        return ctx.lights.escaped(ray.o, ray.d, mis);
+        return ctx.lights.escaped(ray.o, ray.d, weight);
     };
     let mesh = &ctx.scene.meshes[h.mesh as usize];
     let Some(li) = mesh.area_light else {
@@ -869,7 +842,7 @@ fn emitted_mis(ctx: &RenderContext, ray: &Ray, hit: Option<&Hit>, pdf: f32) -> V
     let p = mesh.point(h.prim, h.u, h.v);
     let ng = mesh.geometric_normal(h.prim, h.u, h.v);
     let le = ctx.lights.le(li as usize, ng, -ray.d);
-    le * mis(ctx.lights.pdf_area(li as usize, ray.o, p, ng))
+    le * weight(ctx.lights.pdf_area(li as usize, ray.o, p, ng))
 }
 
 /// Direct light of the lights without a surface (point, spot, distant, infinite) at a gather
@@ -890,16 +863,31 @@ fn direct_at_gather(
     }
     let u_sel = sampler.next_1d();
     let u = sampler.next_2d();
-    let Some(s) = ctx
-        .lights
-        .sample_surfaceless(&ctx.scene.meshes, si.p, u_sel, u)
-    else {
+    let s = (ctx.lights).sample_surfaceless(&ctx.scene.meshes, si.p, u_sel, u);
+    shadow_ray_value(ctx, si, s, f, false)
+}
+
+/// What the light sample `s` brings to `si` through one shadow ray: `f(wi)` (local `wi`)
+/// `|cos| / pdf` times its radiance, zero when occluded; with `cosine_mis`, times the power
+/// heuristic against a cosine-drawn direction for lights such a direction can reach.
+fn shadow_ray_value(
+    ctx: &RenderContext,
+    si: &SurfaceInteraction,
+    s: Option<LightSample>,
+    f: impl Fn(Vec3) -> Vec3,
+    cosine_mis: bool,
+) -> Vec3 {
+    let Some(s) = s else {
         return Vec3::ZERO;
     };
     let wi = si.frame.to_local(s.wi);
-    let value = f(wi) * (wi.z.abs() / s.pdf);
+    let mut value = f(wi) * (wi.z.abs() / s.pdf);
     if value.max_element() <= 0.0 || !value.is_finite() {
         return Vec3::ZERO;
+    }
+    if cosine_mis && !s.delta {
+        let cos_pdf = wi.z.abs() / std::f32::consts::PI;
+        value *= crate::sampling::power_heuristic(s.pdf, cos_pdf);
     }
     ctx.counters
         .shadow_rays
