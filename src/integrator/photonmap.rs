@@ -65,6 +65,8 @@ pub struct PhotonSettings {
     /// divides a thin tube's strip of photons by its whole disc: forty 1 cm tubes above a
     /// floor came out 0.949 of the path tracer without it, 0.994 with 0.7 (0.979 with 0.5;
     /// tests/it/thin_tubes.rs); Bitterli's classroom 0.964 -> 0.979 of pbrt-v4's mean.
+    /// The caustic and glossy estimates at camera points weigh such photons over their own
+    /// area instead ([`crate::photon::estimate::Weigh`]).
     pub thin_fill: f32,
     pub irradiance_cache: bool,
     /// Progressive photon mapping (Knaus and Zwicker 2011): every pass traces fresh maps and
@@ -308,6 +310,13 @@ pub fn prepare(
     let caustic_params = (maps.caustic.as_ref()).map_or(caustic_params, |m| {
         typical_radius_params(m, &caustic_params)
     });
+    // The estimates read at camera points weigh photons that fill a strip of their disc over
+    // the strip's area (`estimate::Weigh`); gather hits pass such points on instead.
+    let [caustic_params, receiver_params] =
+        [caustic_params, receiver_params].map(|p| EstimateParams {
+            min_fill: s.thin_fill,
+            ..p
+        });
     PhotonPass {
         maps,
         cache,

@@ -324,7 +324,9 @@ settings! {
     /// Final-gather directions guided by the nearest photons (Jensen 1995) or cosine only.
     guided_gather: bool = guided_gather, "guidedgather", "guided-gather", None;
     /// Gather hits whose estimate's photons fill less than this share of its disc (a thin
-    /// tube's, an edge's) take their light by shadow ray and one more bounce (0: never).
+    /// tube's, an edge's) take their light by shadow ray and one more bounce; caustic
+    /// estimates at camera points weigh such photons (24 or more) over their own area instead
+    /// of the disc's (0: neither).
     thin_fill: f32 = thin_fill, "thinfill", "thin-fill", Some(Range::closed(0.0, 1.0));
     /// Christensen's precomputed irradiance for the gather lookups.
     irradiance_cache: bool = irradiance_cache, "irradiancecache", "irradiance-cache", None;
