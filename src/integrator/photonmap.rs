@@ -744,6 +744,9 @@ fn reflected(
             ctx.counters
                 .secondary_rays
                 .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            if continued > 0 {
+                out += throughput * emitted(ctx, &ray, hit.as_ref(), |_| 1.0);
+            }
             continue;
         }
         if bsdf.flags().has_diffuse() {
@@ -807,6 +810,12 @@ fn reflected(
         ctx.counters
             .secondary_rays
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        if continued > 0 {
+            // Light that reaches a thin point passed on through specular or glossy bounces
+            // (sun through a window onto a chair's tube): its estimate, which had it, was
+            // not read, and no shadow ray finds it.
+            out += throughput * emitted(ctx, &ray, hit.as_ref(), |_| 1.0);
+        }
     }
     out
 }

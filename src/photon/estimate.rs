@@ -269,6 +269,12 @@ pub struct Spread {
     /// the edge of a uniformly filled ellipse): on the strip or by the edge they fill, not
     /// in the empty part of a disc beside them.
     pub covers_p: bool,
+    /// The mean cosine between the tangent plane and the surface under the photons, taking
+    /// the surface as curving quadratically away from `p` (slope `2 h / t` at height `h` and
+    /// distance `t`): the projected area over the surface's. Photons uniform over a tube's
+    /// curved top crowd in projection; their density over the surface is the projected one
+    /// times this.
+    pub mean_cos: f32,
 }
 
 /// The [`Spread`] of the photons in `buf` around `p` in the tangent plane of `n`; `None` for
@@ -280,9 +286,18 @@ pub fn spread(map: &PhotonMap, p: Vec3, n: Vec3, buf: &KnnResult) -> Option<Spre
     }
     let frame = crate::math::Frame::from_normal(n);
     let (mut sx, mut sy, mut sxx, mut syy, mut sxy) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    let mut cos = 0.0f64;
     for nb in nbs {
         let o = frame.to_local(map.photon(nb.idx).pos() - p);
         let (x, y) = (o.x as f64, o.y as f64);
+        // The slope of a surface through p curving as h = -k t^2 / 2 is 2 h / t at the photon.
+        let t2 = x * x + y * y;
+        let h = o.z as f64;
+        cos += if t2 > 0.0 {
+            1.0 / (1.0 + 4.0 * h * h / t2).sqrt()
+        } else {
+            1.0
+        };
         sx += x;
         sy += y;
         sxx += x * x;
@@ -298,14 +313,17 @@ pub fn spread(map: &PhotonMap, p: Vec3, n: Vec3, buf: &KnnResult) -> Option<Spre
     Some(Spread {
         area: (4.0 * PI as f64 * det.sqrt()) as f32,
         covers_p: maha2 <= 4.0,
+        mean_cos: (cos / m) as f32,
     })
 }
 
 /// The weight of each photon of a search in an estimate: the kernel over the disc of radius
-/// `sqrt(r2)`, or, where the photons fill less than [`EstimateParams::min_fill`] of it and
-/// cover `p` ([`Spread`]), `1 / area` over the area they fill. A disc around a point of a thin
-/// tube or near a surface's edge is mostly empty: the kernel divides the photons of the strip
-/// by the whole disc. Bitterli's car: the seats behind the windscreen, lit through it by the
+/// `sqrt(r2)`, or, where at least [`WEIGH_MIN_PHOTONS`] photons fill less than
+/// [`EstimateParams::min_fill`] of it ([`Spread`]), `mean_cos / area` over the area they fill
+/// when they cover `p`, and 0 when they lie off to one side of it (`p` is past the edge of
+/// their lit patch; the kernel would blur that patch's light onto `p` while the patch keeps
+/// all of it). A disc around a point of a thin tube or near a surface's edge is mostly empty:
+/// the kernel divides the photons of the strip by the whole disc. Bitterli's car: the seats behind the windscreen, lit through it by the
 /// caustic map, came out 9.5% darker than our path tracer's (256 spp), darker the more photons
 /// a lookup took (k 10 / 60 / 400: 0.926 / 0.905 / 0.875 of it), converging only slowly with
 /// the photon count (0.905 / 0.938 / 0.953 at 0.2M / 2M / 20M caustic photons).
@@ -333,8 +351,14 @@ impl Weigh {
         let flat = (params.min_fill > 0.0 && params.shrink2 >= 1.0 && enough)
             .then(|| spread(map, p, n, buf))
             .flatten()
-            .filter(|s| s.covers_p && s.area < params.min_fill * PI * r2)
-            .map(|s| 1.0 / s.area.max(WEIGH_MIN_FILL * PI * r2));
+            .filter(|s| s.area < params.min_fill * PI * r2)
+            .map(|s| {
+                if s.covers_p {
+                    s.mean_cos / s.area.max(WEIGH_MIN_FILL * PI * r2)
+                } else {
+                    0.0
+                }
+            });
         Weigh {
             kernel: params.kernel,
             r2,
@@ -578,8 +602,8 @@ mod tests {
     /// Irradiance 1 on a strip 2a = 0.04 wide (4000 photons of power 0.0001 over 10 x 0.04):
     /// the kernel over the whole disc reads about `4 a / (3 r)` of it; weighed over the
     /// photons' own area (`min_fill`) the estimate is right on the strip, and a point beside
-    /// the strip (its disc holds the strip's photons, but not around the point) keeps the
-    /// kernel's small value. Where the photons fill the disc nothing changes.
+    /// the strip (its disc holds the strip's photons, but not around the point) reads 0.
+    /// Where the photons fill the disc nothing changes.
     #[test]
     fn photons_that_fill_a_strip_are_weighed_over_the_strip() {
         let mut s = 11u64;
@@ -613,12 +637,13 @@ mod tests {
             (weighed - 1.0).abs() < 0.1,
             "weighed over the strip: {weighed}"
         );
-        // Beside the strip, 0.1 away: the disc reaches the strip, the point is off it.
+        // Beside the strip, 0.1 away: the disc reaches the strip, the point is off it and
+        // receives nothing (the kernel blurs the strip's light onto it).
         let p = Vec3::new(5.0, 0.1, 0.0);
         let (k, _, _) = irradiance_with(&map, p, Vec3::Z, &params(0.0), &mut buf);
         let (w, _, _) = irradiance_with(&map, p, Vec3::Z, &params(0.7), &mut buf);
         assert!(
-            k.x > 0.0 && w == k,
+            k.x > 0.0 && w.x == 0.0,
             "beside the strip: kernel {k:?}, weighed {w:?}"
         );
         // A full plane of irradiance 1: the same estimate either way.
@@ -629,6 +654,50 @@ mod tests {
         assert!(
             (k.x - 1.0).abs() < 0.2 && w == k,
             "plane: kernel {k:?}, weighed {w:?}"
+        );
+    }
+
+    /// Irradiance 1 over a tube of radius 0.03 (photons uniform over its surface, each arriving
+    /// along the inward normal), read on its top: the photons of the flattened search lie on
+    /// the curved top, crowded in projection; weighed over their ellipse times the surface's
+    /// mean cosine the estimate is within 2% (measured 1.0008; the kernel 0.617). Without the
+    /// cosine it read 1.042.
+    #[test]
+    fn photons_on_a_tube_are_weighed_over_its_curved_surface() {
+        let (radius, length, count) = (0.03f32, 10.0f32, 60_000);
+        let area = 2.0 * PI * radius * length;
+        let mut s = 17u64;
+        let photons: Vec<Photon> = (0..count)
+            .map(|_| {
+                let (x, phi) = (length * rng(&mut s), 2.0 * PI * rng(&mut s));
+                let normal = Vec3::new(0.0, phi.cos(), phi.sin());
+                let power = Vec3::splat(area / count as f32);
+                Photon::new(Vec3::new(x, 0.0, 0.0) + normal * radius, power, -normal, 0)
+            })
+            .collect();
+        let map = PhotonMap::new(&photons).unwrap();
+        let mut buf = KnnResult::new();
+        let params = |min_fill: f32| EstimateParams {
+            kernel: Kernel::Box,
+            min_fill,
+            ..EstimateParams::new(100, 1.0)
+        };
+        let (mut kernel, mut weighed) = (0.0, 0.0);
+        for i in 0..50 {
+            let p = Vec3::new(1.0 + 0.16 * i as f32, 0.0, radius);
+            kernel += irradiance_with(&map, p, Vec3::Z, &params(0.0), &mut buf)
+                .0
+                .x
+                / 50.0;
+            weighed += irradiance_with(&map, p, Vec3::Z, &params(0.7), &mut buf)
+                .0
+                .x
+                / 50.0;
+        }
+        assert!(kernel < 0.8, "the disc's kernel on the tube: {kernel}");
+        assert!(
+            (weighed - 1.0).abs() < 0.02,
+            "weighed over the tube: {weighed}"
         );
     }
 

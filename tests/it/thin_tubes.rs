@@ -55,3 +55,69 @@ fn thin_tubes_above_a_floor_against_the_path_tracer() {
     assert!((mean - 1.0).abs() < 0.03, "mean ratio {mean}");
     assert!(lo > 0.9 && hi < 1.1, "blocks {lo}..{hi}");
 }
+
+/// The tubes of [`scene`] in a room whose ceiling is a glass pane under a white sky, floor
+/// 0.5 (2M caustic photons): all light comes through the glass, so the photons that reach a
+/// tube are caustic ones. A gather ray passed on at a tube goes on by a cosine bounce; light it
+/// then finds through the glass is what the tube's estimate, not read, would have held.
+fn skylight(integrator: &str, spp: u32) -> String {
+    let photons = if integrator == "photonmap" {
+        r#" "integer globalphotons" [ 200000 ] "integer causticphotons" [ 2000000 ]"#
+    } else {
+        ""
+    };
+    let mut s = format!(
+        r#"LookAt 0 1.6 -1.9  0 0.2 0.5  0 1 0
+Camera "perspective" "float fov" [ 60 ]
+Film "rgb" "integer xresolution" [ 32 ] "integer yresolution" [ 24 ]
+PixelFilter "box" "float xradius" [ 0.5 ] "float yradius" [ 0.5 ]
+Sampler "independent" "integer pixelsamples" [ {spp} ]
+Integrator "{integrator}" "integer maxdepth" [ 5 ]{photons}
+WorldBegin
+LightSource "infinite" "rgb L" [ 1 1 1 ]
+Material "diffuse" "rgb reflectance" [ 0.5 0.5 0.5 ]
+Shape "trianglemesh" "point3 P" [ -2 0 -2  2 0 -2  2 0 2  -2 0 2 ] "integer indices" [ 0 2 1 0 3 2 ]
+Shape "trianglemesh" "point3 P" [ -2 0 2  2 0 2  2 2.5 2  -2 2.5 2 ] "integer indices" [ 0 1 2 0 2 3 ]
+Shape "trianglemesh" "point3 P" [ -2 0 -2  2 0 -2  2 2.5 -2  -2 2.5 -2 ] "integer indices" [ 0 2 1 0 3 2 ]
+Shape "trianglemesh" "point3 P" [ 2 0 -2  2 0 2  2 2.5 2  2 2.5 -2 ] "integer indices" [ 0 2 1 0 3 2 ]
+Shape "trianglemesh" "point3 P" [ -2 0 -2  -2 0 2  -2 2.5 2  -2 2.5 -2 ] "integer indices" [ 0 1 2 0 2 3 ]
+Material "dielectric" "float eta" [ 1.5 ]
+Shape "trianglemesh" "point3 P" [ -2 2.5 -2  2 2.5 -2  2 2.5 2  -2 2.5 2 ] "integer indices" [ 0 1 2 0 2 3 ]
+Shape "trianglemesh" "point3 P" [ -2 2.52 -2  2 2.52 -2  2 2.52 2  -2 2.52 2 ] "integer indices" [ 0 1 2 0 2 3 ]
+Material "diffuse" "rgb reflectance" [ 0.8 0.8 0.8 ]
+"#
+    );
+    for i in 0..40 {
+        let z = -1.0 + i as f32 * 0.05;
+        s += &format!(
+            "AttributeBegin\nTranslate -1 0.15 {z:.3}\nRotate 90 0 1 0\nShape \"cylinder\" \"float radius\" [ 0.01 ] \"float zmin\" [ 0 ] \"float zmax\" [ 2 ]\nAttributeEnd\n"
+        );
+    }
+    s
+}
+
+/// The walls and the floor's far part (the top row of 4x4 blocks and the outer blocks of the
+/// second) against the path tracer (2048 spp), each within 7%. Measured: 0.957, 0.940, 0.959,
+/// 0.989 / 1.012, 1.004; before gather paths passed on at a tube counted light found through
+/// the glass: 0.91, 0.89, 0.91, 0.94 / 0.95, 0.94. The blocks over the tubes themselves stay
+/// dark at this photon count (0.61-0.87): the tubes' caustic estimates hold fewer photons than
+/// `estimate::Weigh` weighs (with 20M caustic photons the whole image is 0.98), and the
+/// nearest blocks' gather rays read them.
+#[test]
+fn thin_tubes_under_a_skylight_pass_on_the_light_through_the_glass() {
+    use photon::integrator::IntegratorKind;
+    let dir = TempDir::new("thin-tubes-skylight");
+    let path = dir.write("path.pbrt", skylight("path", 2048));
+    let reference = common::render_file(&path, IntegratorKind::Path);
+    let pm = dir.write("pm.pbrt", skylight("photonmap", 64));
+    let image = common::render_file(&pm, IntegratorKind::Photonmap);
+    let (mean, blocks) = common::block_ratios(&image, &reference, 32, 4);
+    println!("mean ratio {mean:.4}, blocks {blocks:.3?}");
+    for i in [0, 1, 2, 3, 4, 7] {
+        assert!(
+            (blocks[i] - 1.0).abs() < 0.07,
+            "block {i}: {:.3} (all {blocks:.3?})",
+            blocks[i]
+        );
+    }
+}
