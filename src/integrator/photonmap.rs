@@ -744,9 +744,6 @@ fn reflected(
             ctx.counters
                 .secondary_rays
                 .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-            if continued > 0 {
-                out += throughput * emitted(ctx, &ray, hit.as_ref(), |_| 1.0);
-            }
             continue;
         }
         if bsdf.flags().has_diffuse() {
@@ -771,6 +768,15 @@ fn reflected(
                 continued += 1;
                 let f = |wi: Vec3| bsdf.f(wo, wi, TransportMode::Radiance);
                 out += throughput * direct_mis(ctx, &si, &mut g.sampler, f);
+                // The light that reaches it through specular bounces (sun through a window
+                // onto a chair's tube), which its estimate held and no shadow ray finds: the
+                // caustic map's. (Tracing on to the lights through the glass made fireflies:
+                // cornell-spheres at 16 spp, relMSE 0.0081 -> 0.0091.)
+                if let Some(caustic) = &pass.maps.caustic {
+                    out += throughput
+                        * f_d
+                        * irradiance_with(caustic, si.p, n, &pass.caustic_params, buf).0;
+                }
                 let local = crate::sampling::warp::square_to_cosine_hemisphere(g.sampler.next_2d());
                 let wi = if wo.z < 0.0 { -local } else { local };
                 let pdf = local.z / std::f32::consts::PI;
@@ -810,12 +816,6 @@ fn reflected(
         ctx.counters
             .secondary_rays
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        if continued > 0 {
-            // Light that reaches a thin point passed on through specular or glossy bounces
-            // (sun through a window onto a chair's tube): its estimate, which had it, was
-            // not read, and no shadow ray finds it.
-            out += throughput * emitted(ctx, &ray, hit.as_ref(), |_| 1.0);
-        }
     }
     out
 }

@@ -57,12 +57,12 @@ fn thin_tubes_above_a_floor_against_the_path_tracer() {
 }
 
 /// The tubes of [`scene`] in a room whose ceiling is a glass pane under a white sky, floor
-/// 0.5 (2M caustic photons): all light comes through the glass, so the photons that reach a
-/// tube are caustic ones. A gather ray passed on at a tube goes on by a cosine bounce; light it
-/// then finds through the glass is what the tube's estimate, not read, would have held.
+/// 0.5 (6M caustic photons): all light comes through the glass, so the photons that reach a
+/// tube are caustic ones. A gather ray passed on at a tube takes the tube's caustic estimate
+/// besides its shadow ray: the light the tube's global estimate, not read, would have held.
 fn skylight(integrator: &str, spp: u32) -> String {
     let photons = if integrator == "photonmap" {
-        r#" "integer globalphotons" [ 200000 ] "integer causticphotons" [ 2000000 ]"#
+        r#" "integer globalphotons" [ 200000 ] "integer causticphotons" [ 6000000 ]"#
     } else {
         ""
     };
@@ -97,12 +97,11 @@ Material "diffuse" "rgb reflectance" [ 0.8 0.8 0.8 ]
 }
 
 /// The walls and the floor's far part (the top row of 4x4 blocks and the outer blocks of the
-/// second) against the path tracer (2048 spp), each within 7%. Measured: 0.957, 0.940, 0.959,
-/// 0.989 / 1.012, 1.004; before gather paths passed on at a tube counted light found through
-/// the glass: 0.91, 0.89, 0.91, 0.94 / 0.95, 0.94. The blocks over the tubes themselves stay
-/// dark at this photon count (0.61-0.87): the tubes' caustic estimates hold fewer photons than
-/// `estimate::Weigh` weighs (with 20M caustic photons the whole image is 0.98), and the
-/// nearest blocks' gather rays read them.
+/// second) against the path tracer (2048 spp), each within 5%. Measured: 0.96, 0.96, 0.97,
+/// 0.96 / 0.96, 0.99; before thin points read the caustic map: 0.92, 0.93, 0.94, 0.92 / 0.91,
+/// 0.93. The blocks over the tubes themselves stay dark at this photon count (0.60-0.87): the
+/// tubes' caustic estimates at camera points converge slowly (with 20M caustic photons the
+/// whole image is 0.98).
 #[test]
 fn thin_tubes_under_a_skylight_pass_on_the_light_through_the_glass() {
     use photon::integrator::IntegratorKind;
@@ -115,7 +114,7 @@ fn thin_tubes_under_a_skylight_pass_on_the_light_through_the_glass() {
     println!("mean ratio {mean:.4}, blocks {blocks:.3?}");
     for i in [0, 1, 2, 3, 4, 7] {
         assert!(
-            (blocks[i] - 1.0).abs() < 0.07,
+            (blocks[i] - 1.0).abs() < 0.05,
             "block {i}: {:.3} (all {blocks:.3?})",
             blocks[i]
         );
