@@ -97,11 +97,12 @@ Material "diffuse" "rgb reflectance" [ 0.8 0.8 0.8 ]
 }
 
 /// The walls and the floor's far part (the top row of 4x4 blocks and the outer blocks of the
-/// second) against the path tracer (2048 spp), each within 5%. Measured: 0.96, 0.96, 0.97,
-/// 0.96 / 0.96, 0.99; before thin points read the caustic map: 0.92, 0.93, 0.94, 0.92 / 0.91,
-/// 0.93. The blocks over the tubes themselves stay dark at this photon count (0.60-0.87): the
-/// tubes' caustic estimates at camera points converge slowly (with 20M caustic photons the
-/// whole image is 0.98).
+/// second) against the path tracer (2048 spp), each within 5%, and the blocks over the tubes
+/// within 25%. Measured: walls 0.965, 0.974, 0.982, 0.964 / 0.967, 0.992; before thin points
+/// read the caustic map: 0.92, 0.93, 0.94, 0.92 / 0.91, 0.93. Tubes 0.868, 0.857, 0.811,
+/// 0.846; before sparse searches were weighed (`estimate::SPARSE_MIN_FILL`): 0.61, 0.60,
+/// 0.67, 0.67 (with 20M caustic photons the whole image is 0.98: what is left converges
+/// with the photon count).
 #[test]
 fn thin_tubes_under_a_skylight_pass_on_the_light_through_the_glass() {
     use photon::integrator::IntegratorKind;
@@ -115,7 +116,14 @@ fn thin_tubes_under_a_skylight_pass_on_the_light_through_the_glass() {
     for i in [0, 1, 2, 3, 4, 7] {
         assert!(
             (blocks[i] - 1.0).abs() < 0.05,
-            "block {i}: {:.3} (all {blocks:.3?})",
+            "wall block {i}: {:.3} (all {blocks:.3?})",
+            blocks[i]
+        );
+    }
+    for i in [9, 10, 13, 14] {
+        assert!(
+            (blocks[i] - 1.0).abs() < 0.25,
+            "tube block {i}: {:.3} (all {blocks:.3?})",
             blocks[i]
         );
     }
