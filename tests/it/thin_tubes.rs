@@ -13,6 +13,18 @@
 use crate::support as common;
 use common::TempDir;
 
+/// Forty horizontal tubes 1 cm in radius and 2 m long, 15 cm above the floor, 5 cm apart.
+fn tubes() -> String {
+    (0..40)
+        .map(|i| {
+            let z = -1.0 + i as f32 * 0.05;
+            format!(
+                "AttributeBegin\nTranslate -1 0.15 {z:.3}\nRotate 90 0 1 0\nShape \"cylinder\" \"float radius\" [ 0.01 ] \"float zmin\" [ 0 ] \"float zmax\" [ 2 ]\nAttributeEnd\n"
+            )
+        })
+        .collect()
+}
+
 fn scene(integrator: &str, spp: u32) -> String {
     let photons = if integrator == "photonmap" {
         r#" "integer globalphotons" [ 200000 ] "integer causticphotons" [ 0 ]"#
@@ -20,7 +32,7 @@ fn scene(integrator: &str, spp: u32) -> String {
         ""
     };
     let room = common::CLOSED_ROOM;
-    let mut s = format!(
+    let s = format!(
         r#"LookAt 0 1.6 -1.9  0 0.2 0.5  0 1 0
 Camera "perspective" "float fov" [ 60 ]
 Film "rgb" "integer xresolution" [ 32 ] "integer yresolution" [ 24 ]
@@ -36,13 +48,7 @@ Material "diffuse" "rgb reflectance" [ 0.7 0.7 0.7 ]
 {room}Material "diffuse" "rgb reflectance" [ 0.8 0.8 0.8 ]
 "#
     );
-    for i in 0..40 {
-        let z = -1.0 + i as f32 * 0.05;
-        s += &format!(
-            "AttributeBegin\nTranslate -1 0.15 {z:.3}\nRotate 90 0 1 0\nShape \"cylinder\" \"float radius\" [ 0.01 ] \"float zmin\" [ 0 ] \"float zmax\" [ 2 ]\nAttributeEnd\n"
-        );
-    }
-    s
+    s + &tubes()
 }
 
 /// Mean and the 4x4 block means of the photon mapper (200k photons, 64 spp) against the path
@@ -66,7 +72,7 @@ fn skylight(integrator: &str, spp: u32) -> String {
     } else {
         ""
     };
-    let mut s = format!(
+    let s = format!(
         r#"LookAt 0 1.6 -1.9  0 0.2 0.5  0 1 0
 Camera "perspective" "float fov" [ 60 ]
 Film "rgb" "integer xresolution" [ 32 ] "integer yresolution" [ 24 ]
@@ -87,13 +93,7 @@ Shape "trianglemesh" "point3 P" [ -2 2.52 -2  2 2.52 -2  2 2.52 2  -2 2.52 2 ] "
 Material "diffuse" "rgb reflectance" [ 0.8 0.8 0.8 ]
 "#
     );
-    for i in 0..40 {
-        let z = -1.0 + i as f32 * 0.05;
-        s += &format!(
-            "AttributeBegin\nTranslate -1 0.15 {z:.3}\nRotate 90 0 1 0\nShape \"cylinder\" \"float radius\" [ 0.01 ] \"float zmin\" [ 0 ] \"float zmax\" [ 2 ]\nAttributeEnd\n"
-        );
-    }
-    s
+    s + &tubes()
 }
 
 /// The walls and the floor's far part (the top row of 4x4 blocks and the outer blocks of the
