@@ -54,6 +54,11 @@ pub const THREAD_BYTES: u64 = 2 << 20;
 /// The process before any scene: the executable, Embree, OpenEXR and the C and Rust runtimes.
 /// Measured (peak RSS of a one-triangle 16x16 render, any integrator): 12.4-13.0 MB.
 pub const PROCESS_BYTES: u64 = 13 << 20;
+/// Bytes per pixel of a live preview (`--display-server`, [`crate::tools::display`]): its
+/// frame of 15 floats per pixel, plus the mean image and layers a render in passes makes for
+/// it after each pass (15 floats per pixel, dropped before the next); the pieces it sends are
+/// 1 MB at most.
+pub const PREVIEW_BYTES_PER_PIXEL: u64 = 2 * 60;
 /// The factor on the photons stored per photon emitted that a pilot trace measured
 /// ([`crate::photon::trace::pilot`]): its sampling error and the roulette's spread.
 pub const PILOT_MARGIN: f64 = 1.25;
@@ -206,7 +211,8 @@ fn blame(e: &Estimate, scene: &Scene, cli: FromCli) -> String {
 
 /// Checks a render against `budget` ([`Budget::resolve`], once before anything large is
 /// allocated: what an address-space limit leaves shrinks as the render maps memory) before it
-/// starts; `threads` 0 means all cores. The message starts with where the largest part was set.
+/// starts; `threads` 0 means all cores; `preview` adds a live preview's frame. The message
+/// starts with where the largest part was set.
 pub fn check_render(
     scene: &Scene,
     settings: &RenderSettings,
@@ -214,12 +220,18 @@ pub fn check_render(
     threads: usize,
     landings: Option<Landings>,
     (budget, cli): (&Budget, FromCli),
+    preview: bool,
 ) -> Result<Estimate, String> {
     let threads = match threads {
         0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
         n => n,
     };
-    let e = estimate(scene, settings, (kind, backend), threads, landings);
+    let mut e = estimate(scene, settings, (kind, backend), threads, landings);
+    if preview {
+        let pixels = settings.width as u64 * settings.height as u64;
+        let bytes = pixels.saturating_mul(PREVIEW_BYTES_PER_PIXEL);
+        e.parts.push(("live preview", bytes));
+    }
     check(&e, budget).map_err(|m| format!("{}: {m}", blame(&e, scene, cli)))?;
     Ok(e)
 }

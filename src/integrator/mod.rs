@@ -292,14 +292,37 @@ pub fn pilot(
     })
 }
 
-/// Renders `scene` with `kind`, calling `progress(tiles_done, tiles_total)` as tiles finish.
-/// Runs on the current rayon pool.
+/// What a render reports as it goes, for progress displays and live previews. Every method
+/// has a default that ignores the report; a closure `Fn(done, total)` is an observer of
+/// finished tiles only.
+pub trait Observer: Sync {
+    /// `done` of `total` tiles finished (called from worker threads, in any order).
+    fn tile_done(&self, _done: u64, _total: u64) {}
+    /// The final pixels of the tile `[x0, x1) x [y0, y1)` (image coordinates of the crop
+    /// window's image, row-major, imaging ratio and white balance applied), as it finishes.
+    fn tile_pixels(&self, _x0: u32, _y0: u32, _x1: u32, _y1: u32, _px: &[Radiance]) {}
+    /// The whole image so far and its component layers, after a pass is added into it
+    /// (renders in passes; `pass` counts from 0).
+    fn image(&self, _image: &RgbImage, _layers: &[(&'static str, RgbImage)], _pass: u64) {}
+}
+
+impl<F: Fn(u64, u64) + Sync> Observer for F {
+    fn tile_done(&self, done: u64, total: u64) {
+        self(done, total)
+    }
+}
+
+/// The observer of nothing.
+pub const UNOBSERVED: &dyn Observer = &|_: u64, _: u64| {};
+
+/// Renders `scene` with `kind`, reporting finished tiles to `progress`. Runs on the current
+/// rayon pool.
 pub fn render(
     scene: &Scene,
     accel: &Accel,
     settings: &RenderSettings,
     kind: IntegratorKind,
-    progress: &(dyn Fn(u64, u64) + Sync),
+    progress: &dyn Observer,
 ) -> RenderOutput {
     let start = Instant::now();
     let photons = prepare(scene, accel, settings, kind);
@@ -316,7 +339,7 @@ pub fn render_prepared(
     settings: &RenderSettings,
     kind: IntegratorKind,
     photons: Option<&photonmap::PhotonPass>,
-    progress: &(dyn Fn(u64, u64) + Sync),
+    progress: &dyn Observer,
 ) -> RenderOutput {
     let start = Instant::now();
     // Pass 1's lights when there was one (built once per render).
@@ -360,7 +383,7 @@ pub fn render_prepared(
                 let n = ((x1 - x0) * (y1 - y0)) as usize;
                 return ((x0, y0), vec![Radiance::default(); n]);
             }
-            let px = match kind {
+            let mut px = match kind {
                 IntegratorKind::Photonmap if ctx.photons.is_some() => {
                     photon_mapper::render_tile(&ctx, x0, y0, x1, y1)
                 }
@@ -369,24 +392,25 @@ pub fn render_prepared(
                 }
                 IntegratorKind::Path => path::render_tile(&ctx, x0, y0, x1, y1),
             };
-            progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
+            // The film's imaging ratio and white balance.
+            if settings.imaging_ratio != 1.0 {
+                px.iter_mut().for_each(|r| *r = *r * settings.imaging_ratio);
+            }
+            if let Some(m) = settings.white_balance {
+                px.iter_mut().for_each(|r| *r = r.map(|v| m * v));
+            }
+            progress.tile_pixels(x0 - bx0, y0 - by0, x1 - bx0, y1 - by0, &px);
+            progress.tile_done(done.fetch_add(1, Ordering::Relaxed) + 1, total);
             ((x0, y0), px)
         })
         .collect();
 
     // Assemble the tiles into the combined image and one image per component (the pixels of
-    // the crop window, scaled by the imaging ratio and white balanced).
+    // the crop window).
     let (wu, hu) = ((w - bx0) as usize, (h - by0) as usize);
     let mut parts: [RgbImage; 4] = std::array::from_fn(|_| RgbImage::new(wu, hu));
     let mut image = RgbImage::new(wu, hu);
-    let ratio = settings.imaging_ratio;
-    for ((x0, y0), mut px) in rendered {
-        if ratio != 1.0 {
-            px.iter_mut().for_each(|r| *r = *r * ratio);
-        }
-        if let Some(m) = settings.white_balance {
-            px.iter_mut().for_each(|r| *r = r.map(|v| m * v));
-        }
+    for ((x0, y0), px) in rendered {
         let tw = ((x0 + TILE).min(w) - x0) as usize;
         for (i, r) in px.iter().enumerate() {
             let (x, y) = ((x0 - bx0) as usize + i % tw, (y0 - by0) as usize + i / tw);
@@ -442,16 +466,18 @@ pub fn tile_pixels(x0: u32, y0: u32, x1: u32, y1: u32) -> impl Iterator<Item = (
 /// Renders passes of increasing sample counts over one pass 1 until `budget_s` seconds (pass 1
 /// included) are spent, averaging them by sample count. Pass `k` uses seed `seed + k`, so the
 /// result is deterministic for a given sequence of pass sizes (which depends on timing).
-/// Returns the image and the total samples per pixel.
+/// Returns the image and the total samples per pixel. `observer` sees the image after each
+/// pass.
 pub fn render_for_time(
     scene: &Scene,
     accel: &Accel,
     settings: &RenderSettings,
     kind: IntegratorKind,
     budget_s: f64,
+    observer: &dyn Observer,
 ) -> (RenderOutput, u32) {
     if kind == IntegratorKind::Photonmap && settings.photon.progressive {
-        return passes::render_for_time(scene, accel, settings, kind, budget_s);
+        return passes::render_for_time(scene, accel, settings, kind, budget_s, observer);
     }
     let start = Instant::now();
     let photons = prepare(scene, accel, settings, kind);
@@ -464,7 +490,7 @@ pub fn render_for_time(
     loop {
         let t = Instant::now();
         s.seed = settings.seed.wrapping_add(pass);
-        let out = render_prepared(scene, accel, &s, kind, photons.as_ref(), &|_, _| {});
+        let out = render_prepared(scene, accel, &s, kind, photons.as_ref(), UNOBSERVED);
         let stopping = crate::interrupt::requested().is_some();
         if stopping && total.is_some() {
             break; // cut short by a signal: not added
@@ -476,6 +502,9 @@ pub fn render_for_time(
             None => out,
             Some(acc) => merge(acc, spp_done, out, s.spp),
         });
+        if let Some(t) = &total {
+            observer.image(&t.image, &t.components, pass);
+        }
         spp_done += s.spp;
         pass += 1;
         let left = budget_s - start.elapsed().as_secs_f64();

@@ -450,7 +450,7 @@ pub fn render_passes(
             .then(|| super::prepare(scene, accel, &s, kind))
             .flatten();
         let photons = own.as_ref().or(shared.as_ref());
-        let mut out = super::render_prepared(scene, accel, &s, kind, photons, &|_, _| {});
+        let mut out = super::render_prepared(scene, accel, &s, kind, photons, super::UNOBSERVED);
         if own.is_none() && k != first {
             // Shared maps: their pass 1 is charged to the first pass only.
             out.seconds -= out.photon_seconds + out.map_build_seconds;
@@ -485,6 +485,7 @@ pub fn render_for_time(
     settings: &RenderSettings,
     kind: IntegratorKind,
     budget_s: f64,
+    observer: &dyn super::Observer,
 ) -> (RenderOutput, u32) {
     let start = std::time::Instant::now();
     let (w, h) = settings.image_size();
@@ -498,7 +499,8 @@ pub fn render_for_time(
         s.spp = pass_spp;
         let t = std::time::Instant::now();
         let photons = super::prepare(scene, accel, &s, kind);
-        let out = super::render_prepared(scene, accel, &s, kind, photons.as_ref(), &|_, _| {});
+        let out =
+            super::render_prepared(scene, accel, &s, kind, photons.as_ref(), super::UNOBSERVED);
         if crate::interrupt::requested().is_some() && spp_done > 0 {
             break; // cut short: not added
         }
@@ -517,6 +519,8 @@ pub fn render_for_time(
         totals.add_counts(&out);
         spp_done += pass_spp;
         last_spp = pass_spp;
+        let (image, layers) = weighted_mean(&sums, spp_done, w, h);
+        observer.image(&image, &layers, k);
         k += 1;
         // The next pass: enough samples that photon work is at most PHOTON_SHARE of it.
         let pass_s = t.elapsed().as_secs_f64();
@@ -531,7 +535,29 @@ pub fn render_for_time(
             break;
         }
     }
-    let n = spp_done.max(1) as f64;
+    let (image, parts) = weighted_mean(&sums, spp_done, w, h);
+    totals.image = image;
+    totals.components = parts;
+    totals.seconds = start.elapsed().as_secs_f64();
+    let scale = radius_scale2(settings.photon.alpha as f64, k.saturating_sub(1)).sqrt();
+    totals.notes.push(format!(
+        "progressive: {k} passes, {spp_done} spp ({} spp in the last), {} + {} photons per pass, radii now x{scale:.3} of the k-nearest radius",
+        last_spp,
+        settings.photon.trace.global_photons,
+        settings.photon.trace.caustic_photons
+    ));
+    (totals, spp_done)
+}
+
+/// The image and component images of per-pixel sums (`[component][channel]`, weighted by
+/// samples) over `spp` samples, for a `w x h` image.
+fn weighted_mean(
+    sums: &[[f64; 12]],
+    spp: u32,
+    w: usize,
+    h: usize,
+) -> (RgbImage, Vec<(&'static str, RgbImage)>) {
+    let n = spp.max(1) as f64;
     let mut parts: Vec<(&'static str, RgbImage)> = Component::NAMES
         .iter()
         .map(|&c| (c, RgbImage::new(w, h)))
@@ -547,17 +573,7 @@ pub fn render_for_time(
             image.pixels[i][c] = (t / n) as f32;
         }
     }
-    totals.image = image;
-    totals.components = parts;
-    totals.seconds = start.elapsed().as_secs_f64();
-    let scale = radius_scale2(settings.photon.alpha as f64, k.saturating_sub(1)).sqrt();
-    totals.notes.push(format!(
-        "progressive: {k} passes, {spp_done} spp ({} spp in the last), {} + {} photons per pass, radii now x{scale:.3} of the k-nearest radius",
-        last_spp,
-        settings.photon.trace.global_photons,
-        settings.photon.trace.caustic_photons
-    ));
-    (totals, spp_done)
+    (image, parts)
 }
 
 /// One statistics line: passes, samples, photons and the current radii.

@@ -202,7 +202,16 @@ fn measure(
 ) -> Result<Row, ToolError> {
     let mut s = base.clone();
     (m.adjust)(&mut s, budget);
-    let (img, spp) = pool.install(|| render_for_time(scene, accel, &s, m.kind, budget));
+    let (img, spp) = pool.install(|| {
+        render_for_time(
+            scene,
+            accel,
+            &s,
+            m.kind,
+            budget,
+            crate::integrator::UNOBSERVED,
+        )
+    });
     let (a, r) = match_sizes(img.image.clone(), reference.clone()).map_err(ToolError)?;
     let metrics = compare(&a, &r, mask).map_err(ToolError)?;
     let exr = out.join(format!("{}.exr", m.name));

@@ -68,6 +68,9 @@ pub struct Job<'a> {
     pub load_seconds: f64,
     /// Photons stored per photon emitted, once [`Job::pilot`] measured them.
     pub landings: Option<Landings>,
+    /// A live preview will watch the render (`--display-server`): its frame is in the memory
+    /// check.
+    pub preview: bool,
 }
 
 impl<'a> Job<'a> {
@@ -103,6 +106,7 @@ impl<'a> Job<'a> {
             threads: 0,
             load_seconds: 0.0,
             landings: None,
+            preview: false,
         })
     }
 
@@ -144,7 +148,16 @@ impl<'a> Job<'a> {
     ) -> Result<Estimate, String> {
         let (scene, kinds, threads) = (&self.scene, (self.integrator, self.backend), self.threads);
         let limit = (budget, cli);
-        crate::memory::check_render(scene, settings, kinds, threads, self.landings, limit)
+        let landings = self.landings;
+        crate::memory::check_render(
+            scene,
+            settings,
+            kinds,
+            threads,
+            landings,
+            limit,
+            self.preview,
+        )
     }
 
     /// Measures the photons pass 1 stores per photon emitted with a pilot trace on `accel`
@@ -181,7 +194,7 @@ impl<'a> Job<'a> {
         &self,
         accel: &Accel,
         pool: &rayon::ThreadPool,
-        progress: &(dyn Fn(u64, u64) + Sync),
+        progress: &dyn crate::integrator::Observer,
     ) -> RenderOutput {
         let (scene, settings, kind) = (&self.scene, &self.settings, self.integrator);
         pool.install(|| integrator::render(scene, accel, settings, kind, progress))

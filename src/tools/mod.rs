@@ -32,6 +32,7 @@ pub mod check;
 pub mod compare;
 pub mod converge;
 pub mod crosscheck;
+pub mod display;
 pub mod job;
 pub mod merge;
 pub mod output;

@@ -76,6 +76,10 @@ pub struct RenderOptions {
     /// starts (default: 80% of physical memory, or of what an address-space limit leaves).
     #[arg(long, value_parser = crate::limits::parse_size)]
     pub max_memory: Option<u64>,
+    /// Live preview: send the image to the tev viewer listening at HOST:PORT as tiles finish
+    /// or passes are added (pbrt-v4's flag); the render never waits for the viewer.
+    #[arg(long, value_name = "HOST:PORT", value_parser = super::display::parse_server)]
+    pub display_server: Option<String>,
     #[command(flatten)]
     pub photon: crate::integrator::settings::PhotonOverrides,
     #[command(flatten)]
@@ -183,6 +187,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     let mut job = Job::load(&opts.scene, opts.max_memory)?.with(&overrides);
     (job.integrator, job.backend, job.threads) = (opts.integrator, opts.backend, opts.threads);
     job.accel.robust = opts.robust;
+    job.preview = opts.display_server.is_some();
     let exr = opts
         .output
         .clone()
@@ -209,24 +214,37 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     let mut estimate = check(&job.settings).map_err(ToolError)?;
     banner(opts, &job, build_s, pool.current_num_threads());
     let (scene, mut settings) = (&job.scene, job.settings.clone());
+    let display = opts.display_server.as_deref().map(|server| {
+        let (w, h) = settings.image_size();
+        let name = outputs.files[0].shown.file_name().unwrap_or_default();
+        super::display::Display::start(server, &name.to_string_lossy(), w, h)
+    });
     if opts.passes.active(opts.time.is_some()) {
         let outs = (&outputs, checkpoint.as_ref());
-        return super::render_passes::run(opts, scene, &accel, &settings, &pool, outs);
+        let ran = super::render_passes::run(
+            opts,
+            scene,
+            &accel,
+            &settings,
+            &pool,
+            outs,
+            display.as_ref(),
+        );
+        if let Some(d) = display {
+            d.finish();
+        }
+        return ran;
     }
 
     // SIGINT/SIGTERM from here on stop the render: the tiles (or, with --time, the passes)
     // finished are kept in a fallback file and -o is left as it was (see `stopped`).
     crate::interrupt::install();
-    let bar = progress_bar();
-    let tiles = [AtomicU64::new(0), AtomicU64::new(0)];
-    let progress = |done: u64, total: u64| {
-        tiles[0].fetch_max(done, Relaxed);
-        tiles[1].store(total, Relaxed);
-        if let Some(b) = &bar {
-            b.set_length(total);
-            b.set_position(done);
-        }
+    let watch = Watch {
+        bar: progress_bar(),
+        tiles: [AtomicU64::new(0), AtomicU64::new(0)],
+        display: display.as_ref(),
     };
+    let (progress, tiles) = (&watch, &watch.tiles);
     let out = match opts.time {
         Some(budget) => {
             // Fixed maps grow with the budget; progressive passes keep the file's counts.
@@ -262,7 +280,14 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
                 }
             }
             let (out, spp) = pool.install(|| {
-                integrator::render_for_time(scene, &accel, &settings, opts.integrator, budget)
+                integrator::render_for_time(
+                    scene,
+                    &accel,
+                    &settings,
+                    opts.integrator,
+                    budget,
+                    progress,
+                )
             });
             say!(
                 "time budget {budget:.2} s: {spp} spp, {} + {} photons",
@@ -271,11 +296,15 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
             );
             out
         }
-        None => pool
-            .install(|| integrator::render(scene, &accel, &settings, opts.integrator, &progress)),
+        None => {
+            pool.install(|| integrator::render(scene, &accel, &settings, opts.integrator, progress))
+        }
     };
-    if let Some(b) = bar {
+    if let Some(b) = &watch.bar {
         b.finish_and_clear();
+    }
+    if let Some(d) = display {
+        d.finish();
     }
     let pixel = if opts.half {
         ExrPixel::Half
@@ -408,6 +437,43 @@ fn stopped(
             )
         }
         Err(e) => format!("{} received: {what} could not be saved: {e}", sig.name()),
+    }
+}
+
+/// What a render on the command line reports to: the progress bar and the tile count (kept
+/// for the message of a stopped render), and the live preview.
+struct Watch<'a> {
+    bar: Option<ProgressBar>,
+    /// Tiles done and in all.
+    tiles: [AtomicU64; 2],
+    display: Option<&'a super::display::Display>,
+}
+
+impl integrator::Observer for Watch<'_> {
+    fn tile_done(&self, done: u64, total: u64) {
+        self.tiles[0].fetch_max(done, Relaxed);
+        self.tiles[1].store(total, Relaxed);
+        if let Some(b) = &self.bar {
+            b.set_length(total);
+            b.set_position(done);
+        }
+    }
+
+    fn tile_pixels(&self, x0: u32, y0: u32, x1: u32, y1: u32, px: &[crate::film::Radiance]) {
+        if let Some(d) = self.display {
+            d.tile_pixels(x0, y0, x1, y1, px);
+        }
+    }
+
+    fn image(
+        &self,
+        image: &imageio::RgbImage,
+        layers: &[(&'static str, imageio::RgbImage)],
+        pass: u64,
+    ) {
+        if let Some(d) = self.display {
+            d.image(image, layers, pass);
+        }
     }
 }
 

@@ -65,6 +65,7 @@ pub fn run(
     settings: &RenderSettings,
     pool: &rayon::ThreadPool,
     (outputs, checkpoint): (&Outputs, Option<&Outputs>),
+    display: Option<&super::display::Display>,
 ) -> Result<(), ToolError> {
     crate::interrupt::install();
     let po = &opts.passes;
@@ -140,6 +141,11 @@ pub fn run(
                 &mut acc,
                 &mut |acc, out| {
                     totals.add_counts(out);
+                    if let Some(d) = display {
+                        use crate::integrator::Observer;
+                        let (image, layers) = acc.mean();
+                        d.image(&image, &layers, acc.passes.end - 1);
+                    }
                     let now = t0.elapsed().as_secs_f64();
                     longest = longest.max(now - last);
                     last = now;

@@ -1294,7 +1294,10 @@ fn issue22_case_11_merge_and_compare_write_into_fifos() {
 #[test]
 fn issue22_case_12_an_interrupted_render_keeps_its_finished_tiles() {
     let d = tmp_dir("i22c12");
-    let scene = write(&d, "scene.pbrt", small_scene(""));
+    // A sky, so that every finished tile has light in it (the corners see past the walls: a
+    // stop with only the first tiles finished left an all-black image).
+    let sky = r#"LightSource "infinite" "rgb L" [ 0.2 0.2 0.2 ]"#;
+    let scene = write(&d, "scene.pbrt", small_scene(sky));
     let out = write(&d, "out.exr", "old");
     let extra = ["--res", "256x256", "--spp", "1024", "--integrator", "path"];
     // Not a timing assertion: stopped after 3 s, long enough for some of the 256 tiles to
