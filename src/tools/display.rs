@@ -258,39 +258,52 @@ fn send_loop(shared: &Shared, server: &str, name: &str) {
                 f.done,
             )
         };
-        if conn.is_none() && may_reconnect && last_try.is_none_or(|t| t.elapsed().as_secs() >= 1) {
-            last_try = Some(Instant::now());
-            if let Ok(mut s) = connect(server) {
-                may_reconnect = false;
-                if s.write_all(&create).is_ok() {
-                    conn = Some(s);
-                    // The whole frame: the viewer lost everything.
-                    pieces = split([0, 0, width, height]);
+        // Send; when the viewer is found gone, reconnect at once if that is still allowed.
+        loop {
+            let due = last_try.is_none_or(|t| t.elapsed().as_secs() >= 1);
+            if conn.is_none() && may_reconnect && due {
+                last_try = Some(Instant::now());
+                if let Ok(mut s) = connect(server) {
+                    may_reconnect = false;
+                    if s.write_all(&create).is_ok() {
+                        conn = Some(s);
+                        // The whole frame: the viewer lost everything.
+                        pieces = split([0, 0, width, height]);
+                    }
                 }
             }
-        }
-        if let Some(s) = conn.as_mut() {
-            for r in pieces {
-                // One piece at a time: the copy and its packet stay small (a 128 x 128 piece
-                // is 1 MB) and the observers wait for the lock only as long as one copy.
-                let data = copy_rect(&shared.lock(), r);
-                if s.write_all(&update_image(name, &channels, r, &data))
-                    .is_err()
-                {
-                    if !may_reconnect {
-                        say_err!(
-                            "photon: warning: --display-server {server}: viewer gone again: preview stopped"
-                        );
-                    }
-                    conn = None;
-                    break;
-                }
+            let Some(s) = conn.as_mut() else { break };
+            if send(s, shared, name, &channels, &pieces).is_ok() {
+                break;
+            }
+            conn = None;
+            if !may_reconnect {
+                say_err!(
+                    "photon: warning: --display-server {server}: viewer gone again: preview stopped"
+                );
+                break;
             }
         }
         if done || (conn.is_none() && !may_reconnect) {
             return;
         }
     }
+}
+
+/// Sends `pieces` of the frame, one at a time: the copy and its packet stay small (a 128 x
+/// 128 piece is 1 MB) and the observers wait for the lock only as long as one copy.
+fn send(
+    s: &mut TcpStream,
+    shared: &Shared,
+    name: &str,
+    channels: &[String],
+    pieces: &[[u32; 4]],
+) -> std::io::Result<()> {
+    for &r in pieces {
+        let data = copy_rect(&shared.lock(), r);
+        s.write_all(&update_image(name, channels, r, &data))?;
+    }
+    Ok(())
 }
 
 fn connect(server: &str) -> std::io::Result<TcpStream> {

@@ -15,6 +15,7 @@ mod coated;
 mod crosscheck;
 mod curtains;
 mod direct_light;
+mod display;
 mod envlight;
 mod exr;
 mod fuzz;
