@@ -181,13 +181,114 @@ impl RenderOptions {
     }
 }
 
-pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
-    // Load and validate everything before any work is done.
-    let overrides = opts.overrides();
-    let mut job = Job::load(&opts.scene, opts.max_memory)?.with(&overrides);
+/// A render ready to go: its thread pool, accelerator and memory estimate (see [`prepare`]).
+pub struct Prepared {
+    pub pool: rayon::ThreadPool,
+    pub accel: Accel,
+    /// Seconds the accelerator took to build.
+    pub build_s: f64,
+    /// The memory model of the render, checked against the budget.
+    pub estimate: crate::memory::Estimate,
+    budget: crate::limits::Budget,
+    cli: crate::memory::FromCli,
+}
+
+/// Takes `opts`' integrator, backend, threads and preview into `job` (whose settings already
+/// have `opts`' overrides: [`Job::with`]).
+pub fn configure(job: &mut Job, opts: &RenderOptions) {
     (job.integrator, job.backend, job.threads) = (opts.integrator, opts.backend, opts.threads);
     job.accel.robust = opts.robust;
     job.preview = opts.display_server.is_some();
+}
+
+/// Everything a render does before it renders: checks the memory model without the photon
+/// maps, builds the accelerator, measures pass 1 with a pilot trace and checks again with
+/// the photon maps. `photon render` and the Python module both start here.
+pub fn prepare(job: &mut Job, opts: &RenderOptions) -> Result<Prepared, ToolError> {
+    let cli = opts.overrides().from_cli();
+    let budget = crate::limits::Budget::resolve(opts.max_memory);
+    job.check_memory(&job.settings, &budget, cli)
+        .map_err(ToolError)?;
+    let pool = job.pool()?;
+    let (accel, build_s) = job.build(&pool)?;
+    job.pilot(&accel, &pool);
+    let estimate = job
+        .check_memory(&job.settings, &budget, cli)
+        .map_err(ToolError)?;
+    Ok(Prepared {
+        pool,
+        accel,
+        build_s,
+        estimate,
+        budget,
+        cli,
+    })
+}
+
+/// Renders `job` as `prepared` for `opts` (not in passes: see [`PassOptions::active`]): for
+/// `--time` passes until the budget is spent, with photon maps grown to fit it (and the memory
+/// budget: `prepared.estimate` follows), else the file's samples. Notes about the budget join
+/// the output's notes. A SIGINT/SIGTERM flag ([`crate::interrupt`]) stops it early: the caller
+/// checks the flag and treats the image as incomplete.
+pub fn render_image(
+    job: &Job,
+    prepared: &mut Prepared,
+    opts: &RenderOptions,
+    observer: &dyn integrator::Observer,
+) -> Result<integrator::RenderOutput, ToolError> {
+    let (scene, accel, pool) = (&job.scene, &prepared.accel, &prepared.pool);
+    let mut settings = job.settings.clone();
+    let Some(budget) = opts.time else {
+        return Ok(
+            pool.install(|| integrator::render(scene, accel, &settings, opts.integrator, observer))
+        );
+    };
+    let mut notes = Vec::new();
+    // Fixed maps grow with the budget; progressive passes keep the file's counts.
+    let given = opts.photon.global_photons.is_some() || opts.photon.caustic_photons.is_some();
+    if !given && !settings.photon.progressive {
+        // The budget's counts, halved until the memory estimate fits; the file's counts
+        // (already checked) are the floor.
+        let check = |s: &RenderSettings| job.check_memory(s, &prepared.budget, prepared.cli);
+        let t = &settings.photon.trace;
+        let file = (t.global_photons, t.caustic_photons);
+        settings.photon.scale_for_budget(budget, 200_000);
+        let t = &settings.photon.trace;
+        let wanted = (t.global_photons, t.caustic_photons);
+        while check(&settings).is_err() {
+            let t = &mut settings.photon.trace;
+            if t.global_photons <= file.0 && t.caustic_photons <= file.1 {
+                (t.global_photons, t.caustic_photons) = file;
+                break;
+            }
+            t.global_photons = (t.global_photons / 2).max(file.0);
+            t.caustic_photons = (t.caustic_photons / 2).max(file.1);
+        }
+        prepared.estimate = check(&settings).map_err(|e| ToolError(format!("--time: {e}")))?;
+        let t = &settings.photon.trace;
+        if (t.global_photons, t.caustic_photons) != wanted {
+            notes.push(format!(
+                "time budget: {} + {} photons would not fit the memory budget: {} + {}",
+                wanted.0, wanted.1, t.global_photons, t.caustic_photons
+            ));
+        }
+    }
+    let (mut out, spp) = pool.install(|| {
+        integrator::render_for_time(scene, accel, &settings, opts.integrator, budget, observer)
+    });
+    notes.push(format!(
+        "time budget {budget:.2} s: {spp} spp, {} + {} photons",
+        settings.photon.trace.global_photons, settings.photon.trace.caustic_photons
+    ));
+    notes.append(&mut out.notes);
+    out.notes = notes;
+    Ok(out)
+}
+
+pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
+    // Load and validate everything before any work is done.
+    let mut job = Job::load(&opts.scene, opts.max_memory)?.with(&opts.overrides());
+    configure(&mut job, opts);
     let exr = opts
         .output
         .clone()
@@ -201,32 +302,23 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     };
     let outputs = Outputs::plan(&exr, png.as_deref()).map_err(ToolError)?;
     let checkpoint = super::render_passes::plan_checkpoint(&opts.passes, &outputs)?;
-    let cli = overrides.from_cli();
-    // Everything but the photon maps, before the accelerator is built; then with the photon
-    // maps a pilot trace measured, before pass 1.
-    let budget = crate::limits::Budget::resolve(opts.max_memory);
-    job.check_memory(&job.settings, &budget, cli)
-        .map_err(ToolError)?;
-    let pool = job.pool()?;
-    let (accel, build_s) = job.build(&pool)?;
-    job.pilot(&accel, &pool);
-    let check = |s: &RenderSettings| job.check_memory(s, &budget, cli);
-    let mut estimate = check(&job.settings).map_err(ToolError)?;
-    banner(opts, &job, build_s, pool.current_num_threads());
-    let (scene, mut settings) = (&job.scene, job.settings.clone());
+    let mut prepared = prepare(&mut job, opts)?;
+    let threads = prepared.pool.current_num_threads();
+    banner(opts, &job, prepared.build_s, threads);
     let display = opts.display_server.as_deref().map(|server| {
-        let (w, h) = settings.image_size();
+        let (w, h) = job.settings.image_size();
         let name = outputs.files[0].shown.file_name().unwrap_or_default();
         super::display::Display::start(server, &name.to_string_lossy(), w, h)
     });
     if opts.passes.active(opts.time.is_some()) {
         let outs = (&outputs, checkpoint.as_ref());
+        let (scene, p) = (&job.scene, &prepared);
         let ran = super::render_passes::run(
             opts,
             scene,
-            &accel,
-            &settings,
-            &pool,
+            &p.accel,
+            &job.settings,
+            &p.pool,
             outs,
             display.as_ref(),
         );
@@ -239,73 +331,19 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     // SIGINT/SIGTERM from here on stop the render: the tiles (or, with --time, the passes)
     // finished are kept in a fallback file and -o is left as it was (see `stopped`).
     crate::interrupt::install();
-    let watch = Watch {
+    let mut watch = Watch {
         bar: progress_bar(),
         tiles: [AtomicU64::new(0), AtomicU64::new(0)],
-        display: display.as_ref(),
+        display,
     };
-    let (progress, tiles) = (&watch, &watch.tiles);
-    let out = match opts.time {
-        Some(budget) => {
-            // Fixed maps grow with the budget; progressive passes keep the file's counts.
-            let given =
-                opts.photon.global_photons.is_some() || opts.photon.caustic_photons.is_some();
-            if !given && !settings.photon.progressive {
-                // The budget's counts, halved until the memory estimate fits; the file's
-                // counts (already checked) are the floor.
-                let t = &settings.photon.trace;
-                let file = (t.global_photons, t.caustic_photons);
-                settings.photon.scale_for_budget(budget, 200_000);
-                let t = &settings.photon.trace;
-                let wanted = (t.global_photons, t.caustic_photons);
-                while check(&settings).is_err() {
-                    let t = &mut settings.photon.trace;
-                    if t.global_photons <= file.0 && t.caustic_photons <= file.1 {
-                        (t.global_photons, t.caustic_photons) = file;
-                        break;
-                    }
-                    t.global_photons = (t.global_photons / 2).max(file.0);
-                    t.caustic_photons = (t.caustic_photons / 2).max(file.1);
-                }
-                estimate = check(&settings).map_err(|e| ToolError(format!("--time: {e}")))?;
-                let t = &settings.photon.trace;
-                if (t.global_photons, t.caustic_photons) != wanted {
-                    say!(
-                        "time budget: {} + {} photons would not fit the memory budget: {} + {}",
-                        wanted.0,
-                        wanted.1,
-                        t.global_photons,
-                        t.caustic_photons
-                    );
-                }
-            }
-            let (out, spp) = pool.install(|| {
-                integrator::render_for_time(
-                    scene,
-                    &accel,
-                    &settings,
-                    opts.integrator,
-                    budget,
-                    progress,
-                )
-            });
-            say!(
-                "time budget {budget:.2} s: {spp} spp, {} + {} photons",
-                settings.photon.trace.global_photons,
-                settings.photon.trace.caustic_photons
-            );
-            out
-        }
-        None => {
-            pool.install(|| integrator::render(scene, &accel, &settings, opts.integrator, progress))
-        }
-    };
+    let out = render_image(&job, &mut prepared, opts, &watch);
     if let Some(b) = &watch.bar {
         b.finish_and_clear();
     }
-    if let Some(d) = display {
+    if let Some(d) = watch.display.take() {
         d.finish();
     }
+    let out = out?;
     let pixel = if opts.half {
         ExrPixel::Half
     } else {
@@ -314,6 +352,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     let layers: Vec<(&str, &imageio::RgbImage)> =
         out.components.iter().map(|(n, i)| (*n, i)).collect();
     if let Some(sig) = crate::interrupt::take() {
+        let tiles = &watch.tiles;
         let done = match opts.time {
             Some(_) => None,
             None => Some((tiles[0].load(Relaxed), tiles[1].load(Relaxed))),
@@ -342,9 +381,16 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
             .shadow_rays
             .load(std::sync::atomic::Ordering::Relaxed),
     );
+    let estimate = prepared.estimate;
     if opts.stats {
-        print_stats(&out, pool.current_num_threads());
-        print_raw_rate(scene, accel, &settings, &out, &pool);
+        print_stats(&out, threads);
+        print_raw_rate(
+            &job.scene,
+            prepared.accel,
+            &job.settings,
+            &out,
+            &prepared.pool,
+        );
     }
     let bad = out.image.count_nonfinite();
     if bad > 0 {
@@ -442,14 +488,14 @@ fn stopped(
 
 /// What a render on the command line reports to: the progress bar and the tile count (kept
 /// for the message of a stopped render), and the live preview.
-struct Watch<'a> {
+struct Watch {
     bar: Option<ProgressBar>,
     /// Tiles done and in all.
     tiles: [AtomicU64; 2],
-    display: Option<&'a super::display::Display>,
+    display: Option<super::display::Display>,
 }
 
-impl integrator::Observer for Watch<'_> {
+impl integrator::Observer for Watch {
     fn tile_done(&self, done: u64, total: u64) {
         self.tiles[0].fetch_max(done, Relaxed);
         self.tiles[1].store(total, Relaxed);
@@ -460,7 +506,7 @@ impl integrator::Observer for Watch<'_> {
     }
 
     fn tile_pixels(&self, x0: u32, y0: u32, x1: u32, y1: u32, px: &[crate::film::Radiance]) {
-        if let Some(d) = self.display {
+        if let Some(d) = &self.display {
             d.tile_pixels(x0, y0, x1, y1, px);
         }
     }
@@ -471,7 +517,7 @@ impl integrator::Observer for Watch<'_> {
         layers: &[(&'static str, imageio::RgbImage)],
         pass: u64,
     ) {
-        if let Some(d) = self.display {
+        if let Some(d) = &self.display {
             d.image(image, layers, pass);
         }
     }

@@ -98,11 +98,7 @@ pub fn run(
     // (with --time) when the budget is spent.
     let pass_spp = settings.pass_spp.max(1);
     let until_budget = po.passes.is_none() && opts.time.is_some();
-    let end = match (&po.passes, opts.time) {
-        (Some(r), _) => r.end,
-        (None, Some(_)) => MAX_PASSES,
-        (None, None) => start_pass + settings.spp.div_ceil(pass_spp).max(1) as u64,
-    };
+    let end = pass_end(opts, settings);
     say!(
         "passes: {}..{} of {} spp each, {} photon maps{}",
         acc.passes.end,
@@ -191,6 +187,64 @@ pub fn run(
         crate::interrupt::raise(sig);
     }
     saved
+}
+
+/// Where the passes stop: the range's end, else the file's samples per pixel in passes, else
+/// (with `--time`: the budget stops them) the limit.
+fn pass_end(opts: &RenderOptions, settings: &RenderSettings) -> u64 {
+    let start = opts.passes.passes.as_ref().map_or(0, |r| r.start);
+    match (&opts.passes.passes, opts.time) {
+        (Some(r), _) => r.end,
+        (None, Some(_)) => MAX_PASSES,
+        (None, None) => start + settings.spp.div_ceil(settings.pass_spp.max(1)).max(1) as u64,
+    }
+}
+
+/// Renders the passes of `opts` (`--passes`, `--progressive`, with `--time` or without) in
+/// memory, for callers that keep the image (the Python module): the mean of the passes, as
+/// `photon render` writes it, with the notes of a render in passes. `observer` sees the mean
+/// after each pass; a SIGINT/SIGTERM flag stops after the pass in progress. `--checkpoint` and
+/// `--resume` (files) are the command line's.
+pub fn render_in_memory(
+    opts: &RenderOptions,
+    scene: &Scene,
+    accel: &Accel,
+    settings: &RenderSettings,
+    pool: &rayon::ThreadPool,
+    observer: &dyn crate::integrator::Observer,
+) -> RenderOutput {
+    let kind = opts.integrator;
+    let header = PartialHeader::new(scene, settings, kind, &backend_name(opts));
+    let start = opts.passes.passes.as_ref().map_or(0, |r| r.start);
+    let mut acc = Partial::new(header, start);
+    let t0 = Instant::now();
+    let mut totals = RenderOutput::empty();
+    let mut longest = 0f64;
+    let mut last = 0f64;
+    pool.install(|| {
+        let range = start..pass_end(opts, settings);
+        render_passes(
+            scene,
+            accel,
+            settings,
+            kind,
+            range,
+            &mut acc,
+            &mut |acc, out| {
+                totals.add_counts(out);
+                let (image, layers) = acc.mean();
+                observer.image(&image, &layers, acc.passes.end - 1);
+                let now = t0.elapsed().as_secs_f64();
+                (longest, last) = (longest.max(now - last), now);
+                let in_budget = opts.time.is_none_or(|b| now + longest <= b);
+                in_budget && crate::interrupt::requested().is_none()
+            },
+        )
+    });
+    (totals.image, totals.components) = acc.mean();
+    totals.seconds = t0.elapsed().as_secs_f64();
+    totals.notes.push(progress_note(settings, &acc));
+    totals
 }
 
 /// The checkpoint's plan (checked before any work): refused when it is one of the other
