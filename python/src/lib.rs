@@ -24,7 +24,7 @@ use photon::interrupt::{self, Signal};
 use photon::scene::Scene;
 use photon::tools::job::Job;
 use photon::tools::render::{self, RenderOptions};
-use photon::tools::render_passes::render_in_memory;
+use photon::tools::render_passes::{pass_end, render_in_memory};
 use photon::tools::ToolError;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -32,7 +32,7 @@ use pyo3::types::{PyDict, PyList, PyRange, PyRangeMethods, PyTuple};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 use std::sync::{mpsc, Arc};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 pyo3::create_exception!(
     photon,
@@ -188,17 +188,60 @@ fn load(py: Python<'_>, path: PathBuf, overrides: Option<&Bound<'_, PyDict>>) ->
     })
 }
 
-/// What the render thread reports to the calling one.
-#[derive(Default)]
+/// What the render thread reports to the calling one: how far the render is.
 struct Progress {
+    /// Tiles of the pass in progress: finished, and in all.
     done: AtomicU64,
-    total: AtomicU64,
+    tiles: AtomicU64,
+    /// Passes finished, and in all (0 until known; 1 for a render in one go).
+    passes_done: AtomicU64,
+    passes: AtomicU64,
+    /// A time budget's seconds: then the fraction is the time spent.
+    budget: Option<f64>,
+    start: Instant,
+}
+
+impl Progress {
+    fn new(budget: Option<f64>) -> Progress {
+        Progress {
+            done: AtomicU64::new(0),
+            tiles: AtomicU64::new(0),
+            passes_done: AtomicU64::new(0),
+            passes: AtomicU64::new(0),
+            budget,
+            start: Instant::now(),
+        }
+    }
+
+    /// The fraction of the render done, in [0, 1].
+    fn fraction(&self) -> f64 {
+        if let Some(b) = self.budget {
+            return (self.start.elapsed().as_secs_f64() / b).min(1.0);
+        }
+        let passes = self.passes.load(Relaxed);
+        if passes == 0 {
+            return 0.0;
+        }
+        let tiles = self.tiles.load(Relaxed);
+        let in_pass = match tiles {
+            0 => 0.0,
+            t => self.done.load(Relaxed).min(t) as f64 / t as f64,
+        };
+        let done = self.passes_done.load(Relaxed) as f64 + in_pass;
+        (done / passes as f64).min(1.0)
+    }
 }
 
 impl Observer for Progress {
     fn tile_done(&self, done: u64, total: u64) {
+        self.tiles.store(total, Relaxed);
         self.done.fetch_max(done, Relaxed);
-        self.total.store(total, Relaxed);
+    }
+
+    fn image(&self, _: &RgbImage, _: &[(&'static str, RgbImage)], _: u64) {
+        // After the pass's last tile: the next pass starts from none.
+        self.done.store(0, Relaxed);
+        self.passes_done.fetch_add(1, Relaxed);
     }
 }
 
@@ -212,6 +255,9 @@ fn render_scene(
     render::configure(&mut job, opts);
     let mut prepared = render::prepare(&mut job, opts)?;
     if opts.passes.active(opts.time.is_some()) {
+        let start = opts.passes.passes.as_ref().map_or(0, |r| r.start);
+        let passes = pass_end(opts, &job.settings) - start;
+        progress.passes.store(passes, Relaxed);
         let p = &prepared;
         Ok(render_in_memory(
             opts,
@@ -222,6 +268,7 @@ fn render_scene(
             progress,
         ))
     } else {
+        progress.passes.store(1, Relaxed);
         render::render_image(&job, &mut prepared, opts, progress)
     }
 }
@@ -236,8 +283,9 @@ fn to_array<'py>(py: Python<'py>, image: &RgbImage) -> PyResult<Bound<'py, PyAny
 #[pymethods]
 impl PyScene {
     /// Renders the scene; keywords are `photon render`'s options (see the module's doc).
-    /// `progress(done, total)` is called from this thread as tiles finish (at most every 50
-    /// ms); an exception it raises stops the render and propagates. Returns a dict of float32
+    /// `progress(fraction)` is called from this thread with the fraction done, in [0, 1] (of
+    /// the tiles, of the passes' tiles, or of a `time=` budget), at most every 50 ms when it
+    /// grew, and with 1.0 at the end; an exception it raises stops the render and propagates. Returns a dict of float32
     /// arrays (height, width, 3): "beauty" and the component layers, which sum to it.
     #[pyo3(signature = (progress=None, **options))]
     fn render<'py>(
@@ -248,10 +296,10 @@ impl PyScene {
     ) -> PyResult<Bound<'py, PyDict>> {
         let given = merged(&self.given, options)?;
         let opts = parse(&self.path, &given)?;
-        let watch = Progress::default();
+        let watch = Progress::new(opts.time);
         interrupt::take();
         let mut stop: Option<PyErr> = None;
-        let mut reported = (u64::MAX, u64::MAX);
+        let mut reported = -1.0f64;
         let out = std::thread::scope(|s| {
             let (tx, mut rx) = mpsc::channel::<()>();
             let (scene, opts, watch) = (&*self.scene, &opts, &watch);
@@ -268,11 +316,16 @@ impl PyScene {
                     (!matches!(wait, Err(mpsc::RecvTimeoutError::Timeout)), rx)
                 });
                 if stop.is_none() {
-                    let now = (watch.done.load(Relaxed), watch.total.load(Relaxed));
+                    // 1.0 only once the render has finished (a budget's clock runs out first).
+                    let now = if finished {
+                        1.0
+                    } else {
+                        watch.fraction().min(0.999)
+                    };
                     let called = match &progress {
-                        Some(cb) if now != reported && now.1 > 0 => {
+                        Some(cb) if now > reported => {
                             reported = now;
-                            cb.call1(now).map(drop)
+                            cb.call1((now,)).map(drop)
                         }
                         _ => Ok(()),
                     };

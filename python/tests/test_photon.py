@@ -105,19 +105,25 @@ def test_option_errors_are_the_cli_messages(glass):
         scene.render(progressive=3)
 
 
-def test_progress_callback_sees_every_tile(glass):
-    scene = photon.load(glass, resolution=(64, 64), spp=4)
+@pytest.mark.parametrize(
+    "options",
+    [dict(spp=8), dict(passes=6, pass_spp=2), dict(time=1.0)],
+    ids=["tiles", "passes", "time"],
+)
+def test_progress_grows_to_one(glass, options):
+    scene = photon.load(glass, resolution=(96, 96), integrator="path")
     calls = []
-    scene.render(progress=lambda done, total: calls.append((done, total)))
-    assert calls, "never called"
-    assert calls[-1][0] == calls[-1][1] > 0, calls
-    assert all(a[0] <= b[0] for a, b in zip(calls, calls[1:])), calls
+    scene.render(progress=calls.append, **options)
+    print(options, len(calls), [round(c, 3) for c in calls[:8]])
+    assert calls and calls[-1] == 1.0, calls
+    assert all(0.0 <= a < b <= 1.0 for a, b in zip(calls, calls[1:])), calls
+    assert len(calls) >= 2 and calls[0] < 1.0, calls
 
 
 def test_an_exception_in_the_callback_stops_the_render(glass):
     scene = photon.load(glass, resolution=(256, 256), spp=64, integrator="path")
 
-    def stop(done, total):
+    def stop(fraction):
         raise RuntimeError("enough")
 
     t0 = time.monotonic()
@@ -135,7 +141,7 @@ SIGINT_CHILD = textwrap.dedent(
     import sys, time, photon
     scene = photon.load(sys.argv[1], resolution=(512, 512), spp=4096, integrator="path")
     started = []
-    def progress(done, total):
+    def progress(fraction):
         if not started:
             started.append(1)
             print("started", flush=True)

@@ -116,6 +116,8 @@ struct Frame {
     dirty: Vec<[u32; 4]>,
     /// The render is over: send what is dirty and stop.
     done: bool,
+    /// The sender has given up (no viewer, or gone twice): observers skip their copies.
+    gone: bool,
 }
 
 struct Shared {
@@ -147,6 +149,7 @@ impl Display {
                 pixels: vec![0.0; n],
                 dirty: Vec::new(),
                 done: false,
+                gone: false,
             }),
             wake: Condvar::new(),
         });
@@ -157,6 +160,7 @@ impl Display {
             .ok();
         if sender.is_none() {
             say_err!("photon: warning: --display-server: cannot start its thread: no preview");
+            shared.lock().gone = true;
         }
         Display { shared, sender }
     }
@@ -173,6 +177,12 @@ impl Display {
         if let Some(t) = self.sender.take() {
             let _ = t.join();
         }
+    }
+
+    /// Whether a viewer may still see the image (false once the sender has given up): callers
+    /// can skip preparing what they would show.
+    pub fn watching(&self) -> bool {
+        !self.shared.lock().gone
     }
 
     /// Marks `rect` changed and wakes the sender.
@@ -192,6 +202,9 @@ impl Drop for Display {
 impl Observer for Display {
     fn tile_pixels(&self, x0: u32, y0: u32, x1: u32, y1: u32, px: &[Radiance]) {
         let mut f = self.shared.lock();
+        if f.gone {
+            return;
+        }
         let w = f.width as usize;
         let tw = (x1 - x0) as usize;
         for (i, r) in px.iter().enumerate() {
@@ -210,7 +223,7 @@ impl Observer for Display {
 
     fn image(&self, image: &RgbImage, layers: &[(&'static str, RgbImage)], _pass: u64) {
         let mut f = self.shared.lock();
-        if (image.width, image.height) != (f.width as usize, f.height as usize) {
+        if f.gone || (image.width, image.height) != (f.width as usize, f.height as usize) {
             return;
         }
         for (i, dst) in f.pixels.chunks_exact_mut(CHANNELS).enumerate() {
@@ -228,6 +241,13 @@ impl Observer for Display {
 /// The sender thread: connects, creates the image, then sends each changed rectangle (in tiles
 /// of at most 128 x 128 pixels, as tev's own client does) until the render is done.
 fn send_loop(shared: &Shared, server: &str, name: &str) {
+    send_frames(shared, server, name);
+    let mut f = shared.lock();
+    (f.gone, f.dirty) = (true, Vec::new());
+}
+
+/// [`send_loop`]'s work, until the render is done or the viewer is given up.
+fn send_frames(shared: &Shared, server: &str, name: &str) {
     let channels = channel_names();
     let (width, height) = {
         let f = shared.lock();

@@ -137,7 +137,7 @@ pub fn run(
                 &mut acc,
                 &mut |acc, out| {
                     totals.add_counts(out);
-                    if let Some(d) = display {
+                    if let Some(d) = display.filter(|d| d.watching()) {
                         use crate::integrator::Observer;
                         let (image, layers) = acc.mean();
                         d.image(&image, &layers, acc.passes.end - 1);
@@ -191,7 +191,7 @@ pub fn run(
 
 /// Where the passes stop: the range's end, else the file's samples per pixel in passes, else
 /// (with `--time`: the budget stops them) the limit.
-fn pass_end(opts: &RenderOptions, settings: &RenderSettings) -> u64 {
+pub fn pass_end(opts: &RenderOptions, settings: &RenderSettings) -> u64 {
     let start = opts.passes.passes.as_ref().map_or(0, |r| r.start);
     match (&opts.passes.passes, opts.time) {
         (Some(r), _) => r.end,
