@@ -67,12 +67,17 @@ const REFUSED: &[&str] = &[
 /// One option given as a keyword: its long flag name and the arguments it becomes.
 type Given = (String, Vec<String>);
 
-/// The arguments of the keyword `key=value` (`None`: the option is left out).
-fn arguments(key: &str, value: &Bound<'_, PyAny>) -> PyResult<Option<Given>> {
-    let long = match key {
+/// The long flag a keyword stands for (`max_depth` -> `max-depth`, `resolution` -> `res`).
+fn long_name(key: &str) -> String {
+    match key {
         "resolution" => "res".to_string(),
         k => k.replace('_', "-"),
-    };
+    }
+}
+
+/// The arguments of the keyword `key=value` (`None`: the option is left out).
+fn arguments(key: &str, value: &Bound<'_, PyAny>) -> PyResult<Option<Given>> {
+    let long = long_name(key);
     if REFUSED.contains(&long.as_str()) {
         return Err(PhotonError::new_err(format!(
             "{key}: a file or console option of the command line, not available here"
@@ -130,10 +135,7 @@ fn merged(given: &[Given], kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<G
     if let Some(kw) = kwargs {
         for (k, v) in kw.iter() {
             let key: String = k.extract()?;
-            let long = match key.as_str() {
-                "resolution" => "res".to_string(),
-                k => k.replace('_', "-"),
-            };
+            let long = long_name(&key);
             all.retain(|(l, _)| *l != long);
             if let Some(g) = arguments(&key, &v)? {
                 all.push(g);
