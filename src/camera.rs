@@ -23,6 +23,7 @@ use crate::scene::CameraDesc;
 #[derive(Clone, Debug)]
 pub struct Camera {
     world_from_camera: Mat4,
+    camera_from_world: Mat4,
     origin: Vec3,
     /// Centre and half extents of the screen window at z = 1 in camera space.
     centre: Vec2,
@@ -39,6 +40,7 @@ impl Camera {
         let (centre, window) = screen_window(desc, width, height);
         Camera {
             world_from_camera: desc.world_from_camera,
+            camera_from_world: desc.world_from_camera.inverse(),
             origin: desc.world_from_camera.transform_point3(Vec3::ZERO),
             centre: centre * tan_half,
             half: window * tan_half,
@@ -96,6 +98,40 @@ impl Camera {
 
     pub fn position(&self) -> Vec3 {
         self.origin
+    }
+
+    /// Where the pinhole camera sees world point `p`: its continuous raster position and
+    /// the factor that turns a density per unit of raster area into one per unit solid angle
+    /// at the camera (`1 / (A cos^3)`, `A` a pixel's area on the plane z = 1 in camera
+    /// space, `cos` the angle to the optical axis). `None` behind the camera or off the
+    /// screen window. What light paths splat to the film with (the camera's importance).
+    pub fn project(&self, p: Vec3) -> Option<(Vec2, f32)> {
+        let c = self.camera_from_world.transform_point3(p);
+        if c.z <= 0.0 || !c.is_finite() {
+            return None;
+        }
+        let d = c / c.z;
+        let ndc = Vec2::new(
+            ((d.x - self.centre.x) / self.half.x + 1.0) * 0.5,
+            (1.0 - (d.y - self.centre.y) / self.half.y) * 0.5,
+        );
+        if !(0.0..1.0).contains(&ndc.x) || !(0.0..1.0).contains(&ndc.y) {
+            return None;
+        }
+        let cos = c.z / c.length();
+        Some((ndc * self.res, self.raster_to_solid_angle(cos)))
+    }
+
+    /// `1 / (A cos^3)` of [`Self::project`] for a ray at angle `acos(cos)` to the axis.
+    pub fn raster_to_solid_angle(&self, cos: f32) -> f32 {
+        let pixel_area = 4.0 * self.half.x * self.half.y / (self.res.x * self.res.y);
+        1.0 / (pixel_area * cos * cos * cos)
+    }
+
+    /// The cosine between unit world direction `d` (leaving the camera) and the optical axis.
+    pub fn cos_to_axis(&self, d: Vec3) -> f32 {
+        let c = self.camera_from_world.transform_vector3(d);
+        c.z / c.length()
     }
 }
 

@@ -79,6 +79,43 @@ impl Filter {
     }
 }
 
+impl Filter {
+    /// The filter's radii in pixels.
+    pub fn radius(&self) -> Vec2 {
+        match self {
+            Filter::Box { radius }
+            | Filter::Triangle { radius }
+            | Filter::Tabulated { radius, .. } => *radius,
+        }
+    }
+
+    /// The density [`Self::sample`] draws offset `d` with (the filter normalised to
+    /// integrate to 1): the weight a light path's splat at raster offset `d` from a pixel's
+    /// centre gets in that pixel.
+    pub fn density(&self, d: Vec2) -> f32 {
+        let r = self.radius();
+        if d.x.abs() > r.x || d.y.abs() > r.y || r.x <= 0.0 || r.y <= 0.0 {
+            return 0.0;
+        }
+        match self {
+            Filter::Box { .. } => 1.0 / (4.0 * r.x * r.y),
+            Filter::Triangle { .. } => {
+                (r.x - d.x.abs()) * (r.y - d.y.abs()) / (r.x * r.x * r.y * r.y)
+            }
+            Filter::Tabulated { cdf_x, cdf_y, .. } => {
+                table_density(cdf_x, r.x, d.x) * table_density(cdf_y, r.y, d.y)
+            }
+        }
+    }
+}
+
+/// The piecewise-constant density of a tabulated CDF over `[-r, r]` at `x`.
+fn table_density(cdf: &[f32], r: f32, x: f32) -> f32 {
+    let bins = cdf.len() - 1;
+    let i = (((x + r) / (2.0 * r)) * bins as f32).clamp(0.0, bins as f32 - 1.0) as usize;
+    (cdf[i + 1] - cdf[i]) * bins as f32 / (2.0 * r)
+}
+
 /// Inverts the CDF of the tent `max(0, r - |x|)`.
 fn tent(u: f32, r: f32) -> f32 {
     if u < 0.5 {

@@ -78,6 +78,9 @@ pub fn recording_bytes(per_kind: usize) -> u64 {
         .saturating_mul(RECORDED_RAY_BYTES)
 }
 
+/// Bytes of one pixel's [`crate::film::Radiance`] (four RGB components).
+const RADIANCE_BYTES: u64 = std::mem::size_of::<crate::film::Radiance>() as u64;
+
 /// The parts of an estimate, in bytes.
 #[derive(Clone, Debug, Default)]
 pub struct Estimate {
@@ -135,6 +138,22 @@ pub fn estimate(
         let per = PILOT_MARGIN * stored / (global as f64 + caustic as f64).max(1.0);
         e.what +=
             &format!(", {global} + {caustic} photons x{per:.2} stored x {PHOTON_PEAK_BYTES} B");
+    }
+    if kind.technique().is_some() {
+        // One light subpath per pixel of the crop window, each keeping at most `maxdepth`
+        // vertices (plus the hash grid's 8 bytes and a splat of 32 bytes per vertex), and the
+        // iteration's film and sum.
+        let (w, h) = settings.image_size();
+        let paths = w as u64 * h as u64;
+        let per_path = settings.max_depth.max(1) as u64
+            * (crate::integrator::vcm::LIGHT_VERTEX_BYTES + 8 + 32)
+            + 4;
+        e.parts.push((
+            "light vertices",
+            paths
+                .saturating_mul(per_path)
+                .saturating_add(paths.saturating_mul(3 * RADIANCE_BYTES)),
+        ));
     }
     let tris = scene.triangle_count() as u64;
     let meshes = scene.meshes.len() as u64;

@@ -17,6 +17,7 @@ pub mod photon_mapper;
 pub mod photonmap;
 pub mod recorded;
 pub mod settings;
+pub mod vcm;
 pub mod wavefront;
 
 use crate::accel::Accel;
@@ -48,6 +49,25 @@ pub enum IntegratorKind {
     /// Reference path tracer: unbiased, next-event estimation with power-heuristic MIS,
     /// Russian roulette after 3 bounces (`direct` and `indirect` components).
     Path,
+    /// Vertex connection and merging: bidirectional connections and photon merging weighed
+    /// by multiple importance sampling, one light subpath per pixel per sample.
+    Vcm,
+    /// Bidirectional path tracing (VCM without merging).
+    Bdpt,
+    /// Light tracing: light subpaths splatted to the camera alone.
+    Lighttracer,
+}
+
+impl IntegratorKind {
+    /// The bidirectional technique of [`vcm`], for the three integrators it runs.
+    pub fn technique(self) -> Option<vcm::Technique> {
+        match self {
+            IntegratorKind::Vcm => Some(vcm::Technique::Vcm),
+            IntegratorKind::Bdpt => Some(vcm::Technique::Bdpt),
+            IntegratorKind::Lighttracer => Some(vcm::Technique::LightTracer),
+            _ => None,
+        }
+    }
 }
 
 /// Everything a render needs besides the scene.
@@ -77,6 +97,8 @@ pub struct RenderSettings {
     pub max_component: f32,
     /// The film's `whitebalance` as a matrix on every pixel (see [`film::white_balance`]).
     pub white_balance: Option<crate::math::Mat3>,
+    /// The bidirectional integrators' merge radius and schedule.
+    pub vcm: vcm::VcmSettings,
 }
 
 impl RenderSettings {
@@ -135,6 +157,7 @@ impl RenderSettings {
             max_component: scene.film.max_component,
             white_balance: (scene.film.white_balance != 0.0)
                 .then(|| film::white_balance(scene.film.white_balance)),
+            vcm: vcm::VcmSettings::default(),
         })
     }
 
@@ -373,37 +396,63 @@ pub fn render_prepared(
         .collect();
     let total = tiles.len() as u64;
     let done = AtomicU64::new(0);
-    let rendered: Vec<((u32, u32), Vec<Radiance>)> = tiles
-        .par_iter()
-        .map(|&(x0, y0)| {
-            let x1 = (x0 + TILE).min(w);
-            let y1 = (y0 + TILE).min(h);
-            if crate::interrupt::requested().is_some() {
-                // Stopping: the caller discards this render.
-                let n = ((x1 - x0) * (y1 - y0)) as usize;
-                return ((x0, y0), vec![Radiance::default(); n]);
-            }
-            let mut px = match kind {
-                IntegratorKind::Photonmap if ctx.photons.is_some() => {
-                    photon_mapper::render_tile(&ctx, x0, y0, x1, y1)
+    let rendered: Vec<((u32, u32), Vec<Radiance>)> = if let Some(t) = kind.technique() {
+        // One image from the bidirectional integrator, cut into tiles for the assembly below.
+        let mut px = vcm::render(&ctx, t, progress);
+        if settings.imaging_ratio != 1.0 {
+            px.iter_mut().for_each(|r| *r = *r * settings.imaging_ratio);
+        }
+        if let Some(m) = settings.white_balance {
+            px.iter_mut().for_each(|r| *r = r.map(|v| m * v));
+        }
+        let wu = (w - bx0) as usize;
+        tiles
+            .iter()
+            .map(|&(x0, y0)| {
+                let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
+                let tile: Vec<Radiance> = tile_pixels(x0, y0, x1, y1)
+                    .map(|(x, y)| px[(y - by0) as usize * wu + (x - bx0) as usize])
+                    .collect();
+                progress.tile_pixels(x0 - bx0, y0 - by0, x1 - bx0, y1 - by0, &tile);
+                ((x0, y0), tile)
+            })
+            .collect()
+    } else {
+        tiles
+            .par_iter()
+            .map(|&(x0, y0)| {
+                let x1 = (x0 + TILE).min(w);
+                let y1 = (y0 + TILE).min(h);
+                if crate::interrupt::requested().is_some() {
+                    // Stopping: the caller discards this render.
+                    let n = ((x1 - x0) * (y1 - y0)) as usize;
+                    return ((x0, y0), vec![Radiance::default(); n]);
                 }
-                IntegratorKind::Direct | IntegratorKind::Photonmap => {
-                    direct::render_tile(&ctx, x0, y0, x1, y1)
+                let mut px = match kind {
+                    IntegratorKind::Photonmap if ctx.photons.is_some() => {
+                        photon_mapper::render_tile(&ctx, x0, y0, x1, y1)
+                    }
+                    IntegratorKind::Direct | IntegratorKind::Photonmap => {
+                        direct::render_tile(&ctx, x0, y0, x1, y1)
+                    }
+                    IntegratorKind::Path => path::render_tile(&ctx, x0, y0, x1, y1),
+                    IntegratorKind::Vcm | IntegratorKind::Bdpt | IntegratorKind::Lighttracer => {
+                        unreachable!("rendered by vcm::render above")
+                    }
+                };
+                // The film's imaging ratio and white balance.
+                if settings.imaging_ratio != 1.0 {
+                    px.iter_mut().for_each(|r| *r = *r * settings.imaging_ratio);
                 }
-                IntegratorKind::Path => path::render_tile(&ctx, x0, y0, x1, y1),
-            };
-            // The film's imaging ratio and white balance.
-            if settings.imaging_ratio != 1.0 {
-                px.iter_mut().for_each(|r| *r = *r * settings.imaging_ratio);
-            }
-            if let Some(m) = settings.white_balance {
-                px.iter_mut().for_each(|r| *r = r.map(|v| m * v));
-            }
-            progress.tile_pixels(x0 - bx0, y0 - by0, x1 - bx0, y1 - by0, &px);
-            progress.tile_done(done.fetch_add(1, Ordering::Relaxed) + 1, total);
-            ((x0, y0), px)
-        })
-        .collect();
+                if let Some(m) = settings.white_balance {
+                    px.iter_mut().for_each(|r| *r = r.map(|v| m * v));
+                }
+                progress.tile_pixels(x0 - bx0, y0 - by0, x1 - bx0, y1 - by0, &px);
+                progress.tile_done(done.fetch_add(1, Ordering::Relaxed) + 1, total);
+                ((x0, y0), px)
+            })
+            .collect()
+    };
 
     // Assemble the tiles into the combined image and one image per component (the pixels of
     // the crop window).
@@ -490,6 +539,7 @@ pub fn render_for_time(
     loop {
         let t = Instant::now();
         s.seed = settings.seed.wrapping_add(pass);
+        s.vcm.first = spp_done;
         let out = render_prepared(scene, accel, &s, kind, photons.as_ref(), UNOBSERVED);
         let stopping = crate::interrupt::requested().is_some();
         if stopping && total.is_some() {

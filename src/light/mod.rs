@@ -227,8 +227,50 @@ impl Lights {
         self.sample_light(meshes, i, pmf, p, u)
     }
 
+    /// Picks a light in proportion to power: its index and probability.
+    pub fn pick(&self, u_sel: f32) -> Option<(usize, f32)> {
+        self.select.sample(u_sel)
+    }
+
+    /// Whether light `i` is an area light, point or spot light (a position a bidirectional
+    /// path can start from); distant and infinite lights are not.
+    pub fn is_finite(&self, i: usize) -> bool {
+        !matches!(self.emitters[i], Emitter::Distant(_) | Emitter::Infinite(_))
+    }
+
+    /// Whether light `i` sits at one point (point and spot lights).
+    pub fn is_delta_position(&self, i: usize) -> bool {
+        matches!(self.emitters[i], Emitter::Point(_) | Emitter::Spot(_))
+    }
+
+    /// The densities with which [`Self::emit`] produces a photon of finite light `i` leaving
+    /// a point with geometric normal `n` (zero for point-like lights) along unit `dir`: (the
+    /// origin's area density, 1 for a point-like light; the direction's solid-angle density).
+    /// pbrt-v4's `PDF_Le`; `(0, 0)` for distant and infinite lights.
+    pub fn emit_pdfs(&self, i: usize, n: Vec3, dir: Vec3) -> (f32, f32) {
+        match &self.emitters[i] {
+            Emitter::Area(a) => {
+                let cos = n.dot(dir);
+                if a.area() <= 0.0 || (cos <= 0.0 && !a.two_sided) {
+                    return (0.0, 0.0);
+                }
+                let sides = if a.two_sided { 2.0 } else { 1.0 };
+                (1.0 / a.area(), cos.abs() / (PI * sides))
+            }
+            Emitter::Point(_) => (1.0, 1.0 / (4.0 * PI)),
+            Emitter::Spot(l) => {
+                let cos_end = l.cos_falloff_end;
+                if l.dir.dot(dir) < cos_end || cos_end >= 1.0 {
+                    return (1.0, 0.0);
+                }
+                (1.0, 1.0 / (2.0 * PI * (1.0 - cos_end)))
+            }
+            Emitter::Distant(_) | Emitter::Infinite(_) => (0.0, 0.0),
+        }
+    }
+
     /// A point `u` on light `i`, chosen with probability `pmf`, as seen from `p`.
-    fn sample_light(
+    pub fn sample_light(
         &self,
         meshes: &[Mesh],
         i: usize,

@@ -36,8 +36,10 @@ pub struct Overrides {
     pub light_samples: Option<u32>,
     /// The photon mapper's settings given as flags.
     pub photon: PhotonOverrides,
-    /// The progressive schedule's alpha.
+    /// The progressive schedule's alpha (photon mapper and VCM).
     pub alpha: Option<f32>,
+    /// VCM's initial merge radius, a fraction of the scene's bounding-sphere radius.
+    pub merge_radius: Option<f32>,
     /// Progressive photon mapping (also switched on by the file).
     pub progressive: bool,
     /// Samples per pixel of each pass.
@@ -129,6 +131,10 @@ impl<'a> Job<'a> {
         s.photon.follow_depth(s.max_depth);
         if let Some(a) = o.alpha {
             s.photon.alpha = a; // in range: checked by its parser
+            s.vcm.alpha = a;
+        }
+        if let Some(r) = o.merge_radius {
+            s.vcm.radius = r;
         }
         s.photon.progressive |= o.progressive;
         if let Some(n) = o.pass_spp {

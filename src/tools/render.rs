@@ -80,6 +80,10 @@ pub struct RenderOptions {
     /// or passes are added (pbrt-v4's flag); the render never waits for the viewer.
     #[arg(long, value_name = "HOST:PORT", value_parser = super::display::parse_server)]
     pub display_server: Option<String>,
+    /// VCM's initial merge radius, as a fraction of the radius of the scene's bounding
+    /// sphere (default 0.003); it shrinks with the samples by `--alpha` (default 0.75 for VCM).
+    #[arg(long, value_parser = float_in(1e-6, 1.0, false))]
+    pub merge_radius: Option<f32>,
     #[command(flatten)]
     pub photon: crate::integrator::settings::PhotonOverrides,
     #[command(flatten)]
@@ -175,6 +179,7 @@ impl RenderOptions {
             light_samples: Some(self.light_samples),
             photon: self.photon.clone(),
             alpha: self.passes.alpha,
+            merge_radius: self.merge_radius,
             progressive: self.passes.progressive,
             pass_spp: self.passes.pass_spp,
         }
@@ -205,6 +210,14 @@ pub fn configure(job: &mut Job, opts: &RenderOptions) {
 /// maps, builds the accelerator, measures pass 1 with a pilot trace and checks again with
 /// the photon maps. `photon render` and the Python module both start here.
 pub fn prepare(job: &mut Job, opts: &RenderOptions) -> Result<Prepared, ToolError> {
+    if job.integrator.technique().is_some() {
+        let lights = job.scene.emitters();
+        let lens = job.scene.camera.lens_radius > 0.0;
+        if let Some(why) = integrator::vcm::unsupported(&lights, job.scene.lights.len(), lens) {
+            let name = format!("{:?}", job.integrator).to_lowercase();
+            return Err(ToolError(format!("--integrator {name}: {why}")));
+        }
+    }
     let cli = opts.overrides().from_cli();
     let budget = crate::limits::Budget::resolve(opts.max_memory);
     job.check_memory(&job.settings, &budget, cli)

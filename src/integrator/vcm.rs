@@ -1,0 +1,901 @@
+//! Vertex connection and merging (`photon render --integrator vcm`) and its special cases
+//! `bdpt` (connections only) and `lighttracer` (light paths splatted to the camera).
+//!
+//! ```text
+//! photon render scene.pbrt --integrator vcm --spp 64 --merge-radius 0.003 --alpha 0.75
+//! ```
+//! Georgiev, Křivánek, Davidovič & Slusallek, "Light transport simulation with vertex
+//! connection and merging" (2012), in the formulation of their technical report
+//! ("Implementing vertex connection and merging"): each iteration (one per sample per pixel)
+//! traces one light subpath per pixel of the image, keeps its non-delta vertices, and splats
+//! each of them to the camera (light tracing); then every pixel traces one camera subpath
+//! that, at each non-delta vertex, takes a light sample (next-event estimation), connects to
+//! every vertex of the light subpath with its own index (bidirectional connections) and
+//! merges with the light vertices of all subpaths within the merge radius (photon density
+//! estimation, from a hash grid). Multiple importance sampling weighs every technique by the
+//! balance heuristic through the recursive partial sums `dVCM`, `dVC`, `dVM` of each subpath,
+//! so no technique's path is counted twice. The merge radius shrinks with the iteration `i`
+//! as `r_i = r_0 / (i + 1)^((1 - alpha) / 2)` (progressive photon mapping), so the estimate
+//! converges; `r_0` is `--merge-radius` times the radius of the scene's bounding sphere.
+//!
+//! `bdpt` turns merging off (the weights then are bidirectional path tracing's); `lighttracer`
+//! traces light subpaths only, splatting their every vertex (the light's own point included)
+//! to the camera with weight 1, so paths the camera sees only through delta bounces are
+//! missing from it (as from pbrt-v4's `lighttracer`).
+//!
+//! Conventions: path lengths count segments (a camera ray that hits an emitter is a path of
+//! length 1), so `maxdepth` bounces allow `maxdepth + 1` segments. Russian roulette continues
+//! a subpath with probability `min(1, max reflectance)` of the BSDF, folded into both pdfs as
+//! the technical report does. Light subpaths carry importance: their BSDF values take pbrt-v4's
+//! correction for shading normals. The coated BSDFs' stochastic `f` and `pdf` are used as they
+//! are (their estimates are unbiased; the weights then sum to one only in expectation).
+//!
+//! Determinism: subpath `k` of iteration `i` draws from its own sample stream, camera
+//! subpaths from their pixel's; splats are gathered per chunk of light subpaths and added to
+//! the film in chunk order, so an image does not depend on the number of threads.
+//!
+//! Not handled (a located error before rendering): distant and infinite lights, and thin
+//! lens cameras.
+use super::RenderContext;
+use crate::accel::{Hit, RayKind};
+use crate::bsdf::{Bsdf, TransportMode};
+use crate::film::{Component, Radiance};
+use crate::interaction::SurfaceInteraction;
+use crate::math::{spawn_origin, Frame, Ray, Vec2, Vec3};
+use crate::sampling::Sampler;
+use rayon::prelude::*;
+use std::sync::atomic::Ordering;
+
+/// The three bidirectional integrators.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Technique {
+    LightTracer,
+    Bdpt,
+    Vcm,
+}
+
+/// The settings of the bidirectional integrators.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VcmSettings {
+    /// The initial merge radius as a fraction of the scene's bounding-sphere radius.
+    pub radius: f32,
+    /// The radius schedule's alpha in (0, 1).
+    pub alpha: f32,
+    /// Iterations rendered before this render (a time budget renders in several calls):
+    /// the radius schedule continues from there.
+    pub first: u32,
+}
+
+impl Default for VcmSettings {
+    fn default() -> Self {
+        VcmSettings {
+            radius: 0.003,
+            alpha: 0.75,
+            first: 0,
+        }
+    }
+}
+
+/// Light subpaths traced together; their splats reach the film in chunk order.
+const CHUNK: usize = 256;
+
+/// Salt of the light subpaths' sample streams (camera subpaths use their pixel's stream).
+const LIGHT_STREAM: u64 = 0x6c69_6768_7420_7061;
+
+/// Sample dimensions per light-subpath vertex (lobe 1, direction 2) after the emission's 5.
+const LIGHT_DIMS_PER_VERTEX: u32 = 3;
+
+/// Sample dimensions per camera-subpath vertex: light choice 1, light point 2, lobe 1,
+/// direction 2 (after the camera's).
+const CAMERA_DIMS_PER_VERTEX: u32 = 6;
+
+/// Why a scene cannot be rendered by these integrators.
+pub fn unsupported(
+    ctx_lights: &crate::light::Lights,
+    n_lights: usize,
+    lens: bool,
+) -> Option<String> {
+    if lens {
+        return Some("needs a pinhole camera (\"lensradius\" 0)".into());
+    }
+    (0..n_lights)
+        .any(|i| !ctx_lights.is_finite(i))
+        .then(|| "does not handle distant or infinite lights yet".into())
+}
+
+/// What one iteration's MIS weights need (the technical report's eta_VCM and its factors).
+#[derive(Clone, Copy, Debug)]
+struct Weights {
+    use_vc: bool,
+    use_vm: bool,
+    light_only: bool,
+    /// eta_VCM when merging is on, else 0.
+    vm_factor: f32,
+    /// 1 / eta_VCM when connections are on, else 0.
+    vc_factor: f32,
+    /// 1 / (pi r^2 N): what a merged light vertex's throughput is scaled by.
+    vm_norm: f32,
+    radius2: f32,
+    /// Light subpaths per iteration.
+    n_light: f32,
+    /// Segments a full path may have.
+    max_len: u32,
+}
+
+impl Weights {
+    fn new(t: Technique, radius: f32, n_light: usize, max_depth: u32) -> Weights {
+        let (use_vc, use_vm, light_only) = match t {
+            Technique::LightTracer => (false, false, true),
+            Technique::Bdpt => (true, false, false),
+            Technique::Vcm => (true, true, false),
+        };
+        let radius2 = radius * radius;
+        let eta = std::f32::consts::PI * radius2 * n_light as f32;
+        Weights {
+            use_vc,
+            use_vm,
+            light_only,
+            vm_factor: if use_vm { eta } else { 0.0 },
+            vc_factor: if use_vc { 1.0 / eta } else { 0.0 },
+            vm_norm: 1.0 / eta,
+            radius2,
+            n_light: n_light as f32,
+            max_len: max_depth + 1,
+        }
+    }
+}
+
+/// A subpath as it is extended: the ray to its next vertex and its MIS partial sums.
+#[derive(Clone, Copy, Debug)]
+struct SubPath {
+    ray: Ray,
+    beta: Vec3,
+    /// Segments so far (1 after the first ray).
+    len: u32,
+    /// Every bounce so far was a delta one.
+    specular: bool,
+    dvcm: f32,
+    dvc: f32,
+    dvm: f32,
+}
+
+/// A vertex of a light subpath kept for connections and merging.
+#[derive(Clone, Copy, Debug)]
+struct LightVertex {
+    p: Vec3,
+    err: Vec3,
+    ng: Vec3,
+    frame: Frame,
+    /// Towards the previous vertex, in the shading frame and in world space.
+    wo: Vec3,
+    wo_world: Vec3,
+    bsdf: Bsdf,
+    beta: Vec3,
+    len: u32,
+    dvcm: f32,
+    dvc: f32,
+    dvm: f32,
+}
+
+/// The bytes one kept light vertex takes (for the memory estimate).
+pub const LIGHT_VERTEX_BYTES: u64 = std::mem::size_of::<LightVertex>() as u64;
+
+/// A surface point with its BSDF, for evaluating it towards world directions.
+#[derive(Clone, Copy)]
+struct Vertex {
+    ng: Vec3,
+    frame: Frame,
+    wo: Vec3,
+    wo_world: Vec3,
+    bsdf: Bsdf,
+}
+
+/// A BSDF evaluation towards a world direction (`cos` with the shading normal; `pdf` of
+/// sampling that direction, `pdf_rev` of sampling `wo` from it; both times the roulette's
+/// continuation probability).
+struct Eval {
+    f: Vec3,
+    cos: f32,
+    pdf: f32,
+    pdf_rev: f32,
+}
+
+impl Vertex {
+    fn of(v: &LightVertex) -> Vertex {
+        Vertex {
+            ng: v.ng,
+            frame: v.frame,
+            wo: v.wo,
+            wo_world: v.wo_world,
+            bsdf: v.bsdf,
+        }
+    }
+
+    fn eval(&self, wi_world: Vec3, mode: TransportMode) -> Option<Eval> {
+        let wi = self.frame.to_local(wi_world);
+        let mut f = self.bsdf.f(self.wo, wi, mode);
+        if mode == TransportMode::Importance {
+            f *= shading_correction(self.wo_world, wi_world, self.frame.n, self.ng);
+        }
+        if f.max_element() <= 0.0 || !f.is_finite() {
+            return None;
+        }
+        let cont = continuation(&self.bsdf);
+        Some(Eval {
+            f,
+            cos: wi.z.abs(),
+            pdf: self.bsdf.pdf(self.wo, wi) * cont,
+            pdf_rev: self.bsdf.pdf(wi, self.wo) * cont,
+        })
+    }
+}
+
+/// pbrt-v4's correction of importance transport for shading normals (Veach 1997, 5.3):
+/// `|wo.ns| |wi.ng| / (|wo.ng| |wi.ns|)`.
+fn shading_correction(wo: Vec3, wi: Vec3, ns: Vec3, ng: Vec3) -> f32 {
+    let den = wo.dot(ng).abs() * wi.dot(ns).abs();
+    if den == 0.0 {
+        return 0.0;
+    }
+    wo.dot(ns).abs() * wi.dot(ng).abs() / den
+}
+
+/// The probability Russian roulette continues a subpath at a surface with this BSDF.
+fn continuation(bsdf: &Bsdf) -> f32 {
+    bsdf.reflectance_estimate().max_element().clamp(0.05, 1.0)
+}
+
+/// A light vertex's film contributions: `(raster position, value, component)`.
+type Splat = (Vec2, Vec3, Component);
+
+/// What one chunk of light subpaths leaves behind.
+#[derive(Default)]
+struct ChunkOut {
+    vertices: Vec<LightVertex>,
+    /// Per subpath, the end of its vertices in `vertices` (relative to the chunk).
+    ends: Vec<u32>,
+    splats: Vec<Splat>,
+}
+
+/// Renders the crop window's pixels with `technique`: `ctx.settings.spp` iterations, each a
+/// light subpath per pixel and a camera subpath per pixel; returns the pixels' means in
+/// row-major order of the crop window. `progress(done, total)` after each iteration.
+pub fn render(
+    ctx: &RenderContext,
+    technique: Technique,
+    progress: &dyn super::Observer,
+) -> Vec<Radiance> {
+    let s = &ctx.settings;
+    let [bx0, bx1, by0, by1] = s.pixel_bounds();
+    let (w, h) = ((bx1 - bx0) as usize, (by1 - by0) as usize);
+    let n = w * h;
+    let iterations = s.spp.max(1);
+    let mut sum = vec![Radiance::default(); n];
+    let (_, scene_radius) = ctx.lights.scene_sphere();
+    let r0 = (s.vcm.radius * scene_radius).max(1e-7);
+    for it in 0..iterations {
+        if crate::interrupt::requested().is_some() {
+            break;
+        }
+        let k = s.vcm.first.saturating_add(it + 1) as f32;
+        let radius = r0 / k.powf(0.5 * (1.0 - s.vcm.alpha));
+        let wt = Weights::new(technique, radius.max(1e-7), n, s.max_depth);
+        // Light subpaths, chunk by chunk in parallel; assembled in chunk order.
+        let chunks: Vec<ChunkOut> = (0..n.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let mut out = ChunkOut::default();
+                for k in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                    trace_light(ctx, &wt, k as u64, it, &mut out);
+                    out.ends.push(out.vertices.len() as u32);
+                }
+                out
+            })
+            .collect();
+        let mut vertices = Vec::new();
+        let mut ends = Vec::with_capacity(n);
+        for c in &chunks {
+            let base = vertices.len() as u32;
+            ends.extend(c.ends.iter().map(|e| e + base));
+            vertices.extend_from_slice(&c.vertices);
+        }
+        let mut film = vec![Radiance::default(); n];
+        for c in &chunks {
+            for &(p, v, comp) in &c.splats {
+                splat(ctx, &mut film, (bx0, by0, w, h), p, v, comp);
+            }
+        }
+        drop(chunks);
+        let grid = wt.use_vm.then(|| Grid::new(&vertices, radius));
+        if !wt.light_only {
+            let rows: Vec<Vec<Radiance>> = (0..h)
+                .into_par_iter()
+                .map(|y| {
+                    (0..w)
+                        .map(|x| {
+                            let k = y * w + x;
+                            let start = if k == 0 { 0 } else { ends[k - 1] as usize };
+                            let own = &vertices[start..ends[k] as usize];
+                            let (px, py) = (bx0 + x as u32, by0 + y as u32);
+                            trace_camera(ctx, &wt, (px, py), it, own, &vertices, grid.as_ref())
+                        })
+                        .collect()
+                })
+                .collect();
+            for (y, row) in rows.into_iter().enumerate() {
+                for (x, r) in row.into_iter().enumerate() {
+                    film[y * w + x] += r;
+                }
+            }
+        }
+        for (acc, f) in sum.iter_mut().zip(&film) {
+            *acc += *f;
+        }
+        progress.tile_done(it as u64 + 1, iterations as u64);
+    }
+    let scale = 1.0 / iterations as f32;
+    sum.iter().map(|r| *r * scale).collect()
+}
+
+/// Adds `v` at continuous raster position `p` to the pixels whose filter covers it, each
+/// weighted by the filter's density there.
+fn splat(
+    ctx: &RenderContext,
+    film: &mut [Radiance],
+    (bx0, by0, w, h): (u32, u32, usize, usize),
+    p: Vec2,
+    v: Vec3,
+    comp: Component,
+) {
+    let r = ctx.filter.radius();
+    let x0 = (p.x - r.x - 0.5).ceil().max(bx0 as f32) as i64;
+    let x1 = (p.x + r.x - 0.5).floor() as i64;
+    let y0 = (p.y - r.y - 0.5).ceil().max(by0 as f32) as i64;
+    let y1 = (p.y + r.y - 0.5).floor() as i64;
+    for y in y0..=y1.min(by0 as i64 + h as i64 - 1) {
+        for x in x0..=x1.min(bx0 as i64 + w as i64 - 1) {
+            let d = p - Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            let wgt = ctx.filter.density(d);
+            if wgt > 0.0 {
+                let k = (y as usize - by0 as usize) * w + (x as usize - bx0 as usize);
+                film[k][comp] += v * wgt;
+            }
+        }
+    }
+}
+
+/// The component a path with `bounces` scattering events belongs to.
+fn component(bounces: u32) -> Component {
+    if bounces <= 1 {
+        Component::Direct
+    } else {
+        Component::Indirect
+    }
+}
+
+/// The next hit of `ray` and the interaction there, with the BSDF.
+fn next_vertex<'s>(
+    ctx: &'s RenderContext,
+    kind: RayKind,
+    ray: &Ray,
+) -> Option<(Hit, SurfaceInteraction<'s>, Bsdf)> {
+    let hit = ctx.accel.intersect(kind, ray)?;
+    let mut si = SurfaceInteraction::new(ctx.scene, &hit, ray);
+    let bsdf = si.bsdf(ctx.scene, ctx.settings.footprint());
+    Some((hit, si, bsdf))
+}
+
+/// Whether the segment between two surface points (each with its error bound and geometric
+/// normal) is free.
+fn visible(ctx: &RenderContext, a: (Vec3, Vec3, Vec3), b: (Vec3, Vec3, Vec3)) -> bool {
+    let side = |n: Vec3, d: Vec3| if n.dot(d) >= 0.0 { n } else { -n };
+    let d = b.0 - a.0;
+    let o = spawn_origin(a.0, a.1, side(a.2, d));
+    let t = if b.2 == Vec3::ZERO {
+        b.0
+    } else {
+        spawn_origin(b.0, b.1, side(b.2, -d))
+    };
+    ctx.counters.shadow_rays.fetch_add(1, Ordering::Relaxed);
+    !ctx.accel
+        .occluded(RayKind::Shadow, &Ray::segment(o, t - o, 1.0 - 1e-4))
+}
+
+/// Continues a subpath by sampling the BSDF at `v` (the technical report's
+/// `SampleScattering`): updates the throughput and the partial sums; `false` when it ends.
+fn scatter(
+    path: &mut SubPath,
+    v: &Vertex,
+    wt: &Weights,
+    sampler: &mut Sampler,
+    mode: TransportMode,
+) -> bool {
+    let uc = sampler.next_1d();
+    let u = sampler.next_2d();
+    let Some(s) = v.bsdf.sample(v.wo, uc, u, mode) else {
+        return false;
+    };
+    let cont = continuation(&v.bsdf);
+    // The roulette's number: a hash of the sample, so that it needs no dimension of its own.
+    let u_rr = crate::sampling::to_unit(crate::sampling::hash(&[
+        uc.to_bits() as u64,
+        u.x.to_bits() as u64,
+        u.y.to_bits() as u64,
+        path.len as u64,
+    ]));
+    if u_rr >= cont {
+        return false;
+    }
+    let wi_world = v.frame.to_world(s.wi);
+    let cos_out = s.wi.z.abs();
+    let mut f = s.f;
+    if mode == TransportMode::Importance {
+        f *= shading_correction(v.wo_world, wi_world, v.frame.n, v.ng);
+    }
+    let beta = path.beta * f * (cos_out / (s.pdf * cont));
+    if !beta.is_finite() || beta.max_element() <= 0.0 {
+        return false;
+    }
+    if s.specular {
+        path.dvcm = 0.0;
+        path.dvc *= cos_out;
+        path.dvm *= cos_out;
+    } else {
+        let pdf = v.bsdf.mis_pdf(v.wo, &s) * cont;
+        let pdf_rev = v.bsdf.pdf(s.wi, v.wo) * cont;
+        if pdf <= 0.0 {
+            return false;
+        }
+        path.dvc = cos_out / pdf * (path.dvc * pdf_rev + path.dvcm + wt.vm_factor);
+        path.dvm = cos_out / pdf * (path.dvm * pdf_rev + path.dvcm * wt.vc_factor + 1.0);
+        path.dvcm = 1.0 / pdf;
+        path.specular = false;
+    }
+    path.beta = beta;
+    path.ray.d = wi_world;
+    path.len += 1;
+    true
+}
+
+/// Finishes the partial sums at a new vertex: the squared distance of the segment reaching
+/// it and the cosine there.
+fn arrive(path: &mut SubPath, hit_t: f32, cos_in: f32) {
+    let d2 = (hit_t * path.ray.d.length()).powi(2);
+    path.dvcm *= d2;
+    let c = cos_in.max(1e-8);
+    path.dvcm /= c;
+    path.dvc /= c;
+    path.dvm /= c;
+}
+
+/// Traces light subpath `k` of iteration `it`: keeps its non-delta vertices in `out` and
+/// splats their connections to the camera.
+fn trace_light(ctx: &RenderContext, wt: &Weights, k: u64, it: u32, out: &mut ChunkOut) {
+    let s = &ctx.settings;
+    let mut sampler = Sampler::new(s.pattern, s.seed ^ LIGHT_STREAM, k, it, s.spp);
+    let (u_sel, u_pos, u_dir) = (sampler.next_1d(), sampler.next_2d(), sampler.next_2d());
+    let lights = ctx.lights;
+    let Some((i, pmf)) = lights.pick(u_sel) else {
+        return;
+    };
+    let Some(e) = lights.emit(&ctx.scene.meshes, i, u_pos, u_dir) else {
+        return;
+    };
+    let (pdf_pos, pdf_dir) = lights.emit_pdfs(i, e.n, e.dir);
+    if pdf_pos <= 0.0 || pdf_dir <= 0.0 {
+        return;
+    }
+    let emission_pdf = pmf * pdf_pos * pdf_dir;
+    let direct_pdf = pmf * pdf_pos;
+    let delta = lights.is_delta_position(i);
+    let cos_light = if delta { 1.0 } else { e.n.dot(e.dir).abs() };
+    if wt.light_only && !delta {
+        splat_emitter(ctx, wt, i, pmf * pdf_pos, &e, out);
+    }
+    let dvc = if delta { 0.0 } else { cos_light / emission_pdf };
+    let o = if e.n == Vec3::ZERO {
+        e.p
+    } else {
+        spawn_origin(e.p, e.err, if e.n.dot(e.dir) >= 0.0 { e.n } else { -e.n })
+    };
+    let mut path = SubPath {
+        ray: Ray::new(o, e.dir),
+        beta: e.flux / pmf,
+        len: 1,
+        specular: true,
+        dvcm: direct_pdf / emission_pdf,
+        dvc,
+        dvm: dvc * wt.vc_factor,
+    };
+    while let Some((hit, si, bsdf)) = next_vertex(ctx, RayKind::Photon, &path.ray) {
+        arrive(&mut path, hit.t, si.wo.z.abs());
+        let v = Vertex {
+            ng: si.ng,
+            frame: si.frame,
+            wo: si.wo,
+            wo_world: si.wo_world,
+            bsdf,
+        };
+        if bsdf.flags().has_non_specular() {
+            let lv = LightVertex {
+                p: si.p,
+                err: si.err,
+                ng: si.ng,
+                frame: si.frame,
+                wo: si.wo,
+                wo_world: si.wo_world,
+                bsdf,
+                beta: path.beta,
+                len: path.len,
+                dvcm: path.dvcm,
+                dvc: path.dvc,
+                dvm: path.dvm,
+            };
+            if wt.use_vc || wt.use_vm {
+                out.vertices.push(lv);
+            }
+            if wt.use_vc || wt.light_only {
+                connect_to_camera(ctx, wt, &lv, out);
+            }
+        }
+        if path.len + 2 > wt.max_len {
+            break;
+        }
+        sampler.set_dimension(5 + (path.len - 1) * LIGHT_DIMS_PER_VERTEX);
+        if !scatter(&mut path, &v, wt, &mut sampler, TransportMode::Importance) {
+            break;
+        }
+        path.ray = si.spawn_ray(path.ray.d);
+    }
+}
+
+/// The light's own point seen by the camera (light tracing only): `pdf_a` is the density of
+/// the point (light choice included).
+fn splat_emitter(
+    ctx: &RenderContext,
+    wt: &Weights,
+    i: usize,
+    pdf_a: f32,
+    e: &crate::light::Emission,
+    out: &mut ChunkOut,
+) {
+    let Some((raster, to_solid)) = ctx.camera.project(e.p) else {
+        return;
+    };
+    let to_cam = ctx.camera.position() - e.p;
+    let d2 = to_cam.length_squared();
+    let dir = to_cam / d2.sqrt();
+    let le = ctx.lights.le(i, e.n, dir);
+    if le.max_element() <= 0.0 {
+        return;
+    }
+    let to_surface = to_solid * e.n.dot(dir).abs() / d2;
+    let v = le * (to_surface / (pdf_a * wt.n_light));
+    if v.is_finite()
+        && visible(
+            ctx,
+            (e.p, e.err, e.n),
+            (ctx.camera.position(), Vec3::ZERO, Vec3::ZERO),
+        )
+    {
+        out.splats.push((raster, v, Component::Direct));
+    }
+}
+
+/// Connects light vertex `lv` to the camera (the report's `ConnectToCamera`).
+fn connect_to_camera(ctx: &RenderContext, wt: &Weights, lv: &LightVertex, out: &mut ChunkOut) {
+    let Some((raster, to_solid)) = ctx.camera.project(lv.p) else {
+        return;
+    };
+    let cam = ctx.camera.position();
+    let to_cam = cam - lv.p;
+    let d2 = to_cam.length_squared();
+    let dir = to_cam / d2.sqrt();
+    let Some(ev) = Vertex::of(lv).eval(dir, TransportMode::Importance) else {
+        return;
+    };
+    let to_surface = to_solid * ev.cos / d2;
+    let w = if wt.light_only {
+        1.0
+    } else {
+        let w_light = (to_surface / wt.n_light) * (wt.vm_factor + lv.dvcm + lv.dvc * ev.pdf_rev);
+        1.0 / (1.0 + w_light)
+    };
+    let v = lv.beta * ev.f * (w * to_surface / wt.n_light);
+    if !v.is_finite() || v.max_element() <= 0.0 {
+        return;
+    }
+    if visible(ctx, (lv.p, lv.err, lv.ng), (cam, Vec3::ZERO, Vec3::ZERO)) {
+        out.splats.push((raster, v, component(lv.len)));
+    }
+}
+
+/// Traces the camera subpath of pixel `(x, y)` in iteration `it`: emission it hits, light
+/// samples, connections to `own` (its light subpath's vertices) and merges with `all`.
+fn trace_camera(
+    ctx: &RenderContext,
+    wt: &Weights,
+    (x, y): (u32, u32),
+    it: u32,
+    own: &[LightVertex],
+    all: &[LightVertex],
+    grid: Option<&Grid>,
+) -> Radiance {
+    let mut out = Radiance::default();
+    let (ray, mut sampler) = super::camera_sample(ctx, x, y, it);
+    ctx.counters.camera_rays.fetch_add(1, Ordering::Relaxed);
+    let cos = ctx.camera.cos_to_axis(ray.d.normalize());
+    if cos <= 0.0 {
+        return out;
+    }
+    let to_solid = ctx.camera.raster_to_solid_angle(cos);
+    let mut path = SubPath {
+        ray,
+        beta: Vec3::ONE,
+        len: 1,
+        specular: true,
+        dvcm: wt.n_light / to_solid,
+        dvc: 0.0,
+        dvm: 0.0,
+    };
+    let base = super::wavefront::CAMERA_DIMS;
+    loop {
+        let kind = if path.len == 1 {
+            RayKind::Camera
+        } else {
+            RayKind::Bounce
+        };
+        let Some((hit, si, bsdf)) = next_vertex(ctx, kind, &path.ray) else {
+            break;
+        };
+        arrive(&mut path, hit.t, si.wo.z.abs());
+        if let Some(li) = si.area_light() {
+            let le = emitted(ctx, wt, &path, li, &si);
+            out[component(path.len - 1)] += path.beta * le;
+        }
+        if path.len >= wt.max_len {
+            break;
+        }
+        let v = Vertex {
+            ng: si.ng,
+            frame: si.frame,
+            wo: si.wo,
+            wo_world: si.wo_world,
+            bsdf,
+        };
+        sampler.set_dimension(base + (path.len - 1) * CAMERA_DIMS_PER_VERTEX);
+        if bsdf.flags().has_non_specular() {
+            if wt.use_vc {
+                let c = light_sample(ctx, wt, &path, &v, &si, &mut sampler);
+                out[component(path.len)] += path.beta * c;
+                for lv in own {
+                    if lv.len + path.len + 1 > wt.max_len {
+                        break;
+                    }
+                    let c = connect(ctx, wt, &path, &v, &si, lv);
+                    out[Component::Indirect] += path.beta * lv.beta * c;
+                }
+            }
+            if let Some(g) = grid {
+                let c = merge(wt, &path, &v, si.p, all, g);
+                out[component(path.len)] += path.beta * c * wt.vm_norm;
+            }
+        }
+        sampler.set_dimension(base + (path.len - 1) * CAMERA_DIMS_PER_VERTEX + 3);
+        if !scatter(&mut path, &v, wt, &mut sampler, TransportMode::Radiance) {
+            break;
+        }
+        path.ray = si.spawn_ray(path.ray.d);
+        ctx.counters.secondary_rays.fetch_add(1, Ordering::Relaxed);
+    }
+    out
+}
+
+/// Radiance of area light `li` that a camera subpath hits, MIS-weighted (the report's
+/// `GetLightRadiance`).
+fn emitted(
+    ctx: &RenderContext,
+    wt: &Weights,
+    path: &SubPath,
+    li: usize,
+    si: &SurfaceInteraction,
+) -> Vec3 {
+    let le = ctx.lights.le(li, si.ng, si.wo_world);
+    if le.max_element() <= 0.0 || path.len == 1 {
+        return le;
+    }
+    if !wt.use_vc {
+        // Merging alone: paths of delta bounces only get here, the rest is merged.
+        return if path.specular { le } else { Vec3::ZERO };
+    }
+    let pmf = ctx.lights.selection_pmf(li);
+    let (pdf_pos, pdf_dir) = ctx.lights.emit_pdfs(li, si.ng, si.wo_world);
+    let direct_pdf = pmf * pdf_pos;
+    let emission_pdf = direct_pdf * pdf_dir;
+    let w_camera = direct_pdf * path.dvcm + emission_pdf * path.dvc;
+    le / (1.0 + w_camera)
+}
+
+/// Next-event estimation at camera vertex `v` (the report's `DirectIllumination`); reads 3
+/// dimensions.
+fn light_sample(
+    ctx: &RenderContext,
+    wt: &Weights,
+    path: &SubPath,
+    v: &Vertex,
+    si: &SurfaceInteraction,
+    sampler: &mut Sampler,
+) -> Vec3 {
+    let (u_sel, u) = (sampler.next_1d(), sampler.next_2d());
+    let lights = ctx.lights;
+    let Some((i, pmf)) = lights.pick(u_sel) else {
+        return Vec3::ZERO;
+    };
+    let Some(s) = lights.sample_light(&ctx.scene.meshes, i, pmf, si.p, u) else {
+        return Vec3::ZERO;
+    };
+    let Some(ev) = v.eval(s.wi, TransportMode::Radiance) else {
+        return Vec3::ZERO;
+    };
+    let d2 = (s.p - si.p).length_squared();
+    let (direct_pdf_w, cos_at_light) = if s.delta {
+        (d2, 1.0)
+    } else {
+        (s.pdf / pmf, s.n.dot(s.wi).abs())
+    };
+    let w_light = if s.delta { 0.0 } else { ev.pdf / s.pdf };
+    let (pdf_pos, pdf_dir) = lights.emit_pdfs(i, s.n, -s.wi);
+    let w_camera = (pdf_pos * pdf_dir * ev.cos / (direct_pdf_w * cos_at_light))
+        * (wt.vm_factor + path.dvcm + path.dvc * ev.pdf_rev);
+    let w = 1.0 / (w_light + 1.0 + w_camera);
+    let c = s.li * ev.f * (w * ev.cos / s.pdf);
+    if !c.is_finite() || c.max_element() <= 0.0 {
+        return Vec3::ZERO;
+    }
+    ctx.counters.shadow_rays.fetch_add(1, Ordering::Relaxed);
+    if ctx.accel.occluded(RayKind::Shadow, &si.shadow_ray(&s)) {
+        return Vec3::ZERO;
+    }
+    c
+}
+
+/// Connects camera vertex `v` to light vertex `lv` (the report's `ConnectVertices`); the
+/// caller multiplies by both throughputs.
+fn connect(
+    ctx: &RenderContext,
+    wt: &Weights,
+    path: &SubPath,
+    v: &Vertex,
+    si: &SurfaceInteraction,
+    lv: &LightVertex,
+) -> Vec3 {
+    let to = lv.p - si.p;
+    let d2 = to.length_squared();
+    if d2 <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let dir = to / d2.sqrt();
+    let Some(cam) = v.eval(dir, TransportMode::Radiance) else {
+        return Vec3::ZERO;
+    };
+    let Some(light) = Vertex::of(lv).eval(-dir, TransportMode::Importance) else {
+        return Vec3::ZERO;
+    };
+    let g = cam.cos * light.cos / d2;
+    let cam_pdf_a = cam.pdf * light.cos / d2;
+    let light_pdf_a = light.pdf * cam.cos / d2;
+    let w_light = cam_pdf_a * (wt.vm_factor + lv.dvcm + lv.dvc * light.pdf_rev);
+    let w_camera = light_pdf_a * (wt.vm_factor + path.dvcm + path.dvc * cam.pdf_rev);
+    let c = cam.f * light.f * (g / (w_light + 1.0 + w_camera));
+    if !c.is_finite() || c.max_element() <= 0.0 {
+        return Vec3::ZERO;
+    }
+    if !visible(ctx, (si.p, si.err, si.ng), (lv.p, lv.err, lv.ng)) {
+        return Vec3::ZERO;
+    }
+    c
+}
+
+/// The merges of camera vertex `v` at `p` with the light vertices within the radius (the
+/// report's range query), before the `1 / (pi r^2 N)` normalisation.
+fn merge(wt: &Weights, path: &SubPath, v: &Vertex, p: Vec3, all: &[LightVertex], g: &Grid) -> Vec3 {
+    let mut sum = Vec3::ZERO;
+    g.query(p, |k| {
+        let lv = &all[k as usize];
+        if (lv.p - p).length_squared() > wt.radius2 || lv.len + path.len > wt.max_len {
+            return;
+        }
+        let Some(ev) = v.eval(lv.wo_world, TransportMode::Radiance) else {
+            return;
+        };
+        let w_light = lv.dvcm * wt.vc_factor + lv.dvm * ev.pdf;
+        let w_camera = path.dvcm * wt.vc_factor + path.dvm * ev.pdf_rev;
+        sum += ev.f * lv.beta / (w_light + 1.0 + w_camera);
+    });
+    sum
+}
+
+/// A uniform grid of cell size `2r` hashed into as many buckets as there are vertices
+/// (the report's hash grid), built by a counting sort so that queries visit vertices in a
+/// fixed order.
+struct Grid {
+    lo: Vec3,
+    inv_cell: f32,
+    /// Bucket `b` holds `order[starts[b]..starts[b + 1]]`.
+    starts: Vec<u32>,
+    order: Vec<u32>,
+}
+
+impl Grid {
+    fn new(vertices: &[LightVertex], radius: f32) -> Grid {
+        let lo = vertices
+            .iter()
+            .fold(Vec3::splat(f32::INFINITY), |a, v| a.min(v.p));
+        let inv_cell = 1.0 / (2.0 * radius);
+        let buckets = vertices.len().max(1);
+        let mut g = Grid {
+            lo,
+            inv_cell,
+            starts: vec![0; buckets + 1],
+            order: vec![0; vertices.len()],
+        };
+        let keys: Vec<usize> = vertices.iter().map(|v| g.bucket(g.cell(v.p))).collect();
+        for &b in &keys {
+            g.starts[b + 1] += 1;
+        }
+        for b in 0..buckets {
+            g.starts[b + 1] += g.starts[b];
+        }
+        let mut next = g.starts.clone();
+        for (k, &b) in keys.iter().enumerate() {
+            g.order[next[b] as usize] = k as u32;
+            next[b] += 1;
+        }
+        g
+    }
+
+    fn cell(&self, p: Vec3) -> [i64; 3] {
+        let c = ((p - self.lo) * self.inv_cell).floor();
+        [c.x as i64, c.y as i64, c.z as i64]
+    }
+
+    fn bucket(&self, c: [i64; 3]) -> usize {
+        let h = (c[0].wrapping_mul(73_856_093))
+            ^ (c[1].wrapping_mul(19_349_663))
+            ^ (c[2].wrapping_mul(83_492_791));
+        (h as u64 % (self.starts.len() as u64 - 1)) as usize
+    }
+
+    /// Calls `f` with every vertex of the (up to 8) cells that a sphere of radius `r` about
+    /// `p` touches, and possibly others sharing their buckets.
+    fn query(&self, p: Vec3, mut f: impl FnMut(u32)) {
+        if self.order.is_empty() {
+            return;
+        }
+        // With cells of 2r, the sphere touches the cell of p and its neighbours towards the
+        // side of the cell's centre p is nearest to.
+        let q = (p - self.lo) * self.inv_cell;
+        let c = q.floor();
+        let frac = q - c;
+        let step = |fr: f32| if fr < 0.5 { -1 } else { 1 };
+        let base = [c.x as i64, c.y as i64, c.z as i64];
+        let steps = [step(frac.x), step(frac.y), step(frac.z)];
+        let mut seen = [usize::MAX; 8];
+        for (n, corner) in (0..8u32).enumerate() {
+            let cell = [
+                base[0] + if corner & 1 != 0 { steps[0] } else { 0 },
+                base[1] + if corner & 2 != 0 { steps[1] } else { 0 },
+                base[2] + if corner & 4 != 0 { steps[2] } else { 0 },
+            ];
+            let b = self.bucket(cell);
+            if seen[..n].contains(&b) {
+                continue;
+            }
+            seen[n] = b;
+            let (s, e) = (self.starts[b] as usize, self.starts[b + 1] as usize);
+            for &k in &self.order[s..e] {
+                f(k);
+            }
+        }
+    }
+}
