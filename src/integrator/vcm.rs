@@ -34,8 +34,10 @@
 //! subpaths from their pixel's; splats are gathered per chunk of light subpaths and added to
 //! the film in chunk order, so an image does not depend on the number of threads.
 //!
-//! Not handled (a located error before rendering): distant and infinite lights, and thin
-//! lens cameras.
+//! Distant and infinite lights start their subpaths on the disc of the scene's bounding
+//! sphere that faces their direction (as photons do); their first segment's length does not
+//! count in the partial sums. Not handled (a one-line error before rendering): infinite
+//! lights behind a portal, and thin lens cameras.
 use super::RenderContext;
 use crate::accel::{Hit, RayKind};
 use crate::bsdf::{Bsdf, TransportMode};
@@ -99,8 +101,8 @@ pub fn unsupported(
         return Some("needs a pinhole camera (\"lensradius\" 0)".into());
     }
     (0..n_lights)
-        .any(|i| !ctx_lights.is_finite(i))
-        .then(|| "does not handle distant or infinite lights yet".into())
+        .any(|i| ctx_lights.has_portal(i))
+        .then(|| "does not handle portal infinite lights yet".into())
 }
 
 /// What one iteration's MIS weights need (the technical report's eta_VCM and its factors).
@@ -154,6 +156,9 @@ struct SubPath {
     len: u32,
     /// Every bounce so far was a delta one.
     specular: bool,
+    /// Starts at a camera or a light with a position (not a distant or infinite light): the
+    /// first segment's length counts in the partial sums.
+    finite: bool,
     dvcm: f32,
     dvc: f32,
     dvm: f32,
@@ -460,8 +465,9 @@ fn scatter(
 /// Finishes the partial sums at a new vertex: the squared distance of the segment reaching
 /// it and the cosine there.
 fn arrive(path: &mut SubPath, hit_t: f32, cos_in: f32) {
-    let d2 = (hit_t * path.ray.d.length()).powi(2);
-    path.dvcm *= d2;
+    if path.len > 1 || path.finite {
+        path.dvcm *= (hit_t * path.ray.d.length()).powi(2);
+    }
     let c = cos_in.max(1e-8);
     path.dvcm /= c;
     path.dvc /= c;
@@ -486,10 +492,19 @@ fn trace_light(ctx: &RenderContext, wt: &Weights, k: u64, it: u32, out: &mut Chu
         return;
     }
     let emission_pdf = pmf * pdf_pos * pdf_dir;
-    let direct_pdf = pmf * pdf_pos;
-    let delta = lights.is_delta_position(i);
-    let cos_light = if delta { 1.0 } else { e.n.dot(e.dir).abs() };
-    if wt.light_only && !delta {
+    let finite = lights.is_finite(i);
+    let point = lights.is_delta_position(i);
+    let delta = point || lights.is_delta_direction(i);
+    // The density of the light's first vertex as next-event estimation picks it: by area
+    // for an area light, by solid angle for an infinite one, 1 for a delta light.
+    let direct_pdf = pmf * if !finite && !delta { pdf_dir } else { pdf_pos };
+    let direct_pdf = if point { pmf } else { direct_pdf };
+    let cos_light = if !finite || point {
+        1.0
+    } else {
+        e.n.dot(e.dir).abs()
+    };
+    if wt.light_only && finite && !point {
         splat_emitter(ctx, wt, i, pmf * pdf_pos, &e, out);
     }
     let dvc = if delta { 0.0 } else { cos_light / emission_pdf };
@@ -503,6 +518,7 @@ fn trace_light(ctx: &RenderContext, wt: &Weights, k: u64, it: u32, out: &mut Chu
         beta: e.flux / pmf,
         len: 1,
         specular: true,
+        finite,
         dvcm: direct_pdf / emission_pdf,
         dvc,
         dvm: dvc * wt.vc_factor,
@@ -516,7 +532,9 @@ fn trace_light(ctx: &RenderContext, wt: &Weights, k: u64, it: u32, out: &mut Chu
             wo_world: si.wo_world,
             bsdf,
         };
-        if bsdf.flags().has_non_specular() {
+        // Connected to the camera or another vertex, or merged, this vertex makes a path of
+        // at least one more segment.
+        if bsdf.flags().has_non_specular() && path.len < wt.max_len {
             let lv = LightVertex {
                 p: si.p,
                 err: si.err,
@@ -634,6 +652,7 @@ fn trace_camera(
         beta: Vec3::ONE,
         len: 1,
         specular: true,
+        finite: true,
         dvcm: wt.n_light / to_solid,
         dvc: 0.0,
         dvm: 0.0,
@@ -646,6 +665,7 @@ fn trace_camera(
             RayKind::Bounce
         };
         let Some((hit, si, bsdf)) = next_vertex(ctx, kind, &path.ray) else {
+            out[component(path.len - 1)] += path.beta * escaped(ctx, wt, &path);
             break;
         };
         arrive(&mut path, hit.t, si.wo.z.abs());
@@ -716,6 +736,30 @@ fn emitted(
     le / (1.0 + w_camera)
 }
 
+/// Radiance of the infinite lights along a camera subpath's ray that leaves the scene,
+/// MIS-weighted.
+fn escaped(ctx: &RenderContext, wt: &Weights, path: &SubPath) -> Vec3 {
+    if !ctx.lights.has_infinite() {
+        return Vec3::ZERO;
+    }
+    let disc = ctx.lights.disc_area();
+    let d = path.ray.d.normalize();
+    ctx.lights.escaped(path.ray.o, d, |direct_pdf| {
+        if path.len == 1 {
+            1.0
+        } else if !wt.use_vc {
+            if path.specular {
+                1.0
+            } else {
+                0.0
+            }
+        } else {
+            let emission_pdf = direct_pdf / disc;
+            1.0 / (1.0 + direct_pdf * path.dvcm + emission_pdf * path.dvc)
+        }
+    })
+}
+
 /// Next-event estimation at camera vertex `v` (the report's `DirectIllumination`); reads 3
 /// dimensions.
 fn light_sample(
@@ -738,8 +782,14 @@ fn light_sample(
         return Vec3::ZERO;
     };
     let d2 = (s.p - si.p).length_squared();
-    let (direct_pdf_w, cos_at_light) = if s.delta {
+    // The light's own densities without its choice: per solid angle at this point for area
+    // and infinite lights, d^2 for point lights (the report's convention), 1 for distant.
+    let (direct_pdf_w, cos_at_light) = if lights.is_delta_position(i) {
         (d2, 1.0)
+    } else if lights.is_delta_direction(i) {
+        (1.0, 1.0)
+    } else if !lights.is_finite(i) {
+        (s.pdf / pmf, 1.0)
     } else {
         (s.pdf / pmf, s.n.dot(s.wi).abs())
     };

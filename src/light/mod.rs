@@ -245,8 +245,9 @@ impl Lights {
 
     /// The densities with which [`Self::emit`] produces a photon of finite light `i` leaving
     /// a point with geometric normal `n` (zero for point-like lights) along unit `dir`: (the
-    /// origin's area density, 1 for a point-like light; the direction's solid-angle density).
-    /// pbrt-v4's `PDF_Le`; `(0, 0)` for distant and infinite lights.
+    /// origin's area density, 1 for a point-like light; the direction's solid-angle density,
+    /// 1 for a distant light). pbrt-v4's `PDF_Le`; distant and infinite lights start on the
+    /// disc of [`Self::disc_origin`] (no aim).
     pub fn emit_pdfs(&self, i: usize, n: Vec3, dir: Vec3) -> (f32, f32) {
         match &self.emitters[i] {
             Emitter::Area(a) => {
@@ -265,8 +266,24 @@ impl Lights {
                 }
                 (1.0, 1.0 / (2.0 * PI * (1.0 - cos_end)))
             }
-            Emitter::Distant(_) | Emitter::Infinite(_) => (0.0, 0.0),
+            Emitter::Distant(_) => (1.0 / self.disc_area(), 1.0),
+            Emitter::Infinite(map) => (1.0 / self.disc_area(), map.pdf(-dir)),
         }
+    }
+
+    /// The area of the disc that photons of distant and infinite lights start from.
+    pub fn disc_area(&self) -> f32 {
+        PI * self.radius * self.radius
+    }
+
+    /// Whether light `i` is a distant light (one direction).
+    pub fn is_delta_direction(&self, i: usize) -> bool {
+        matches!(self.emitters[i], Emitter::Distant(_))
+    }
+
+    /// Whether light `i` is an infinite light seen only through a portal.
+    pub fn has_portal(&self, i: usize) -> bool {
+        matches!(&self.emitters[i], Emitter::Infinite(m) if !m.admits_everything())
     }
 
     /// A point `u` on light `i`, chosen with probability `pmf`, as seen from `p`.

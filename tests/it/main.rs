@@ -8,6 +8,7 @@ mod support;
 mod alpha;
 mod backends;
 mod bench;
+mod bidirectional;
 mod camera_film;
 mod check;
 mod cli;
