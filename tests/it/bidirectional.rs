@@ -25,7 +25,7 @@ const BLOCKS: usize = 4;
 /// The luminance-like mean (RGB average) of each of `BLOCKS x BLOCKS` blocks of a
 /// `w x h` image.
 fn block_means(pixels: &[[f32; 3]], w: usize, h: usize) -> Vec<f64> {
-    let mut sums = vec![0.0f64; BLOCKS * BLOCKS];
+    let mut sums = [0.0f64; BLOCKS * BLOCKS];
     for (i, p) in pixels.iter().enumerate() {
         let (x, y) = (i % w, i / w);
         let b = (y * BLOCKS / h) * BLOCKS + x * BLOCKS / w;
