@@ -58,6 +58,11 @@ pub fn pass_settings(settings: &RenderSettings, k: u64) -> RenderSettings {
     s.seed = pass_seed(settings.seed, k);
     s.texture_spp = Some(settings.texture_spp.unwrap_or(settings.spp));
     s.spp = settings.pass_spp.max(1);
+    // VCM's merge radius goes on shrinking from the iterations of the passes before.
+    s.vcm.first = k
+        .saturating_mul(s.spp as u64)
+        .saturating_add(settings.vcm.first as u64)
+        .min(u32::MAX as u64) as u32;
     if s.photon.progressive {
         s.photon.radius_scale2 = radius_scale2(s.photon.alpha as f64, k);
     }

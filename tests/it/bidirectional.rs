@@ -295,3 +295,72 @@ LightSource "infinite" "rgb L" [ 1 1 1 ] "point3 portal" [ -1 -1 3  1 -1 3  1 1 
         );
     }
 }
+
+/// VCM in passes: any split of the passes over processes (and thread counts) merges to the
+/// same file as the whole range, bit for bit (each pass continues the radius schedule from
+/// the passes before it, whichever process renders it).
+#[test]
+fn vcm_passes_split_and_merge_exactly() {
+    let dir = common::scratch("bidirectional", "passes");
+    let render = |range: &str, threads: &str, out: &str| {
+        let o = common::photon()
+            .args(["render", "scenes/cornell-glass.pbrt", "--integrator", "vcm"])
+            .args([
+                "--res",
+                "24x20",
+                "--pass-spp",
+                "2",
+                "--no-png",
+                "--passes",
+                range,
+            ])
+            .args(["--threads", threads, "-o"])
+            .arg(dir.join(out))
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    let merge = |parts: &[&str], out: &str| {
+        let o = common::photon()
+            .arg("merge")
+            .args(parts.iter().map(|p| dir.join(p)))
+            .arg("-o")
+            .arg(dir.join(out))
+            .arg("--no-png")
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        std::fs::read(dir.join(out)).unwrap()
+    };
+    render("0..4", "2", "whole.exr");
+    let whole = merge(&["whole.exr"], "whole-merged.exr");
+    render("0..1", "1", "a.exr");
+    render("1..3", "2", "b.exr");
+    render("3..4", "1", "c.exr");
+    assert!(merge(&["c.exr", "a.exr", "b.exr"], "split.exr") == whole);
+    // The test of the test: another seed gives another file.
+    let o = common::photon()
+        .args([
+            "render",
+            "scenes/cornell-glass.pbrt",
+            "--integrator",
+            "vcm",
+            "--seed",
+            "9",
+        ])
+        .args([
+            "--res",
+            "24x20",
+            "--pass-spp",
+            "2",
+            "--no-png",
+            "--passes",
+            "0..4",
+            "-o",
+        ])
+        .arg(dir.join("other.exr"))
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    assert!(merge(&["other.exr"], "other-merged.exr") != whole);
+}
