@@ -139,21 +139,24 @@ pub fn estimate(
         e.what +=
             &format!(", {global} + {caustic} photons x{per:.2} stored x {PHOTON_PEAK_BYTES} B");
     }
-    if kind.technique().is_some() {
-        // One light subpath per pixel of the crop window, each keeping at most `maxdepth`
-        // vertices (plus the hash grid's 8 bytes and a splat of 32 bytes per vertex), and the
-        // iteration's film and sum.
+    if let (Some(_), Some(per)) = (kind.technique(), landings) {
+        // One light subpath per pixel of the crop window, each keeping the vertices a pilot
+        // trace measured (with the photon maps' margin; plus the hash grid's 8 bytes and a
+        // splat of 32 bytes per vertex), and the iteration's film, sum and camera rows.
         let (w, h) = settings.image_size();
         let paths = w as u64 * h as u64;
-        let per_path = settings.max_depth.max(1) as u64
-            * (crate::integrator::vcm::LIGHT_VERTEX_BYTES + 8 + 32)
-            + 4;
+        let vertices = paths as f64 * per.subpath * PILOT_MARGIN;
+        let bytes = vertices * (crate::integrator::vcm::LIGHT_VERTEX_BYTES + 8 + 32) as f64;
         e.parts.push((
             "light vertices",
-            paths
-                .saturating_mul(per_path)
-                .saturating_add(paths.saturating_mul(3 * RADIANCE_BYTES)),
+            (bytes.min(u64::MAX as f64) as u64)
+                .saturating_add(paths.saturating_mul(4 + 3 * RADIANCE_BYTES + 48)),
         ));
+        e.what += &format!(
+            ", {paths} light subpaths x{:.2} vertices x {} B",
+            per.subpath * PILOT_MARGIN,
+            crate::integrator::vcm::LIGHT_VERTEX_BYTES
+        );
     }
     let tris = scene.triangle_count() as u64;
     let meshes = scene.meshes.len() as u64;

@@ -280,6 +280,16 @@ pub struct RenderContext<'a> {
     pub photons: Option<&'a photonmap::PhotonPass>,
 }
 
+/// Why `kind` cannot render `scene` (`--integrator NAME: why`), if it cannot.
+pub fn unsupported(scene: &Scene, kind: IntegratorKind) -> Option<String> {
+    kind.technique()?;
+    let lights = scene.emitters();
+    let lens = scene.camera.lens_radius > 0.0;
+    let why = vcm::unsupported(&lights, scene.lights.len(), lens)?;
+    let name = format!("{kind:?}").to_lowercase();
+    Some(format!("--integrator {name}: {why}"))
+}
+
 /// Pass 1 for `kind` (photon maps for the photon mapper, nothing otherwise).
 pub fn prepare(
     scene: &Scene,
@@ -296,14 +306,21 @@ pub fn prepare(
     })
 }
 
-/// The photons pass 1 of `settings` would store per photon emitted, measured by a pilot
-/// trace (`None` for integrators without pass 1). Runs on the current rayon pool.
+/// The photons pass 1 of `settings` would store per photon emitted, or the light vertices the
+/// bidirectional integrators keep per light subpath, measured by a pilot trace (`None` for
+/// the other integrators). Runs on the current rayon pool.
 pub fn pilot(
     scene: &Scene,
     accel: &Accel,
     settings: &RenderSettings,
     kind: IntegratorKind,
 ) -> Option<crate::photon::trace::Landings> {
+    if let Some(t) = kind.technique() {
+        return Some(crate::photon::trace::Landings {
+            subpath: vcm::pilot(scene, accel, settings, t),
+            ..Default::default()
+        });
+    }
     (kind == IntegratorKind::Photonmap).then(|| {
         let mut t = settings.photon.trace.clone();
         (t.seed, t.pattern) = (settings.seed, settings.pattern);
@@ -374,7 +391,7 @@ pub fn render_prepared(
             &own
         }
     };
-    let notes = photons.map(photonmap::describe).unwrap_or_default();
+    let mut notes = photons.map(photonmap::describe).unwrap_or_default();
     let (photon_seconds, map_build_seconds) = photons.map_or((0.0, 0.0), |p| {
         let st = &p.maps.stats;
         (st.trace_seconds, st.build_seconds + p.cache_seconds)
@@ -398,7 +415,9 @@ pub fn render_prepared(
     let done = AtomicU64::new(0);
     let rendered: Vec<((u32, u32), Vec<Radiance>)> = if let Some(t) = kind.technique() {
         // One image from the bidirectional integrator, cut into tiles for the assembly below.
-        let mut px = vcm::render(&ctx, t, progress);
+        let out = vcm::render(&ctx, t, progress);
+        notes.extend(out.notes);
+        let mut px = out.pixels;
         if settings.imaging_ratio != 1.0 {
             px.iter_mut().for_each(|r| *r = *r * settings.imaging_ratio);
         }

@@ -262,6 +262,44 @@ struct ChunkOut {
     splats: Vec<Splat>,
 }
 
+/// The techniques whose shares of the image `--stats` reports, in [`Tally::sums`]' order.
+const TECHNIQUES: [&str; 5] = [
+    "emission hit",
+    "light samples",
+    "connections",
+    "merges",
+    "light tracing",
+];
+
+/// What each technique added (the mean of RGB, summed over samples) and how often merging
+/// found a light vertex; summed in a fixed order, so the report is deterministic too.
+#[derive(Clone, Copy, Debug, Default)]
+struct Tally {
+    sums: [f64; 5],
+    merged: u64,
+}
+
+impl Tally {
+    fn add(&mut self, technique: usize, v: Vec3) {
+        self.sums[technique] += ((v.x + v.y + v.z) / 3.0) as f64;
+    }
+
+    fn absorb(&mut self, o: &Tally) {
+        for (a, b) in self.sums.iter_mut().zip(o.sums) {
+            *a += b;
+        }
+        self.merged += o.merged;
+    }
+}
+
+/// The image of [`render`] and its report.
+pub struct Rendered {
+    /// The crop window's pixels in row-major order.
+    pub pixels: Vec<Radiance>,
+    /// Lines for the statistics: the radii, light vertices, each technique's share, times.
+    pub notes: Vec<String>,
+}
+
 /// Renders the crop window's pixels with `technique`: `ctx.settings.spp` iterations, each a
 /// light subpath per pixel and a camera subpath per pixel; returns the pixels' means in
 /// row-major order of the crop window. `progress(done, total)` after each iteration.
@@ -269,7 +307,7 @@ pub fn render(
     ctx: &RenderContext,
     technique: Technique,
     progress: &dyn super::Observer,
-) -> Vec<Radiance> {
+) -> Rendered {
     let s = &ctx.settings;
     let [bx0, bx1, by0, by1] = s.pixel_bounds();
     let (w, h) = ((bx1 - bx0) as usize, (by1 - by0) as usize);
@@ -278,6 +316,9 @@ pub fn render(
     let mut sum = vec![Radiance::default(); n];
     let (_, scene_radius) = ctx.lights.scene_sphere();
     let r0 = (s.vcm.radius * scene_radius).max(1e-7);
+    let mut tally = Tally::default();
+    let (mut light_s, mut camera_s, mut stored, mut radii) = (0.0, 0.0, 0u64, (0.0f32, 0.0f32));
+    let mut done = 0u32;
     for it in 0..iterations {
         if crate::interrupt::requested().is_some() {
             break;
@@ -285,6 +326,8 @@ pub fn render(
         let k = s.vcm.first.saturating_add(it + 1) as f32;
         let radius = r0 / k.powf(0.5 * (1.0 - s.vcm.alpha));
         let wt = Weights::new(technique, radius.max(1e-7), n, s.max_depth);
+        radii = (if it == 0 { radius } else { radii.0 }, radius);
+        let t0 = std::time::Instant::now();
         // Light subpaths, chunk by chunk in parallel; assembled in chunk order.
         let chunks: Vec<ChunkOut> = (0..n.div_ceil(CHUNK))
             .into_par_iter()
@@ -294,26 +337,32 @@ pub fn render(
                     trace_light(ctx, &wt, k as u64, it, &mut out);
                     out.ends.push(out.vertices.len() as u32);
                 }
+                // Exact sizes: every chunk is alive until the assembly below.
+                out.vertices.shrink_to_fit();
+                out.splats.shrink_to_fit();
                 out
             })
             .collect();
-        let mut vertices = Vec::new();
+        // One store of the exact size, each chunk freed as soon as it is copied in.
+        let total: usize = chunks.iter().map(|c| c.vertices.len()).sum();
+        let mut vertices = Vec::with_capacity(total);
         let mut ends = Vec::with_capacity(n);
-        for c in &chunks {
+        let mut film = vec![Radiance::default(); n];
+        for c in chunks {
             let base = vertices.len() as u32;
             ends.extend(c.ends.iter().map(|e| e + base));
             vertices.extend_from_slice(&c.vertices);
-        }
-        let mut film = vec![Radiance::default(); n];
-        for c in &chunks {
             for &(p, v, comp) in &c.splats {
                 splat(ctx, &mut film, (bx0, by0, w, h), p, v, comp);
+                tally.add(4, v);
             }
         }
-        drop(chunks);
+        stored += vertices.len() as u64;
+        light_s += t0.elapsed().as_secs_f64();
+        let t1 = std::time::Instant::now();
         let grid = wt.use_vm.then(|| Grid::new(&vertices, radius));
         if !wt.light_only {
-            let rows: Vec<Vec<Radiance>> = (0..h)
+            let rows: Vec<Vec<(Radiance, Tally)>> = (0..h)
                 .into_par_iter()
                 .map(|y| {
                     (0..w)
@@ -328,18 +377,90 @@ pub fn render(
                 })
                 .collect();
             for (y, row) in rows.into_iter().enumerate() {
-                for (x, r) in row.into_iter().enumerate() {
+                for (x, (r, t)) in row.into_iter().enumerate() {
                     film[y * w + x] += r;
+                    tally.absorb(&t);
                 }
             }
         }
+        camera_s += t1.elapsed().as_secs_f64();
         for (acc, f) in sum.iter_mut().zip(&film) {
             *acc += *f;
         }
+        done += 1;
         progress.tile_done(it as u64 + 1, iterations as u64);
     }
     let scale = 1.0 / iterations as f32;
-    sum.iter().map(|r| *r * scale).collect()
+    let total: f64 = tally.sums.iter().sum::<f64>().max(f64::MIN_POSITIVE);
+    let shares: Vec<String> = TECHNIQUES
+        .iter()
+        .zip(tally.sums)
+        .map(|(name, v)| format!("{name} {:.1}%", 100.0 * v / total))
+        .collect();
+    let paths = (n as u64 * done.max(1) as u64) as f64;
+    let mut notes = vec![format!(
+        "{technique:?}: {done} iterations of {n} light and {n} camera subpaths; {:.2} light \
+         vertices kept per subpath; light subpaths {light_s:.2} s, camera subpaths \
+         {camera_s:.2} s",
+        stored as f64 / paths
+    )];
+    notes.push(format!(
+        "{technique:?}: share of the image: {}",
+        shares.join(", ")
+    ));
+    if technique == Technique::Vcm {
+        notes.push(format!(
+            "Vcm: merge radius {:.4} -> {:.4} (scene units), {:.2} light vertices merged per \
+             camera subpath",
+            radii.0,
+            radii.1,
+            tally.merged as f64 / paths
+        ));
+    }
+    Rendered {
+        pixels: sum.iter().map(|r| *r * scale).collect(),
+        notes,
+    }
+}
+
+/// Light subpaths a pilot trace follows to measure the vertices kept per subpath.
+pub const PILOT_SUBPATHS: usize = 8192;
+
+/// The light vertices `technique` keeps per light subpath, measured on [`PILOT_SUBPATHS`]
+/// subpaths of their own seed (what the memory model multiplies the image's pixels by).
+/// Runs on the current rayon pool.
+pub fn pilot(
+    scene: &crate::scene::Scene,
+    accel: &crate::accel::Accel,
+    settings: &super::RenderSettings,
+    technique: Technique,
+) -> f64 {
+    let lights = scene.emitters();
+    let mut s = settings.clone();
+    s.seed = crate::sampling::hash(&[settings.seed, 0x0070_696c_6f74]);
+    let ctx = RenderContext {
+        scene,
+        accel,
+        lights: &lights,
+        camera: crate::camera::Camera::new(&scene.camera, s.width, s.height),
+        filter: crate::film::Filter::new(&scene.filter),
+        settings: s,
+        counters: super::Counters::default(),
+        photons: None,
+    };
+    let (_, radius) = lights.scene_sphere();
+    let wt = Weights::new(technique, radius * 1e-3, PILOT_SUBPATHS, settings.max_depth);
+    let kept: usize = (0..PILOT_SUBPATHS.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let mut out = ChunkOut::default();
+            for k in c * CHUNK..((c + 1) * CHUNK).min(PILOT_SUBPATHS) {
+                trace_light(&ctx, &wt, k as u64, 0, &mut out);
+            }
+            out.vertices.len()
+        })
+        .sum();
+    kept as f64 / PILOT_SUBPATHS as f64
 }
 
 /// Adds `v` at continuous raster position `p` to the pixels whose filter covers it, each
@@ -638,13 +759,14 @@ fn trace_camera(
     own: &[LightVertex],
     all: &[LightVertex],
     grid: Option<&Grid>,
-) -> Radiance {
+) -> (Radiance, Tally) {
     let mut out = Radiance::default();
+    let mut tally = Tally::default();
     let (ray, mut sampler) = super::camera_sample(ctx, x, y, it);
     ctx.counters.camera_rays.fetch_add(1, Ordering::Relaxed);
     let cos = ctx.camera.cos_to_axis(ray.d.normalize());
     if cos <= 0.0 {
-        return out;
+        return (out, tally);
     }
     let to_solid = ctx.camera.raster_to_solid_angle(cos);
     let mut path = SubPath {
@@ -665,13 +787,16 @@ fn trace_camera(
             RayKind::Bounce
         };
         let Some((hit, si, bsdf)) = next_vertex(ctx, kind, &path.ray) else {
-            out[component(path.len - 1)] += path.beta * escaped(ctx, wt, &path);
+            let c = path.beta * escaped(ctx, wt, &path);
+            out[component(path.len - 1)] += c;
+            tally.add(0, c);
             break;
         };
         arrive(&mut path, hit.t, si.wo.z.abs());
         if let Some(li) = si.area_light() {
-            let le = emitted(ctx, wt, &path, li, &si);
-            out[component(path.len - 1)] += path.beta * le;
+            let c = path.beta * emitted(ctx, wt, &path, li, &si);
+            out[component(path.len - 1)] += c;
+            tally.add(0, c);
         }
         if path.len >= wt.max_len {
             break;
@@ -686,19 +811,24 @@ fn trace_camera(
         sampler.set_dimension(base + (path.len - 1) * CAMERA_DIMS_PER_VERTEX);
         if bsdf.flags().has_non_specular() {
             if wt.use_vc {
-                let c = light_sample(ctx, wt, &path, &v, &si, &mut sampler);
-                out[component(path.len)] += path.beta * c;
+                let c = path.beta * light_sample(ctx, wt, &path, &v, &si, &mut sampler);
+                out[component(path.len)] += c;
+                tally.add(1, c);
                 for lv in own {
                     if lv.len + path.len + 1 > wt.max_len {
                         break;
                     }
-                    let c = connect(ctx, wt, &path, &v, &si, lv);
-                    out[Component::Indirect] += path.beta * lv.beta * c;
+                    let c = path.beta * lv.beta * connect(ctx, wt, &path, &v, &si, lv);
+                    out[Component::Indirect] += c;
+                    tally.add(2, c);
                 }
             }
             if let Some(g) = grid {
-                let c = merge(wt, &path, &v, si.p, all, g);
-                out[component(path.len)] += path.beta * c * wt.vm_norm;
+                let (c, found) = merge(wt, &path, &v, si.p, all, g);
+                let c = path.beta * c * wt.vm_norm;
+                out[component(path.len)] += c;
+                tally.add(3, c);
+                tally.merged += found;
             }
         }
         sampler.set_dimension(base + (path.len - 1) * CAMERA_DIMS_PER_VERTEX + 3);
@@ -708,7 +838,7 @@ fn trace_camera(
         path.ray = si.spawn_ray(path.ray.d);
         ctx.counters.secondary_rays.fetch_add(1, Ordering::Relaxed);
     }
-    out
+    (out, tally)
 }
 
 /// Radiance of area light `li` that a camera subpath hits, MIS-weighted (the report's
@@ -847,14 +977,23 @@ fn connect(
 }
 
 /// The merges of camera vertex `v` at `p` with the light vertices within the radius (the
-/// report's range query), before the `1 / (pi r^2 N)` normalisation.
-fn merge(wt: &Weights, path: &SubPath, v: &Vertex, p: Vec3, all: &[LightVertex], g: &Grid) -> Vec3 {
-    let mut sum = Vec3::ZERO;
+/// report's range query), before the `1 / (pi r^2 N)` normalisation, and how many light
+/// vertices were within the radius.
+fn merge(
+    wt: &Weights,
+    path: &SubPath,
+    v: &Vertex,
+    p: Vec3,
+    all: &[LightVertex],
+    g: &Grid,
+) -> (Vec3, u64) {
+    let (mut sum, mut found) = (Vec3::ZERO, 0);
     g.query(p, |k| {
         let lv = &all[k as usize];
         if (lv.p - p).length_squared() > wt.radius2 || lv.len + path.len > wt.max_len {
             return;
         }
+        found += 1;
         let Some(ev) = v.eval(lv.wo_world, TransportMode::Radiance) else {
             return;
         };
@@ -862,7 +1001,7 @@ fn merge(wt: &Weights, path: &SubPath, v: &Vertex, p: Vec3, all: &[LightVertex],
         let w_camera = path.dvcm * wt.vc_factor + path.dvm * ev.pdf_rev;
         sum += ev.f * lv.beta / (w_light + 1.0 + w_camera);
     });
-    sum
+    (sum, found)
 }
 
 /// A uniform grid of cell size `2r` hashed into as many buckets as there are vertices

@@ -321,6 +321,9 @@ pub fn trace(scene: &Scene, accel: &Accel, lights: &Lights, s: &TraceSettings) -
 pub struct Landings {
     pub global: f64,
     pub caustic: f64,
+    /// Light vertices kept per light subpath (the bidirectional integrators' pilot,
+    /// `integrator::vcm::pilot`); 0 for the photon maps' pilot.
+    pub subpath: f64,
 }
 
 /// Photons a pilot trace shoots for each map it measures.
@@ -373,6 +376,7 @@ pub fn pilot(scene: &Scene, accel: &Accel, lights: &Lights, s: &TraceSettings) -
             true => 0.0,
             false => rate(MapKind::Caustic, s.caustic_photons, &aimed),
         },
+        subpath: 0.0,
     }
 }
 

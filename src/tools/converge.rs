@@ -97,6 +97,16 @@ pub fn methods() -> Vec<Method> {
             kind: IntegratorKind::Path,
             adjust: |_, _| {},
         },
+        Method {
+            name: "bdpt",
+            kind: IntegratorKind::Bdpt,
+            adjust: |_, _| {},
+        },
+        Method {
+            name: "vcm",
+            kind: IntegratorKind::Vcm,
+            adjust: |_, _| {},
+        },
     ]
 }
 
@@ -156,6 +166,10 @@ pub fn run(opts: &ConvergeOptions) -> Result<bool, ToolError> {
     };
     let mut rows = Vec::new();
     for m in &chosen {
+        if let Some(why) = crate::integrator::unsupported(scene, m.kind) {
+            say!("{:<22} skipped: {why}", m.name);
+            continue;
+        }
         for &budget in &opts.budgets {
             let row = measure(
                 scene, &accel, base, m, budget, &reference, mask, &opts.out, &pool,

@@ -210,13 +210,8 @@ pub fn configure(job: &mut Job, opts: &RenderOptions) {
 /// maps, builds the accelerator, measures pass 1 with a pilot trace and checks again with
 /// the photon maps. `photon render` and the Python module both start here.
 pub fn prepare(job: &mut Job, opts: &RenderOptions) -> Result<Prepared, ToolError> {
-    if job.integrator.technique().is_some() {
-        let lights = job.scene.emitters();
-        let lens = job.scene.camera.lens_radius > 0.0;
-        if let Some(why) = integrator::vcm::unsupported(&lights, job.scene.lights.len(), lens) {
-            let name = format!("{:?}", job.integrator).to_lowercase();
-            return Err(ToolError(format!("--integrator {name}: {why}")));
-        }
+    if let Some(why) = integrator::unsupported(&job.scene, job.integrator) {
+        return Err(ToolError(why));
     }
     let cli = opts.overrides().from_cli();
     let budget = crate::limits::Budget::resolve(opts.max_memory);
@@ -259,7 +254,8 @@ pub fn render_image(
     let mut notes = Vec::new();
     // Fixed maps grow with the budget; progressive passes keep the file's counts.
     let given = opts.photon.global_photons.is_some() || opts.photon.caustic_photons.is_some();
-    if !given && !settings.photon.progressive {
+    let photonmap = opts.integrator == IntegratorKind::Photonmap;
+    if photonmap && !given && !settings.photon.progressive {
         // The budget's counts, halved until the memory estimate fits; the file's counts
         // (already checked) are the floor.
         let check = |s: &RenderSettings| job.check_memory(s, &prepared.budget, prepared.cli);
@@ -289,10 +285,14 @@ pub fn render_image(
     let (mut out, spp) = pool.install(|| {
         integrator::render_for_time(scene, accel, &settings, opts.integrator, budget, observer)
     });
-    notes.push(format!(
-        "time budget {budget:.2} s: {spp} spp, {} + {} photons",
-        settings.photon.trace.global_photons, settings.photon.trace.caustic_photons
-    ));
+    notes.push(if photonmap {
+        format!(
+            "time budget {budget:.2} s: {spp} spp, {} + {} photons",
+            settings.photon.trace.global_photons, settings.photon.trace.caustic_photons
+        )
+    } else {
+        format!("time budget {budget:.2} s: {spp} spp")
+    });
     notes.append(&mut out.notes);
     out.notes = notes;
     Ok(out)
