@@ -2,7 +2,7 @@
 //! `bdpt` (connections only) and `lighttracer` (light paths splatted to the camera).
 //!
 //! ```text
-//! photon render scene.pbrt --integrator vcm --spp 64 --merge-radius 0.003 --alpha 0.75
+//! photon render scene.pbrt --integrator vcm --spp 64 --merge-radius 1px --alpha 0.75
 //! ```
 //! Georgiev, Křivánek, Davidovič & Slusallek, "Light transport simulation with vertex
 //! connection and merging" (2012), in the formulation of their technical report
@@ -16,7 +16,9 @@
 //! balance heuristic through the recursive partial sums `dVCM`, `dVC`, `dVM` of each subpath,
 //! so no technique's path is counted twice. The merge radius shrinks with the iteration `i`
 //! as `r_i = r_0 / (i + 1)^((1 - alpha) / 2)` (progressive photon mapping), so the estimate
-//! converges; `r_0` is `--merge-radius` times the radius of the scene's bounding sphere.
+//! converges; `r_0` is `--merge-radius`: by default 1 pixel footprint (the median width of a
+//! pixel where the camera sees the scene), `Npx` for N of them, or a number F for F times the
+//! radius of the scene's bounding sphere (SmallVCM's convention, 0.003 there).
 //!
 //! `bdpt` turns merging off (the weights then are bidirectional path tracing's); `lighttracer`
 //! traces light subpaths only, splatting their every vertex (the light's own point included)
@@ -56,11 +58,45 @@ pub enum Technique {
     Vcm,
 }
 
+/// VCM's initial merge radius.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum MergeRadius {
+    /// A fraction of the radius of the scene's bounding sphere (`--merge-radius 0.003`).
+    Scene(f32),
+    /// Pixels: this many times the median footprint of a pixel at the surfaces the camera
+    /// sees (`--merge-radius 2px`), measured on a 32x32 grid of camera rays.
+    Pixels(f32),
+}
+
+impl MergeRadius {
+    /// Parses `F` (a fraction of the scene's radius, in (0, 1]) or `Fpx` (pixels, in (0, 1000]).
+    pub fn parse(s: &str) -> Result<MergeRadius, String> {
+        let t = s.trim();
+        let (num, px) = match t.strip_suffix("px") {
+            Some(n) => (n, true),
+            None => (t, false),
+        };
+        let v: f32 = num
+            .trim()
+            .parse()
+            .map_err(|_| format!("expected a number or a number of pixels (`2px`), got `{s}`"))?;
+        let hi = if px { 1000.0 } else { 1.0 };
+        if !(v > 0.0 && v <= hi) {
+            return Err(format!("must be in (0, {hi}], got {v}"));
+        }
+        Ok(if px {
+            MergeRadius::Pixels(v)
+        } else {
+            MergeRadius::Scene(v)
+        })
+    }
+}
+
 /// The settings of the bidirectional integrators.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct VcmSettings {
-    /// The initial merge radius as a fraction of the scene's bounding-sphere radius.
-    pub radius: f32,
+    /// The initial merge radius.
+    pub radius: MergeRadius,
     /// The radius schedule's alpha in (0, 1).
     pub alpha: f32,
     /// Iterations rendered before this render (a time budget renders in several calls):
@@ -71,12 +107,15 @@ pub struct VcmSettings {
 impl Default for VcmSettings {
     fn default() -> Self {
         VcmSettings {
-            radius: 0.003,
+            radius: MergeRadius::Pixels(DEFAULT_PIXELS),
             alpha: 0.75,
             first: 0,
         }
     }
 }
+
+/// The default initial merge radius in pixel footprints.
+pub const DEFAULT_PIXELS: f32 = 1.0;
 
 /// Light subpaths traced together; their splats reach the film in chunk order.
 const CHUNK: usize = 256;
@@ -314,8 +353,7 @@ pub fn render(
     let n = w * h;
     let iterations = s.spp.max(1);
     let mut sum = vec![Radiance::default(); n];
-    let (_, scene_radius) = ctx.lights.scene_sphere();
-    let r0 = (s.vcm.radius * scene_radius).max(1e-7);
+    let r0 = initial_radius(ctx).max(1e-7);
     let mut tally = Tally::default();
     let (mut light_s, mut camera_s, mut stored, mut radii) = (0.0, 0.0, 0u64, (0.0f32, 0.0f32));
     let mut done = 0u32;
@@ -421,6 +459,40 @@ pub fn render(
         pixels: sum.iter().map(|r| *r * scale).collect(),
         notes,
     }
+}
+
+/// The initial merge radius in scene units (see [`MergeRadius`]).
+fn initial_radius(ctx: &RenderContext) -> f32 {
+    let (_, scene_radius) = ctx.lights.scene_sphere();
+    match ctx.settings.vcm.radius {
+        MergeRadius::Scene(f) => f * scene_radius,
+        MergeRadius::Pixels(px) => px * pixel_footprint(ctx).unwrap_or(1e-3 * scene_radius),
+    }
+}
+
+/// The median width of a pixel where the camera's rays through a 32x32 grid of the image
+/// first hit a surface (distance times the pixel's angular width); `None` when none hits.
+fn pixel_footprint(ctx: &RenderContext) -> Option<f32> {
+    const GRID: u32 = 32;
+    let (w, h) = (ctx.settings.width as f32, ctx.settings.height as f32);
+    let mut widths: Vec<f32> = (0..GRID * GRID)
+        .filter_map(|i| {
+            let p = Vec2::new(
+                ((i % GRID) as f32 + 0.5) / GRID as f32 * w,
+                ((i / GRID) as f32 + 0.5) / GRID as f32 * h,
+            );
+            let ray = ctx.camera.generate_ray(p);
+            let hit = ctx.accel.intersect(RayKind::Camera, &ray)?;
+            let cos = ctx.camera.cos_to_axis(ray.d);
+            let width = hit.t * ray.d.length() / ctx.camera.raster_to_solid_angle(cos).sqrt();
+            (width.is_finite() && width > 0.0).then_some(width)
+        })
+        .collect();
+    if widths.is_empty() {
+        return None;
+    }
+    widths.sort_by(f32::total_cmp);
+    Some(widths[widths.len() / 2])
 }
 
 /// Light subpaths a pilot trace follows to measure the vertices kept per subpath.

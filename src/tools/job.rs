@@ -38,8 +38,8 @@ pub struct Overrides {
     pub photon: PhotonOverrides,
     /// The progressive schedule's alpha (photon mapper and VCM).
     pub alpha: Option<f32>,
-    /// VCM's initial merge radius, a fraction of the scene's bounding-sphere radius.
-    pub merge_radius: Option<f32>,
+    /// VCM's initial merge radius.
+    pub merge_radius: Option<crate::integrator::vcm::MergeRadius>,
     /// Progressive photon mapping (also switched on by the file).
     pub progressive: bool,
     /// Samples per pixel of each pass.

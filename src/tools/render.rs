@@ -80,10 +80,11 @@ pub struct RenderOptions {
     /// or passes are added (pbrt-v4's flag); the render never waits for the viewer.
     #[arg(long, value_name = "HOST:PORT", value_parser = super::display::parse_server)]
     pub display_server: Option<String>,
-    /// VCM's initial merge radius, as a fraction of the radius of the scene's bounding
-    /// sphere (default 0.003); it shrinks with the samples by `--alpha` (default 0.75 for VCM).
-    #[arg(long, value_parser = float_in(1e-6, 1.0, false))]
-    pub merge_radius: Option<f32>,
+    /// VCM's initial merge radius: `Npx` pixel footprints (default 1px), or a fraction of
+    /// the radius of the scene's bounding sphere (`0.003`); it shrinks with the samples by
+    /// `--alpha` (default 0.75 for VCM).
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::integrator::vcm::MergeRadius::parse)]
+    pub merge_radius: Option<crate::integrator::vcm::MergeRadius>,
     #[command(flatten)]
     pub photon: crate::integrator::settings::PhotonOverrides,
     #[command(flatten)]
