@@ -104,8 +104,10 @@ impl Camera {
     /// the factor that turns a density per unit of raster area into one per unit solid angle
     /// at the camera (`1 / (A cos^3)`, `A` a pixel's area on the plane z = 1 in camera
     /// space, `cos` the angle to the optical axis). `None` behind the camera or off the
-    /// screen window. What light paths splat to the film with (the camera's importance).
-    pub fn project(&self, p: Vec3) -> Option<(Vec2, f32)> {
+    /// screen window widened by `margin` pixels on every side (a pixel filter's radius: the
+    /// samples of the edge pixels reach that far). What light paths splat to the film with
+    /// (the camera's importance).
+    pub fn project(&self, p: Vec3, margin: Vec2) -> Option<(Vec2, f32)> {
         let c = self.camera_from_world.transform_point3(p);
         if c.z <= 0.0 || !c.is_finite() {
             return None;
@@ -115,11 +117,13 @@ impl Camera {
             ((d.x - self.centre.x) / self.half.x + 1.0) * 0.5,
             (1.0 - (d.y - self.centre.y) / self.half.y) * 0.5,
         );
-        if !(0.0..1.0).contains(&ndc.x) || !(0.0..1.0).contains(&ndc.y) {
+        let raster = ndc * self.res;
+        let (lo, hi) = (-margin, self.res + margin);
+        if !(raster.cmpge(lo).all() && raster.cmplt(hi).all()) {
             return None;
         }
         let cos = c.z / c.length();
-        Some((ndc * self.res, self.raster_to_solid_angle(cos)))
+        Some((raster, self.raster_to_solid_angle(cos)))
     }
 
     /// `1 / (A cos^3)` of [`Self::project`] for a ray at angle `acos(cos)` to the axis.

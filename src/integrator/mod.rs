@@ -10,6 +10,11 @@
 //! [`settings`], `progressive`, `alpha`) only under `Integrator "photonmap"`; `maxdepth` and
 //! `passspp` under any name; pbrt-v4's other integrators' own parameters are ignored with a
 //! note; any other parameter is an error at its location.
+//!
+//! Tiles go to the per-pixel integrators (`photon_mapper`, `direct`, `path` through
+//! [`wavefront`]); the bidirectional ones (`vcm`, `bdpt`, `lighttracer`: [`vcm`]) splat light
+//! paths anywhere on the film, so they render the whole image at once and it is cut into the
+//! same tiles afterwards.
 pub mod direct;
 pub mod passes;
 pub mod path;

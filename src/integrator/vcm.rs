@@ -770,7 +770,7 @@ fn splat_emitter(
     e: &crate::light::Emission,
     out: &mut ChunkOut,
 ) {
-    let Some((raster, to_solid)) = ctx.camera.project(e.p) else {
+    let Some((raster, to_solid)) = ctx.camera.project(e.p, ctx.filter.radius()) else {
         return;
     };
     let to_cam = ctx.camera.position() - e.p;
@@ -795,7 +795,7 @@ fn splat_emitter(
 
 /// Connects light vertex `lv` to the camera (the report's `ConnectToCamera`).
 fn connect_to_camera(ctx: &RenderContext, wt: &Weights, lv: &LightVertex, out: &mut ChunkOut) {
-    let Some((raster, to_solid)) = ctx.camera.project(lv.p) else {
+    let Some((raster, to_solid)) = ctx.camera.project(lv.p, ctx.filter.radius()) else {
         return;
     };
     let cam = ctx.camera.position();
