@@ -61,6 +61,8 @@ pub enum IntegratorKind {
     Bdpt,
     /// Light tracing: light subpaths splatted to the camera alone.
     Lighttracer,
+    /// Bidirectional photon mapping: VCM's merging alone.
+    Bpm,
 }
 
 impl IntegratorKind {
@@ -70,6 +72,7 @@ impl IntegratorKind {
             IntegratorKind::Vcm => Some(vcm::Technique::Vcm),
             IntegratorKind::Bdpt => Some(vcm::Technique::Bdpt),
             IntegratorKind::Lighttracer => Some(vcm::Technique::LightTracer),
+            IntegratorKind::Bpm => Some(vcm::Technique::Bpm),
             _ => None,
         }
     }
@@ -460,7 +463,10 @@ pub fn render_prepared(
                         direct::render_tile(&ctx, x0, y0, x1, y1)
                     }
                     IntegratorKind::Path => path::render_tile(&ctx, x0, y0, x1, y1),
-                    IntegratorKind::Vcm | IntegratorKind::Bdpt | IntegratorKind::Lighttracer => {
+                    IntegratorKind::Vcm
+                    | IntegratorKind::Bdpt
+                    | IntegratorKind::Lighttracer
+                    | IntegratorKind::Bpm => {
                         unreachable!("rendered by vcm::render above")
                     }
                 };

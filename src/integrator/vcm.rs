@@ -1,5 +1,6 @@
 //! Vertex connection and merging (`photon render --integrator vcm`) and its special cases
-//! `bdpt` (connections only) and `lighttracer` (light paths splatted to the camera).
+//! `bdpt` (connections only), `bpm` (merging only) and `lighttracer` (light paths splatted to
+//! the camera).
 //!
 //! ```text
 //! photon render scene.pbrt --integrator vcm --spp 64 --merge-radius 1px --alpha 0.75
@@ -20,7 +21,9 @@
 //! pixel where the camera sees the scene), `Npx` for N of them, or a number F for F times the
 //! radius of the scene's bounding sphere (SmallVCM's convention, 0.003 there).
 //!
-//! `bdpt` turns merging off (the weights then are bidirectional path tracing's); `lighttracer`
+//! `bdpt` turns merging off (the weights then are bidirectional path tracing's), `bpm` turns
+//! connections, light samples and light tracing off (merging alone, with emission only along
+//! delta chains from the camera: bidirectional photon mapping); `lighttracer`
 //! traces light subpaths only, splatting their every vertex (the light's own point included)
 //! to the camera with weight 1, so paths the camera sees only through delta bounces are
 //! missing from it (as from pbrt-v4's `lighttracer`).
@@ -50,11 +53,14 @@ use crate::sampling::Sampler;
 use rayon::prelude::*;
 use std::sync::atomic::Ordering;
 
-/// The three bidirectional integrators.
+/// The bidirectional integrators: which techniques are on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Technique {
     LightTracer,
     Bdpt,
+    /// Merging alone (bidirectional photon mapping): light vertices merged at every
+    /// non-delta camera vertex; emission only along delta chains from the camera.
+    Bpm,
     Vcm,
 }
 
@@ -168,6 +174,7 @@ impl Weights {
         let (use_vc, use_vm, light_only) = match t {
             Technique::LightTracer => (false, false, true),
             Technique::Bdpt => (true, false, false),
+            Technique::Bpm => (false, true, false),
             Technique::Vcm => (true, true, false),
         };
         let radius2 = radius * radius;

@@ -1,5 +1,6 @@
 //! The bidirectional integrators (`vcm`, `bdpt`, `lighttracer`) against independent answers:
-//! - the shared Cornell box and its glass-and-mirror variant against the path tracer: block
+//! - the shared Cornell box, its glass-and-mirror variant and a room of coated spheres on
+//!   rough metal against the path tracer (bpm too on the Cornell box): block
 //!   means of 16 independent renders of each, every block within 4 standard errors (a 3%
 //!   bias is caught: the test of the test);
 //! - a white furnace (every wall emits and reflects): `Le / (1 - rho)` analytically;
@@ -135,6 +136,7 @@ fn bidirectional_agree_with_path_on_the_cornell_box() {
             (IntegratorKind::Bdpt, 4),
             (IntegratorKind::Lighttracer, 16),
             (IntegratorKind::Vcm, 4),
+            (IntegratorKind::Bpm, 64),
         ],
         32,
     );
