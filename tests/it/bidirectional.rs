@@ -235,6 +235,7 @@ AttributeEnd
         (IntegratorKind::Bdpt, 64),
         (IntegratorKind::Vcm, 64),
         (IntegratorKind::Lighttracer, 1024),
+        (IntegratorKind::Bpm, 512),
     ] {
         let out = render_with(&scene, kind, BackendKind::Embree, (16, 16, spp), 0, 7);
         let px: Vec<Vec3> = out
