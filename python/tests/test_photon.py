@@ -57,8 +57,12 @@ def assert_bit_equal(arrays, exr):
             ["--progressive", "--passes", "1..3", "--global-photons", "5000",
              "--caustic-photons", "5000"],
         ),
+        (
+            dict(spp=2, seed=4, integrator="vcm", merge_radius="2px"),
+            ["--spp", "2", "--seed", "4", "--integrator", "vcm", "--merge-radius", "2px"],
+        ),
     ],
-    ids=["photonmap", "path-passes", "progressive-range"],
+    ids=["photonmap", "path-passes", "progressive-range", "vcm"],
 )
 def test_arrays_equal_the_cli_exr(tmp_path, cli, glass, options, flags):
     scene = photon.load(glass, resolution=(48, 40))
