@@ -291,9 +291,7 @@ pub struct RenderContext<'a> {
 /// Why `kind` cannot render `scene` (`--integrator NAME: why`), if it cannot.
 pub fn unsupported(scene: &Scene, kind: IntegratorKind) -> Option<String> {
     kind.technique()?;
-    let lights = scene.emitters();
-    let lens = scene.camera.lens_radius > 0.0;
-    let why = vcm::unsupported(&lights, scene.lights.len(), lens)?;
+    let why = vcm::unsupported(scene.camera.lens_radius > 0.0)?;
     let name = format!("{kind:?}").to_lowercase();
     Some(format!("--integrator {name}: {why}"))
 }

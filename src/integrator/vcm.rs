@@ -41,8 +41,9 @@
 //!
 //! Distant and infinite lights start their subpaths on the disc of the scene's bounding
 //! sphere that faces their direction (as photons do); their first segment's length does not
-//! count in the partial sums. Not handled (a one-line error before rendering): infinite
-//! lights behind a portal, and thin lens cameras.
+//! count in the partial sums; behind a portal, an infinite light's subpaths that miss it carry
+//! nothing (as photons do), while the densities stay the whole map's, which every technique
+//! uses alike. Not handled (a one-line error before rendering): thin lens cameras.
 use super::RenderContext;
 use crate::accel::{Hit, RayKind};
 use crate::bsdf::{Bsdf, TransportMode};
@@ -137,17 +138,8 @@ const LIGHT_DIMS_PER_VERTEX: u32 = 3;
 const CAMERA_DIMS_PER_VERTEX: u32 = 6;
 
 /// Why a scene cannot be rendered by these integrators.
-pub fn unsupported(
-    ctx_lights: &crate::light::Lights,
-    n_lights: usize,
-    lens: bool,
-) -> Option<String> {
-    if lens {
-        return Some("needs a pinhole camera (\"lensradius\" 0)".into());
-    }
-    (0..n_lights)
-        .any(|i| ctx_lights.has_portal(i))
-        .then(|| "does not handle portal infinite lights yet".into())
+pub fn unsupported(lens: bool) -> Option<String> {
+    lens.then(|| "needs a pinhole camera (\"lensradius\" 0)".into())
 }
 
 /// What one iteration's MIS weights need (the technical report's eta_VCM and its factors).

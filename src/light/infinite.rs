@@ -190,11 +190,6 @@ impl EnvMap {
         self.portal.is_none_or(|p| p.admits(o, w))
     }
 
-    /// Whether there is no portal.
-    pub fn admits_everything(&self) -> bool {
-        self.portal.is_none()
-    }
-
     /// Whether a photon from `p` along `dir` enters the scene (always, without a portal).
     pub fn admits_photon(&self, p: Vec3, dir: Vec3) -> bool {
         self.portal.is_none_or(|p_| p_.admits_photon(p, dir))

@@ -281,11 +281,6 @@ impl Lights {
         matches!(self.emitters[i], Emitter::Distant(_))
     }
 
-    /// Whether light `i` is an infinite light seen only through a portal.
-    pub fn has_portal(&self, i: usize) -> bool {
-        matches!(&self.emitters[i], Emitter::Infinite(m) if !m.admits_everything())
-    }
-
     /// A point `u` on light `i`, chosen with probability `pmf`, as seen from `p`.
     pub fn sample_light(
         &self,
