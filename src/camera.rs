@@ -126,6 +126,44 @@ impl Camera {
         Some((raster, self.raster_to_solid_angle(cos)))
     }
 
+    /// [`Self::project`] through the point of the lens that `u_lens` (in [0, 1)^2) picks, as
+    /// [`Self::generate_ray_lens`] uses it: the raster position whose lens ray from that point
+    /// passes through `p`, the density factor, and the lens point in world space (what `p`
+    /// must see). The pinhole's projection without a lens.
+    pub fn project_through_lens(
+        &self,
+        p: Vec3,
+        u_lens: Vec2,
+        margin: Vec2,
+    ) -> Option<(Vec2, f32, Vec3)> {
+        if !self.has_lens() {
+            let (raster, f) = self.project(p, margin)?;
+            return Some((raster, f, self.origin));
+        }
+        let c = self.camera_from_world.transform_point3(p);
+        let lens = square_to_disk_concentric(u_lens) * self.lens_radius;
+        let o = Vec3::new(lens.x, lens.y, 0.0);
+        let d = c - o;
+        if d.z <= 0.0 || !d.is_finite() {
+            return None;
+        }
+        // Where the ray from the lens point through p meets the plane in focus, scaled back
+        // to z = 1: the pinhole direction of the raster position that generates this ray.
+        let q = o / self.focal_distance + d / d.z;
+        let ndc = Vec2::new(
+            ((q.x - self.centre.x) / self.half.x + 1.0) * 0.5,
+            (1.0 - (q.y - self.centre.y) / self.half.y) * 0.5,
+        );
+        let raster = ndc * self.res;
+        let (lo, hi) = (-margin, self.res + margin);
+        if !(raster.is_finite() && raster.cmpge(lo).all() && raster.cmplt(hi).all()) {
+            return None;
+        }
+        let cos = d.z / d.length();
+        let world = self.world_from_camera.transform_point3(o);
+        Some((raster, self.raster_to_solid_angle(cos), world))
+    }
+
     /// `1 / (A cos^3)` of [`Self::project`] for a ray at angle `acos(cos)` to the axis.
     pub fn raster_to_solid_angle(&self, cos: f32) -> f32 {
         let pixel_area = 4.0 * self.half.x * self.half.y / (self.res.x * self.res.y);

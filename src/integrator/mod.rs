@@ -288,14 +288,6 @@ pub struct RenderContext<'a> {
     pub photons: Option<&'a photonmap::PhotonPass>,
 }
 
-/// Why `kind` cannot render `scene` (`--integrator NAME: why`), if it cannot.
-pub fn unsupported(scene: &Scene, kind: IntegratorKind) -> Option<String> {
-    kind.technique()?;
-    let why = vcm::unsupported(scene.camera.lens_radius > 0.0)?;
-    let name = format!("{kind:?}").to_lowercase();
-    Some(format!("--integrator {name}: {why}"))
-}
-
 /// Pass 1 for `kind` (photon maps for the photon mapper, nothing otherwise).
 pub fn prepare(
     scene: &Scene,

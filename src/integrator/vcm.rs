@@ -43,7 +43,8 @@
 //! sphere that faces their direction (as photons do); their first segment's length does not
 //! count in the partial sums; behind a portal, an infinite light's subpaths that miss it carry
 //! nothing (as photons do), while the densities stay the whole map's, which every technique
-//! uses alike. Not handled (a one-line error before rendering): thin lens cameras.
+//! uses alike. With a thin lens, a light vertex connects to a point of the lens drawn for it
+//! (the camera subpaths' own lens density, so it leaves the weights as for a pinhole).
 use super::RenderContext;
 use crate::accel::{Hit, RayKind};
 use crate::bsdf::{Bsdf, TransportMode};
@@ -136,11 +137,6 @@ const LIGHT_DIMS_PER_VERTEX: u32 = 3;
 /// Sample dimensions per camera-subpath vertex: light choice 1, light point 2, lobe 1,
 /// direction 2 (after the camera's).
 const CAMERA_DIMS_PER_VERTEX: u32 = 6;
-
-/// Why a scene cannot be rendered by these integrators.
-pub fn unsupported(lens: bool) -> Option<String> {
-    lens.then(|| "needs a pinhole camera (\"lensradius\" 0)".into())
-}
 
 /// What one iteration's MIS weights need (the technical report's eta_VCM and its factors).
 #[derive(Clone, Copy, Debug)]
@@ -697,7 +693,7 @@ fn trace_light(ctx: &RenderContext, wt: &Weights, k: u64, it: u32, out: &mut Chu
         e.n.dot(e.dir).abs()
     };
     if wt.light_only && finite && !point {
-        splat_emitter(ctx, wt, i, pmf * pdf_pos, &e, out);
+        splat_emitter(ctx, wt, i, pmf * pdf_pos, &e, lens_u(s.seed, k, it, 0), out);
     }
     let dvc = if delta { 0.0 } else { cos_light / emission_pdf };
     let o = if e.n == Vec3::ZERO {
@@ -745,7 +741,7 @@ fn trace_light(ctx: &RenderContext, wt: &Weights, k: u64, it: u32, out: &mut Chu
                 out.vertices.push(lv);
             }
             if wt.use_vc || wt.light_only {
-                connect_to_camera(ctx, wt, &lv, out);
+                connect_to_camera(ctx, wt, &lv, lens_u(s.seed, k, it, path.len), out);
             }
         }
         if path.len + 2 > wt.max_len {
@@ -759,6 +755,14 @@ fn trace_light(ctx: &RenderContext, wt: &Weights, k: u64, it: u32, out: &mut Chu
     }
 }
 
+/// The lens sample of the camera connection of light subpath `k`'s vertex after `len`
+/// segments in iteration `it` (a hash: the subpath's own dimensions stay as they are).
+fn lens_u(seed: u64, k: u64, it: u32, len: u32) -> Vec2 {
+    use crate::sampling::{hash, to_unit};
+    let h = |d: u64| to_unit(hash(&[seed, LIGHT_STREAM, k, it as u64, len as u64, d]));
+    Vec2::new(h(0), h(1))
+}
+
 /// The light's own point seen by the camera (light tracing only): `pdf_a` is the density of
 /// the point (light choice included).
 fn splat_emitter(
@@ -767,12 +771,16 @@ fn splat_emitter(
     i: usize,
     pdf_a: f32,
     e: &crate::light::Emission,
+    u_lens: Vec2,
     out: &mut ChunkOut,
 ) {
-    let Some((raster, to_solid)) = ctx.camera.project(e.p, ctx.filter.radius()) else {
+    let Some((raster, to_solid, cam)) =
+        ctx.camera
+            .project_through_lens(e.p, u_lens, ctx.filter.radius())
+    else {
         return;
     };
-    let to_cam = ctx.camera.position() - e.p;
+    let to_cam = cam - e.p;
     let d2 = to_cam.length_squared();
     let dir = to_cam / d2.sqrt();
     let le = ctx.lights.le(i, e.n, dir);
@@ -793,11 +801,19 @@ fn splat_emitter(
 }
 
 /// Connects light vertex `lv` to the camera (the report's `ConnectToCamera`).
-fn connect_to_camera(ctx: &RenderContext, wt: &Weights, lv: &LightVertex, out: &mut ChunkOut) {
-    let Some((raster, to_solid)) = ctx.camera.project(lv.p, ctx.filter.radius()) else {
+fn connect_to_camera(
+    ctx: &RenderContext,
+    wt: &Weights,
+    lv: &LightVertex,
+    u_lens: Vec2,
+    out: &mut ChunkOut,
+) {
+    let Some((raster, to_solid, cam)) =
+        ctx.camera
+            .project_through_lens(lv.p, u_lens, ctx.filter.radius())
+    else {
         return;
     };
-    let cam = ctx.camera.position();
     let to_cam = cam - lv.p;
     let d2 = to_cam.length_squared();
     let dir = to_cam / d2.sqrt();

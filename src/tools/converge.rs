@@ -166,10 +166,6 @@ pub fn run(opts: &ConvergeOptions) -> Result<bool, ToolError> {
     };
     let mut rows = Vec::new();
     for m in &chosen {
-        if let Some(why) = crate::integrator::unsupported(scene, m.kind) {
-            say!("{:<22} skipped: {why}", m.name);
-            continue;
-        }
         for &budget in &opts.budgets {
             let row = measure(
                 scene, &accel, base, m, budget, &reference, mask, &opts.out, &pool,

@@ -211,9 +211,6 @@ pub fn configure(job: &mut Job, opts: &RenderOptions) {
 /// maps, builds the accelerator, measures pass 1 with a pilot trace and checks again with
 /// the photon maps. `photon render` and the Python module both start here.
 pub fn prepare(job: &mut Job, opts: &RenderOptions) -> Result<Prepared, ToolError> {
-    if let Some(why) = integrator::unsupported(&job.scene, job.integrator) {
-        return Err(ToolError(why));
-    }
     let cli = opts.overrides().from_cli();
     let budget = crate::limits::Budget::resolve(opts.max_memory);
     job.check_memory(&job.settings, &budget, cli)
