@@ -294,6 +294,7 @@ struct ChunkOut {
     /// Per subpath, the end of its vertices in `vertices` (relative to the chunk).
     ends: Vec<u32>,
     splats: Vec<Splat>,
+    tally: Tally,
 }
 
 /// The techniques whose shares of the image `--stats` reports, in [`Tally::sums`]' order.
@@ -311,6 +312,8 @@ const TECHNIQUES: [&str; 5] = [
 struct Tally {
     sums: [f64; 5],
     merged: u64,
+    /// Shadow rays cast by each technique (same order as `sums`; emission hits cast none).
+    rays: [u64; 5],
 }
 
 impl Tally {
@@ -323,6 +326,9 @@ impl Tally {
             *a += b;
         }
         self.merged += o.merged;
+        for (a, b) in self.rays.iter_mut().zip(o.rays) {
+            *a += b;
+        }
     }
 }
 
@@ -389,6 +395,7 @@ pub fn render(
                 splat(ctx, &mut film, (bx0, by0, w, h), p, v, comp);
                 tally.add(4, v);
             }
+            tally.absorb(&c.tally);
         }
         stored += vertices.len() as u64;
         light_s += t0.elapsed().as_secs_f64();
@@ -440,6 +447,13 @@ pub fn render(
     notes.push(format!(
         "{technique:?}: share of the image: {}",
         shares.join(", ")
+    ));
+    notes.push(format!(
+        "{technique:?}: shadow rays per subpath: light samples {:.2}, connections {:.2}, \
+         light tracing {:.2}",
+        tally.rays[1] as f64 / paths,
+        tally.rays[2] as f64 / paths,
+        tally.rays[4] as f64 / paths
     ));
     if technique == Technique::Vcm {
         notes.push(format!(
@@ -789,13 +803,11 @@ fn splat_emitter(
     }
     let to_surface = to_solid * e.n.dot(dir).abs() / d2;
     let v = le * (to_surface / (pdf_a * wt.n_light));
-    if v.is_finite()
-        && visible(
-            ctx,
-            (e.p, e.err, e.n),
-            (ctx.camera.position(), Vec3::ZERO, Vec3::ZERO),
-        )
-    {
+    if !v.is_finite() {
+        return;
+    }
+    out.tally.rays[4] += 1;
+    if visible(ctx, (e.p, e.err, e.n), (cam, Vec3::ZERO, Vec3::ZERO)) {
         out.splats.push((raster, v, Component::Direct));
     }
 }
@@ -831,6 +843,7 @@ fn connect_to_camera(
     if !v.is_finite() || v.max_element() <= 0.0 {
         return;
     }
+    out.tally.rays[4] += 1;
     if visible(ctx, (lv.p, lv.err, lv.ng), (cam, Vec3::ZERO, Vec3::ZERO)) {
         out.splats.push((raster, v, component(lv.len)));
     }
@@ -898,14 +911,14 @@ fn trace_camera(
         sampler.set_dimension(base + (path.len - 1) * CAMERA_DIMS_PER_VERTEX);
         if bsdf.flags().has_non_specular() {
             if wt.use_vc {
-                let c = path.beta * light_sample(ctx, wt, &path, &v, &si, &mut sampler);
+                let c = path.beta * light_sample(ctx, wt, &path, &v, &si, &mut sampler, &mut tally);
                 out[component(path.len)] += c;
                 tally.add(1, c);
                 for lv in own {
                     if lv.len + path.len + 1 > wt.max_len {
                         break;
                     }
-                    let c = path.beta * lv.beta * connect(ctx, wt, &path, &v, &si, lv);
+                    let c = path.beta * lv.beta * connect(ctx, wt, &path, &v, &si, lv, &mut tally);
                     out[Component::Indirect] += c;
                     tally.add(2, c);
                 }
@@ -986,6 +999,7 @@ fn light_sample(
     v: &Vertex,
     si: &SurfaceInteraction,
     sampler: &mut Sampler,
+    tally: &mut Tally,
 ) -> Vec3 {
     let (u_sel, u) = (sampler.next_1d(), sampler.next_2d());
     let lights = ctx.lights;
@@ -1020,6 +1034,7 @@ fn light_sample(
         return Vec3::ZERO;
     }
     ctx.counters.shadow_rays.fetch_add(1, Ordering::Relaxed);
+    tally.rays[1] += 1;
     if ctx.accel.occluded(RayKind::Shadow, &si.shadow_ray(&s)) {
         return Vec3::ZERO;
     }
@@ -1035,6 +1050,7 @@ fn connect(
     v: &Vertex,
     si: &SurfaceInteraction,
     lv: &LightVertex,
+    tally: &mut Tally,
 ) -> Vec3 {
     let to = lv.p - si.p;
     let d2 = to.length_squared();
@@ -1057,6 +1073,7 @@ fn connect(
     if !c.is_finite() || c.max_element() <= 0.0 {
         return Vec3::ZERO;
     }
+    tally.rays[2] += 1;
     if !visible(ctx, (si.p, si.err, si.ng), (lv.p, lv.err, lv.ng)) {
         return Vec3::ZERO;
     }
