@@ -22,6 +22,7 @@ pub mod light;
 pub mod limits;
 pub mod material;
 pub mod math;
+pub mod medium;
 pub mod memory;
 pub mod mesh;
 pub mod params;

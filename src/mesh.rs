@@ -29,6 +29,9 @@ pub struct Mesh {
     /// to `a < 1` is kept only with probability `a` (see [`crate::accel::alpha_keeps`]).
     /// `None`: opaque.
     pub alpha: Option<Arc<crate::texture::Texture>>,
+    /// The media this surface separates (`MediumInterface` with two different media), if
+    /// any: see [`crate::medium`].
+    pub interface: Option<crate::medium::MediumInterface>,
 }
 
 /// The uvs of a triangle's vertices (indices `tri`): from `uvs`, or without them pbrt-v4's

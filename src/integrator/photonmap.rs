@@ -645,8 +645,10 @@ pub fn gather_radiance(
     let mis = |light_pdf: f32| {
         crate::sampling::power_heuristic(n_g * g.pdf, g.light_samples as f32 * light_pdf)
     };
+    // The gather ray's own segment (a medium it crosses) weighs both.
+    let tr = ctx.scene.transmittance(hit.as_ref(), &g.ray);
     let direct = emitted(ctx, &g.ray, hit.as_ref(), mis);
-    (direct, reflected(ctx, pass, global, g, hit, buf))
+    (tr * direct, tr * reflected(ctx, pass, global, g, hit, buf))
 }
 
 /// The GGX alpha below which glossy lobes count as sharp (caustic chains go on through them,
@@ -741,6 +743,7 @@ fn reflected(
             throughput *= bs.f * (bs.wi.z.abs() / (bs.pdf * p_coat));
             ray = si.spawn_ray(si.frame.to_world(bs.wi));
             hit = ctx.accel.intersect(RayKind::Gather, &ray);
+            throughput *= scene.transmittance(hit.as_ref(), &ray);
             ctx.counters
                 .secondary_rays
                 .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
@@ -787,6 +790,7 @@ fn reflected(
                 from_thin = Some(pdf);
                 ray = si.spawn_ray(si.frame.to_world(wi));
                 hit = ctx.accel.intersect(RayKind::Gather, &ray);
+                throughput *= scene.transmittance(hit.as_ref(), &ray);
                 ctx.counters
                     .secondary_rays
                     .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
@@ -813,6 +817,7 @@ fn reflected(
         throughput *= bs.f * (bs.wi.z.abs() / bs.pdf);
         ray = si.spawn_ray(si.frame.to_world(bs.wi));
         hit = ctx.accel.intersect(RayKind::Gather, &ray);
+        throughput *= scene.transmittance(hit.as_ref(), &ray);
         ctx.counters
             .secondary_rays
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed);

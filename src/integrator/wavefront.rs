@@ -223,8 +223,9 @@ fn wave<S: Shade>(
     intersect_batch(ctx, kind, &b.rays, &mut b.hits);
     b.shadows.clear();
     b.next.clear();
-    for (path, hit) in b.paths.drain(..).zip(b.hits.iter()) {
+    for (mut path, hit) in b.paths.drain(..).zip(b.hits.iter()) {
         if let Some(hit) = hit {
+            path.beta *= ctx.scene.transmittance(Some(hit), &path.ray);
             let mut w = Wave {
                 acc,
                 shadows: &mut b.shadows,

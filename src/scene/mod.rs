@@ -112,6 +112,8 @@ pub struct Scene {
     pub meshes: Vec<Mesh>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
+    /// `MakeNamedMedium` media, indexed by [`crate::medium::MediumInterface`]s.
+    pub media: Vec<crate::medium::Medium>,
     pub camera: CameraDesc,
     pub film: FilmDesc,
     pub filter: FilterDesc,
@@ -144,6 +146,7 @@ impl Scene {
             meshes,
             materials,
             lights,
+            media: Vec::new(),
             camera: CameraDesc::pinhole(Mat4::IDENTITY, 45.0),
             film: FilmDesc::new(256, 256),
             filter: FilterDesc::Box {
@@ -190,6 +193,9 @@ impl Scene {
                 )
             )),
         ]);
+        if !self.media.is_empty() {
+            h = hash(&[h, text(format!("{:?}", self.media))]);
+        }
         for m in &self.meshes {
             let bits = |v: &[f32]| {
                 v.iter()
@@ -219,6 +225,9 @@ impl Scene {
                 m.flip_normals as u64,
             ]);
             // Only with alpha, so that the hash of a scene without alpha is what it was.
+            if let Some(mi) = &m.interface {
+                h = hash(&[h, text(format!("{mi:?}"))]);
+            }
             if let Some(a) = &m.alpha {
                 h = hash(&[h, text(format!("{a:?}"))]);
             }
@@ -227,6 +236,22 @@ impl Scene {
     }
 
     /// Bytes the environment maps of `infinite` lights hold (texels and sampling tables).
+    /// What survives of light along `ray` up to `hit` (the segment's medium: the side of the
+    /// hit surface it arrives from, see [`crate::medium`]); 1 without a medium there, or for
+    /// a ray that leaves the scene (`None`: media are closed regions).
+    #[inline]
+    pub fn transmittance(&self, hit: Option<&crate::accel::Hit>, ray: &crate::math::Ray) -> Vec3 {
+        let Some(h) = hit else { return Vec3::ONE };
+        let mesh = &self.meshes[h.mesh as usize];
+        let Some(mi) = &mesh.interface else {
+            return Vec3::ONE;
+        };
+        match mi.arriving(ray.d, mesh.geometric_normal(h.prim, h.u, h.v)) {
+            Some(m) => self.media[m as usize].transmittance(h.t * ray.d.length()),
+            None => Vec3::ONE,
+        }
+    }
+
     pub fn light_map_bytes(&self) -> u64 {
         self.lights
             .iter()

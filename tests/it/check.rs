@@ -54,7 +54,7 @@ fn collect_mode_lists_every_problem_in_order() {
         (4, "wood.png"),
         (5, "unsupported material type \"hair\""),
         (8, "missing.ply"),
-        (9, "participating media are not supported"),
+        (9, "scattering media are not supported yet"),
         (10, "unknown directive \"Frobnicate\""),
         (11, "\"point3 portal\": expected 4 points, got 3"),
         // The texture failed to load on line 4, so the name is unknown here.

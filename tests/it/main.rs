@@ -26,6 +26,7 @@ mod hostile;
 mod kdtree;
 mod lamp_can;
 mod layers;
+mod media;
 mod parser;
 mod passes;
 mod path_tracer;

@@ -18,8 +18,9 @@
 //! parameters; photon builds its own BVH), the parameters of another renderer's `Integrator`
 //! that photon does not implement (`Integrator "sppm" "float radius" 0.01`: see
 //! [`FOREIGN_INTEGRATORS`]), the `Option`s that cannot change photon's image. `ColorSpace
-//! "srgb"` is photon's own space; other color spaces, participating media (`MakeNamedMedium`,
-//! a non-empty `MediumInterface`), curves and hair are errors. `Texture`s are parsed and
+//! "srgb"` is photon's own space; other color spaces, curves and hair are errors.
+//! `MakeNamedMedium` and `MediumInterface` build absorbing media ([`crate::medium`], which
+//! lists what is not supported yet). `Texture`s are parsed and
 //! stored ([`super::textures`]); materials ([`crate::material`]) and a shape's `alpha` (see
 //! [`super::shapes`]) name them.
 //!
@@ -86,6 +87,9 @@ struct GraphicsState {
     material: MatRef,
     area: Option<AreaSpec>,
     reverse: bool,
+    /// The current `MediumInterface`: inside and outside medium names ("" = vacuum) and
+    /// where it was written.
+    media: (String, String, Option<Loc>),
 }
 
 /// A pushed block: what it saved and where it began.
@@ -135,6 +139,11 @@ pub struct Builder {
     texture_work: std::collections::HashMap<usize, (u64, u32)>,
     /// What the data files (images, PLY meshes, instanced copies) may allocate.
     budget: super::LoadBudget,
+    /// `MakeNamedMedium` media, and their indices by name.
+    media: Vec<crate::medium::Medium>,
+    named_media: HashMap<String, u32>,
+    /// The camera's medium (the outside medium at `Camera`), when not vacuum.
+    camera_medium: Option<(String, Loc)>,
     /// `ObjectBegin` definitions: world-space meshes as defined (CTM at definition).
     objects: HashMap<String, Vec<Mesh>>,
     /// The definition being read: its name, meshes and where it began.
@@ -158,6 +167,7 @@ impl Builder {
                 material: MatRef::Default,
                 area: None,
                 reverse: false,
+                media: Default::default(),
             },
             stack: Vec::new(),
             named_coords: HashMap::new(),
@@ -194,6 +204,9 @@ impl Builder {
             images: Default::default(),
             texture_work: Default::default(),
             budget: super::LoadBudget::new(crate::limits::default_budget().bytes),
+            media: Vec::new(),
+            named_media: HashMap::new(),
+            camera_medium: None,
             objects: HashMap::new(),
             object: None,
         }
@@ -253,6 +266,15 @@ impl Builder {
         if !self.world_begun {
             return Err(SceneError::at(end, "the scene has no WorldBegin"));
         }
+        if let Some((name, loc)) = &self.camera_medium {
+            return Err(SceneError::at(
+                loc,
+                format!(
+                    "the camera is inside medium \"{name}\" (MediumInterface before Camera): \
+                     not supported yet (media must be closed regions the camera is outside of)"
+                ),
+            ));
+        }
         self.tessellate_spheres();
         super::extent::check(&self.meshes, &self.mesh_locs)
     }
@@ -272,6 +294,7 @@ impl Builder {
             meshes: self.meshes,
             materials: self.materials,
             lights: self.lights,
+            media: self.media,
             camera: self.camera,
             film: self.film,
             filter: self.filter,
@@ -488,14 +511,25 @@ impl Builder {
             }
             "Option" => self.pbrt_option(tok)?,
             "MakeNamedMedium" => {
-                string_arg(tok, "a medium name")?;
-                read_params(tok)?;
-                return Err(SceneError::at(
-                    &loc,
-                    "participating media are not supported (MakeNamedMedium)",
-                ));
+                let (name, at) = string_arg(tok, "a medium name")?;
+                let mut params = read_params(tok)?;
+                if name.is_empty() {
+                    return Err(SceneError::at(&at, "a medium needs a non-empty name"));
+                }
+                if self.named_media.contains_key(&name) {
+                    return Err(SceneError::at(
+                        &at,
+                        format!("medium \"{name}\" is defined twice"),
+                    ));
+                }
+                let medium = crate::medium::Medium::create(&name, &mut params, &loc)?;
+                self.named_media.insert(name, self.media.len() as u32);
+                self.media.push(medium);
             }
-            "MediumInterface" => medium_interface(tok, &loc)?,
+            "MediumInterface" => {
+                let (inside, outside) = medium_interface(tok, &loc)?;
+                self.gs.media = (inside, outside, Some(loc.clone()));
+            }
             "Texture" => {
                 self.world_only(t.text, &loc)?;
                 self.texture_count += 1;
@@ -520,6 +554,16 @@ impl Builder {
                 let (ty, at) = string_arg(tok, "a light type")?;
                 let mut params = read_params(tok)?;
                 let portal = params.loc("portal").cloned();
+                if !self.gs.media.1.is_empty() {
+                    return Err(SceneError::at(
+                        &at,
+                        format!(
+                            "a light inside medium \"{}\" is not supported yet (media must \
+                             be closed regions the lights are outside of)",
+                            self.gs.media.1
+                        ),
+                    ));
+                }
                 let light = light_source(
                     &ty,
                     &mut params,
@@ -641,6 +685,10 @@ impl Builder {
                 }
                 self.note_motion(&at);
                 self.camera = camera(&ty, &mut params, &at, start)?;
+                // pbrt-v4: the camera is in the outside medium current at `Camera`.
+                if !self.gs.media.1.is_empty() {
+                    self.camera_medium = Some((self.gs.media.1.clone(), at.clone()));
+                }
             }
             "Film" => {
                 let (film, note) = film(&ty, &mut params, &at)?;
@@ -914,6 +962,14 @@ impl Builder {
             }
         };
         super::extent::check_shape(&mesh, &at)?;
+        mesh.interface = self.interface(&at)?;
+        if let (Some(_), Some(_)) = (&mesh.interface, &self.gs.area) {
+            return Err(SceneError::at(
+                &at,
+                "an emitting shape on a medium boundary is not supported yet (media must be \
+                 closed regions the lights are outside of)",
+            ));
+        }
         self.note_motion(&at);
         mesh.material = self.material_index();
         if let (Some(a), Some(_), Some(loc), None) =
@@ -965,6 +1021,41 @@ impl Builder {
         self.meshes.push(mesh);
         self.mesh_locs.push(at);
         Ok(())
+    }
+
+    /// The medium boundary the current `MediumInterface` makes of a shape at `at`: `None`
+    /// when both sides are vacuum.
+    fn interface(&self, at: &Loc) -> Result<Option<crate::medium::MediumInterface>, SceneError> {
+        let (inside, outside, written) = &self.gs.media;
+        if inside.is_empty() && outside.is_empty() {
+            return Ok(None);
+        }
+        let written = written.as_ref().unwrap_or(at);
+        if inside == outside {
+            return Err(SceneError::at(
+                written,
+                format!(
+                    "a surface with medium \"{inside}\" on both sides is not supported yet \
+                     (only boundaries between two different media are)"
+                ),
+            ));
+        }
+        let index = |name: &String| -> Result<Option<u32>, SceneError> {
+            if name.is_empty() {
+                return Ok(None);
+            }
+            match self.named_media.get(name) {
+                Some(&i) => Ok(Some(i)),
+                None => Err(SceneError::at(
+                    written,
+                    format!("undefined medium \"{name}\" (MakeNamedMedium must come first)"),
+                )),
+            }
+        };
+        Ok(Some(crate::medium::MediumInterface {
+            inside: index(inside)?,
+            outside: index(outside)?,
+        }))
     }
 
     /// `ObjectInstance "name"`: a copy of each mesh of the object, moved by the CTM (so the
@@ -1133,9 +1224,9 @@ fn skip_arguments(tok: &mut Tokenizer) -> Result<(), SceneError> {
     Ok(())
 }
 
-/// `MediumInterface "inside" "outside"` (or one name for both): empty names (vacuum, pbrt-v4's
-/// default) are accepted, a named medium is an error.
-fn medium_interface(tok: &mut Tokenizer, loc: &Loc) -> Result<(), SceneError> {
+/// `MediumInterface "inside" "outside"` (or one name for both): the two names ("" = vacuum,
+/// pbrt-v4's default).
+fn medium_interface(tok: &mut Tokenizer, loc: &Loc) -> Result<(String, String), SceneError> {
     let mut names = Vec::new();
     while let Some(t) = tok.peek()? {
         if t.kind != TokKind::Str || names.len() == 2 {
@@ -1150,16 +1241,9 @@ fn medium_interface(tok: &mut Tokenizer, loc: &Loc) -> Result<(), SceneError> {
             "MediumInterface needs one or two medium names",
         ));
     }
-    if names.iter().all(String::is_empty) {
-        return Ok(());
-    }
-    Err(SceneError::at(
-        loc,
-        format!(
-            "participating media are not supported (MediumInterface \"{}\")",
-            names.join("\" \"")
-        ),
-    ))
+    let inside = names[0].clone();
+    let outside = names.get(1).unwrap_or(&inside).clone();
+    Ok((inside, outside))
 }
 
 /// Marks used the parameters whose names `keep` accepts and returns their declarations in

@@ -326,6 +326,7 @@ pub fn transform_mesh(mesh: &Mesh, m: &Mat4) -> Result<Mesh, String> {
         flip_normals,
         sphere,
         alpha: mesh.alpha.clone(),
+        interface: mesh.interface,
     })
 }
 

@@ -336,12 +336,16 @@ fn media_textures_and_curves_are_clear_errors() {
     assert_src_err(
         "WorldBegin\n\nMakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n",
         3,
-        &["participating media are not supported (MakeNamedMedium)"],
+        &[
+            "medium \"fog\" scatters",
+            "scattering media are not supported yet",
+        ],
     );
+    // A medium that only absorbs loads; its name must be defined before a shape uses it.
     assert_src_err(
-        "WorldBegin\nMediumInterface \"\" \"fog\"\n",
+        "WorldBegin\nMediumInterface \"\" \"fog\"\nShape \"sphere\"\n",
         2,
-        &["participating media are not supported (MediumInterface \"\" \"fog\")"],
+        &["undefined medium \"fog\""],
     );
     assert_src_err(
         "WorldBegin\nShape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n",
