@@ -8,6 +8,9 @@
 //!   [`bsdf`] and [`light`] do the shading, [`film`] accumulates pixels;
 //! - [`imageio`] writes EXR (OpenEXRCore) and PNG.
 //!
+//! [`medium`] holds the absorbing media (`MakeNamedMedium`) that ray segments cross, which
+//! [`scene::Scene::transmittance`] applies for every integrator.
+//!
 //! [`texture`] holds the textures the loader parses (image maps, checkerboards, scale and mix),
 //! which materials and shape alpha evaluate per hit.
 pub mod accel;

@@ -61,6 +61,12 @@ AttributeEnd
 fn render(text: &str, kind: IntegratorKind, spp: u32) -> Vec3 {
     let dir = TempDir::new("photon-media");
     let scene = loader::load(&dir.write("scene.pbrt", text)).expect("scene loads");
+    let media = scene
+        .notes
+        .iter()
+        .filter(|n| n.starts_with("media: "))
+        .count();
+    assert_eq!(media, 1, "one note names the media: {:?}", scene.notes);
     let out = common::render_with(&scene, kind, BackendKind::Embree, (16, 16, spp), 2, 7);
     channel_means(&out.image)
 }

@@ -276,6 +276,7 @@ impl Builder {
             ));
         }
         self.tessellate_spheres();
+        self.note_media();
         super::extent::check(&self.meshes, &self.mesh_locs)
     }
 
@@ -1021,6 +1022,29 @@ impl Builder {
         self.meshes.push(mesh);
         self.mesh_locs.push(at);
         Ok(())
+    }
+
+    /// A note naming the media and what every integrator does with them.
+    fn note_media(&mut self) {
+        if self.media.is_empty() {
+            return;
+        }
+        let boundaries = self.meshes.iter().filter(|m| m.interface.is_some()).count();
+        let names: Vec<String> = self
+            .media
+            .iter()
+            .map(|m| {
+                let s = m.sigma_a;
+                format!("\"{}\" (sigma_a {} {} {})", m.name, s.x, s.y, s.z)
+            })
+            .collect();
+        self.notes.push(format!(
+            "media: {} absorbing ({}) closed by {boundaries} shapes: every integrator dims each \
+             ray segment inside them by Beer's law (photons, camera, gather and bidirectional \
+             paths alike); nothing scatters in them",
+            self.media.len(),
+            names.join(", ")
+        ));
     }
 
     /// The medium boundary the current `MediumInterface` makes of a shape at `at`: `None`
