@@ -232,14 +232,19 @@ impl<'s> SurfaceInteraction<'s> {
     /// The shadow ray to a light sample: from past this point's error bound to just short of
     /// the light point (itself moved past its own bound towards this side).
     pub fn shadow_ray(&self, s: &LightSample) -> Ray {
-        let o = self.spawn(s.wi);
-        let target = if s.n == Vec3::ZERO {
-            s.p
-        } else {
-            spawn_origin(s.p, s.err, if s.n.dot(o - s.p) >= 0.0 { s.n } else { -s.n })
-        };
-        Ray::segment(o, target - o, 1.0 - 1e-4)
+        shadow_ray_from(self.spawn(s.wi), s)
     }
+}
+
+/// The shadow ray from `o` (already clear of its surface, or a point in a medium) to a light
+/// sample, ending just short of the light point (moved past its own bound towards `o`).
+pub fn shadow_ray_from(o: Vec3, s: &LightSample) -> Ray {
+    let target = if s.n == Vec3::ZERO {
+        s.p
+    } else {
+        spawn_origin(s.p, s.err, if s.n.dot(o - s.p) >= 0.0 { s.n } else { -s.n })
+    };
+    Ray::segment(o, target - o, 1.0 - 1e-4)
 }
 
 /// Whether any texture of `m` reads its footprint, or `m` is bump mapped.

@@ -8,8 +8,9 @@
 //!   [`bsdf`] and [`light`] do the shading, [`film`] accumulates pixels;
 //! - [`imageio`] writes EXR (OpenEXRCore) and PNG.
 //!
-//! [`medium`] holds the absorbing media (`MakeNamedMedium`) that ray segments cross, which
-//! [`scene::Scene::transmittance`] applies for every integrator.
+//! [`medium`] holds the media (`MakeNamedMedium`): the path tracer tracks the medium of each
+//! ray and scatters in it ([`integrator::wavefront`]); the other integrators weigh segments in
+//! absorbing closed media by [`accel::transmittance`].
 //!
 //! [`texture`] holds the textures the loader parses (image maps, checkerboards, scale and mix),
 //! which materials and shape alpha evaluate per hit.

@@ -51,27 +51,51 @@ enum Command {
 /// version print as usual.
 fn parse() -> Result<Cli, ExitCode> {
     use clap::error::ErrorKind;
-    Cli::try_parse().map_err(|e| match e.kind() {
-        ErrorKind::DisplayHelp
-        | ErrorKind::DisplayVersion
-        | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
-            let _ = e.print();
-            ExitCode::SUCCESS
-        }
-        _ => {
-            let text = e.to_string();
-            let lines: Vec<&str> = text
-                .lines()
-                .map(str::trim)
-                .take_while(|l| !l.starts_with("Usage:") && !l.starts_with("For more information"))
-                .filter(|l| !l.is_empty())
-                .collect();
-            let line = lines.join(" ");
-            let line = line.strip_prefix("error: ").unwrap_or(&line);
-            let _ = writeln!(std::io::stderr(), "photon: {}", one_line(line));
-            ExitCode::from(2)
+    Cli::try_parse_from(with_subcommand(std::env::args_os().collect())).map_err(|e| {
+        match e.kind() {
+            ErrorKind::DisplayHelp
+            | ErrorKind::DisplayVersion
+            | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+                let _ = e.print();
+                ExitCode::SUCCESS
+            }
+            _ => {
+                let text = e.to_string();
+                let lines: Vec<&str> = text
+                    .lines()
+                    .map(str::trim)
+                    .take_while(|l| {
+                        !l.starts_with("Usage:") && !l.starts_with("For more information")
+                    })
+                    .filter(|l| !l.is_empty())
+                    .collect();
+                let line = lines.join(" ");
+                let line = line.strip_prefix("error: ").unwrap_or(&line);
+                let _ = writeln!(std::io::stderr(), "photon: {}", one_line(line));
+                ExitCode::from(2)
+            }
         }
     })
+}
+
+/// `photon SCENE.pbrt ...` as pbrt-v4 users type it: a first argument that is no subcommand
+/// and no flag but names a `.pbrt` file (or a `.pbrt.gz`) means `render`.
+fn with_subcommand(mut args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString> {
+    use clap::CommandFactory;
+    let Some(first) = args.get(1).and_then(|a| a.to_str()) else {
+        return args;
+    };
+    let is_subcommand = Cli::command()
+        .get_subcommands()
+        .any(|c| c.get_name() == first)
+        || first == "help";
+    if !is_subcommand
+        && !first.starts_with('-')
+        && (first.ends_with(".pbrt") || first.ends_with(".pbrt.gz"))
+    {
+        args.insert(1, "render".into());
+    }
+    args
 }
 
 /// An error as the one line photon prints after `photon: ` (at most

@@ -269,6 +269,22 @@ pub(crate) fn validate_meshes(scene: &Scene) -> Result<(), AccelError> {
 /// The unit geometric normal `normalize(cross(p1 - p0, p2 - p0))` of every triangle of `mesh`
 /// (zero for zero-area triangles). Both backends fill [`Hit::ng`] from this one function so
 /// that they agree bit for bit. Indices must have been checked by [`validate_meshes`].
+/// What survives of light along `ray` up to `hit` (the segment's medium: the side of the
+/// hit surface it arrives from, see [`crate::medium`]); 1 without a medium there, or for a
+/// ray that leaves the scene (`None`: media are closed regions).
+#[inline]
+pub fn transmittance(scene: &Scene, hit: Option<&Hit>, ray: &Ray) -> Vec3 {
+    let Some(h) = hit else { return Vec3::ONE };
+    let mesh = &scene.meshes[h.mesh as usize];
+    let Some(mi) = &mesh.interface else {
+        return Vec3::ONE;
+    };
+    match mi.arriving(ray.d, mesh.geometric_normal(h.prim, h.u, h.v)) {
+        Some(m) => scene.media[m as usize].transmittance(h.t * ray.d.length()),
+        None => Vec3::ONE,
+    }
+}
+
 pub(crate) fn face_normals(mesh: &crate::scene::Mesh) -> Vec<Vec3> {
     (0..mesh.indices.len() as u32)
         .map(|p| {

@@ -191,6 +191,7 @@ pub(super) fn shadow_rays<T>(
             ray: si.shadow_ray(&s),
             contrib,
             component: component(path.depth == 0),
+            medium: None,
         });
     }
 }

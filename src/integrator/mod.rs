@@ -288,6 +288,21 @@ pub struct RenderContext<'a> {
     pub photons: Option<&'a photonmap::PhotonPass>,
 }
 
+/// Whether `kind` renders `scene` right: only the path tracer tracks the medium each ray is
+/// in, so scenes whose media need that ([`Scene::media_need_tracking`]) are refused by the
+/// others with the file location of the first reason.
+pub fn check_scene(kind: IntegratorKind, scene: &Scene) -> Result<(), String> {
+    match (&scene.media_need_tracking, kind) {
+        (None, _) | (Some(_), IntegratorKind::Path) => Ok(()),
+        (Some(why), _) => Err(format!(
+            "{why}: only --integrator path renders such media yet (--integrator {} handles \
+             absorbing media closed by the surfaces that name them)",
+            clap::ValueEnum::to_possible_value(&kind)
+                .map_or("?".into(), |v| v.get_name().to_string())
+        )),
+    }
+}
+
 /// Pass 1 for `kind` (photon maps for the photon mapper, nothing otherwise).
 pub fn prepare(
     scene: &Scene,

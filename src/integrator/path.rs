@@ -44,8 +44,9 @@ use super::RenderContext;
 use crate::accel::Hit;
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::film::Radiance;
-use crate::interaction::SurfaceInteraction;
-use crate::math::{max_component, Vec3};
+use crate::interaction::{shadow_ray_from, SurfaceInteraction};
+use crate::math::{max_component, Ray, Vec3};
+use crate::medium::{henyey_greenstein, sample_henyey_greenstein};
 use crate::sampling::power_heuristic;
 
 /// Dimensions each vertex reads: light choice (1), light point (2), BSDF lobe (1), BSDF
@@ -76,6 +77,14 @@ impl Shade for PathTracer {
     fn emitted_component(&self, path: &PathState) -> Component {
         component(path.depth == 0 || (path.depth == 1 && path.prev_pdf > 0.0))
     }
+
+    fn tracks_media(&self) -> bool {
+        true
+    }
+
+    fn shade_medium(&self, ctx: &RenderContext, path: PathState, p: Vec3, wave: &mut Wave<()>) {
+        shade_medium(ctx, path, p, wave)
+    }
 }
 
 /// Light from an emitter straight away or after one non-delta bounce at the first hit is
@@ -91,6 +100,14 @@ fn component(direct: bool) -> Component {
 /// Shades one hit: emission, a light sample, and a BSDF-sampled continuation.
 fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<()>) {
     let mut si = SurfaceInteraction::new(ctx.scene, hit, &path.ray);
+    if si.material(ctx.scene).interface {
+        // No surface: the ray goes on into the medium behind the boundary, no bounce taken.
+        let d = path.ray.d;
+        path.medium = next_medium(&si, d, path.medium);
+        path.ray = Ray::new(si.spawn(d), d);
+        wave.next.push(path);
+        return;
+    }
     if let Some(li) = si.area_light() {
         let le = emitted(ctx, &path, li, si.p, si.ng);
         add(
@@ -165,6 +182,7 @@ fn light_sample(
         ray: v.shadow_ray(&s),
         contrib,
         component: component(path.depth == 0),
+        medium: next_medium(v, s.wi, path.medium),
     })
 }
 
@@ -193,11 +211,84 @@ fn continue_path(mut path: PathState, bsdf: &Bsdf, v: &SurfaceInteraction) -> Op
     if beta.max_element() <= 0.0 || !beta.is_finite() {
         return None;
     }
-    path.ray = v.spawn_ray(v.frame.to_world(bs.wi));
+    let wi = v.frame.to_world(bs.wi);
+    path.medium = next_medium(v, wi, path.medium);
+    path.ray = v.spawn_ray(wi);
     path.beta = beta;
     path.depth = depth;
     path.prev_pdf = bsdf.mis_pdf(v.wo, &bs);
     path.prev_p = v.p;
     path.eta_scale = eta_scale;
     Some(path)
+}
+
+/// The medium a ray leaving `v` along world direction `d` travels in: the side of `v`'s
+/// medium boundary it goes to, or `current` where the surface is no boundary (pbrt-v4's
+/// `GetMedium`).
+fn next_medium(v: &SurfaceInteraction, d: Vec3, current: Option<u32>) -> Option<u32> {
+    match &v.mesh.interface {
+        Some(mi) => mi.leaving(d, v.ng),
+        None => current,
+    }
+}
+
+/// Shades a scattering point `p` in the path's medium (the throughput already holds
+/// `sigma_s T / pdf`): a light sample through the phase function, MIS-weighted against phase
+/// sampling, and a phase-sampled continuation; a medium vertex is a bounce like a surface one
+/// and reads the same dimensions.
+fn shade_medium(ctx: &RenderContext, mut path: PathState, p: Vec3, wave: &mut Wave<()>) {
+    if path.depth >= ctx.settings.max_depth {
+        return;
+    }
+    let g = match path.medium {
+        Some(m) => ctx.scene.media[m as usize].g,
+        None => return,
+    };
+    let wo = -path.ray.d.normalize();
+    let base = CAMERA_DIMS.wrapping_add(path.depth.wrapping_mul(DIMS_PER_VERTEX));
+    path.sampler.set_dimension(base);
+    let mut sampler = path.sampler.clone();
+    let u_sel = sampler.next_1d();
+    let u = sampler.next_2d();
+    if let Some(s) = ctx.lights.sample(&ctx.scene.meshes, p, u_sel, u) {
+        let f = henyey_greenstein(wo.dot(s.wi), g);
+        let w = if s.delta {
+            1.0
+        } else {
+            power_heuristic(s.pdf, f)
+        };
+        let contrib = path.beta * s.li * (f * w / s.pdf);
+        if contrib.is_finite() && contrib.max_element() > 0.0 {
+            wave.shadows.push(Shadow {
+                pixel: path.pixel,
+                ray: shadow_ray_from(p, &s),
+                contrib,
+                component: component(path.depth == 0),
+                medium: path.medium,
+            });
+        }
+    }
+    path.sampler.set_dimension(base + 4);
+    let u = path.sampler.next_2d();
+    let u_rr = path.sampler.next_1d();
+    let (wi, pdf) = sample_henyey_greenstein(wo, g, u);
+    let depth = path.depth + 1;
+    if depth > RR_MIN_BOUNCES {
+        let survive = max_component(path.beta * path.eta_scale);
+        if survive < 1.0 {
+            if u_rr >= survive {
+                return;
+            }
+            path.beta /= survive;
+        }
+    }
+    if path.beta.max_element() <= 0.0 || !path.beta.is_finite() {
+        return;
+    }
+    path.ray = Ray::new(p, wi);
+    path.depth = depth;
+    path.prev_pdf = pdf;
+    path.prev_p = p;
+    path.prev_delta = false;
+    wave.next.push(path);
 }

@@ -646,7 +646,7 @@ pub fn gather_radiance(
         crate::sampling::power_heuristic(n_g * g.pdf, g.light_samples as f32 * light_pdf)
     };
     // The gather ray's own segment (a medium it crosses) weighs both.
-    let tr = ctx.scene.transmittance(hit.as_ref(), &g.ray);
+    let tr = crate::accel::transmittance(ctx.scene, hit.as_ref(), &g.ray);
     let direct = emitted(ctx, &g.ray, hit.as_ref(), mis);
     (tr * direct, tr * reflected(ctx, pass, global, g, hit, buf))
 }
@@ -743,7 +743,7 @@ fn reflected(
             throughput *= bs.f * (bs.wi.z.abs() / (bs.pdf * p_coat));
             ray = si.spawn_ray(si.frame.to_world(bs.wi));
             hit = ctx.accel.intersect(RayKind::Gather, &ray);
-            throughput *= scene.transmittance(hit.as_ref(), &ray);
+            throughput *= crate::accel::transmittance(scene, hit.as_ref(), &ray);
             ctx.counters
                 .secondary_rays
                 .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
@@ -790,7 +790,7 @@ fn reflected(
                 from_thin = Some(pdf);
                 ray = si.spawn_ray(si.frame.to_world(wi));
                 hit = ctx.accel.intersect(RayKind::Gather, &ray);
-                throughput *= scene.transmittance(hit.as_ref(), &ray);
+                throughput *= crate::accel::transmittance(scene, hit.as_ref(), &ray);
                 ctx.counters
                     .secondary_rays
                     .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
@@ -817,7 +817,7 @@ fn reflected(
         throughput *= bs.f * (bs.wi.z.abs() / bs.pdf);
         ray = si.spawn_ray(si.frame.to_world(bs.wi));
         hit = ctx.accel.intersect(RayKind::Gather, &ray);
-        throughput *= scene.transmittance(hit.as_ref(), &ray);
+        throughput *= crate::accel::transmittance(scene, hit.as_ref(), &ray);
         ctx.counters
             .secondary_rays
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed);

@@ -727,7 +727,7 @@ fn trace_light(ctx: &RenderContext, wt: &Weights, k: u64, it: u32, out: &mut Chu
     };
     while let Some((hit, si, bsdf)) = next_vertex(ctx, RayKind::Photon, &path.ray) {
         arrive(&mut path, hit.t, si.wo.z.abs());
-        path.beta *= ctx.scene.transmittance(Some(&hit), &path.ray);
+        path.beta *= crate::accel::transmittance(ctx.scene, Some(&hit), &path.ray);
         let v = Vertex {
             ng: si.ng,
             frame: si.frame,
@@ -894,7 +894,7 @@ fn trace_camera(
             break;
         };
         arrive(&mut path, hit.t, si.wo.z.abs());
-        path.beta *= ctx.scene.transmittance(Some(&hit), &path.ray);
+        path.beta *= crate::accel::transmittance(ctx.scene, Some(&hit), &path.ray);
         if let Some(li) = si.area_light() {
             let c = path.beta * emitted(ctx, wt, &path, li, &si);
             out[component(path.len - 1)] += c;

@@ -20,6 +20,10 @@ use std::time::Instant;
 /// Dimensions the camera sample uses (pixel filter offset).
 pub const CAMERA_DIMS: u32 = 2;
 
+/// First sampler dimension of the distance sampling in media: ray segment `k` of a path reads
+/// dimensions `MEDIUM_DIMS + 2k` and `+ 2k + 1` (channel, distance), far above any vertex's.
+pub const MEDIUM_DIMS: u32 = 1 << 20;
+
 /// One path in flight; `T` is the integrator's own per-path state ([`Shade::PathData`]).
 #[derive(Clone, Debug)]
 pub struct PathState<T = ()> {
@@ -39,6 +43,11 @@ pub struct PathState<T = ()> {
     pub prev_delta: bool,
     /// Product of `eta^2` over the delta refractions so far (for roulette).
     pub eta_scale: f32,
+    /// The medium the ray travels in (index into `Scene::media`), for integrators that track
+    /// media ([`Shade::tracks_media`]).
+    pub medium: Option<u32>,
+    /// Ray segments traced so far (each reads its own medium dimensions, [`MEDIUM_DIMS`]).
+    pub segment: u32,
     pub sampler: Sampler,
     /// The integrator's own state.
     pub data: T,
@@ -56,6 +65,8 @@ impl<T: Default> PathState<T> {
             prev_p: ray.o,
             prev_delta: true,
             eta_scale: 1.0,
+            medium: None,
+            segment: 0,
             sampler,
             data: T::default(),
         }
@@ -78,6 +89,8 @@ pub struct Shadow {
     pub ray: Ray,
     pub contrib: Vec3,
     pub component: Component,
+    /// The medium the ray starts in (read only by integrators that track media).
+    pub medium: Option<u32>,
 }
 
 /// Where a shading step puts its results.
@@ -108,6 +121,24 @@ pub trait Shade: Sync {
     /// The component that light emitted towards `path` counts towards: an emitter it hits, or
     /// the infinite lights when it leaves the scene (see [`escaped`]).
     fn emitted_component(&self, path: &PathState<Self::PathData>) -> Component;
+    /// Whether this integrator tracks the medium each path is in (pbrt-v4's semantics:
+    /// segments in a medium sample scattering, [`Shade::shade_medium`] shades the points, and
+    /// shadow rays pass `interface` surfaces, taking each medium's transmittance). Integrators
+    /// that do not weigh a segment by the medium on the side of the surface it ends on
+    /// ([`crate::accel::transmittance`]), which is exact for absorbing regions closed by the
+    /// surfaces that name them.
+    fn tracks_media(&self) -> bool {
+        false
+    }
+    /// Shades a scattering point `p` of `path`'s medium (for integrators that track media).
+    fn shade_medium(
+        &self,
+        _ctx: &RenderContext,
+        _path: PathState<Self::PathData>,
+        _p: Vec3,
+        _wave: &mut Wave<Self::Extra, Self::PathData>,
+    ) {
+    }
     /// What `path` sees of the infinite lights when it leaves the scene (see [`escaped`]).
     fn escaped(&self, ctx: &RenderContext, path: &PathState<Self::PathData>) -> Vec3 {
         escaped(ctx, path)
@@ -187,7 +218,9 @@ pub fn render_tile<S: Shade>(
         b.paths.clear();
         for (i, (x, y)) in tile_pixels(x0, y0, x1, y1).enumerate() {
             let (ray, sampler) = super::camera_sample(ctx, x, y, sample);
-            b.paths.push(PathState::camera(i, ray, sampler));
+            let mut path = PathState::camera(i, ray, sampler);
+            path.medium = ctx.scene.camera_medium;
+            b.paths.push(path);
         }
         ctx.counters
             .camera_rays
@@ -223,41 +256,160 @@ fn wave<S: Shade>(
     intersect_batch(ctx, kind, &b.rays, &mut b.hits);
     b.shadows.clear();
     b.next.clear();
-    for (mut path, hit) in b.paths.drain(..).zip(b.hits.iter()) {
-        if let Some(hit) = hit {
-            path.beta *= ctx.scene.transmittance(Some(hit), &path.ray);
-            let mut w = Wave {
-                acc,
-                shadows: &mut b.shadows,
-                next: &mut b.next,
-                extra,
-            };
-            shader.shade(ctx, path, hit, &mut w);
-        } else if ctx.lights.has_infinite() {
-            add(
-                acc,
-                path.pixel,
-                shader.emitted_component(&path),
-                shader.escaped(ctx, &path),
-            );
-        }
+    let tracks = shader.tracks_media();
+    for (path, hit) in b.paths.drain(..).zip(b.hits.iter()) {
+        let mut w = Wave {
+            acc,
+            shadows: &mut b.shadows,
+            next: &mut b.next,
+            extra,
+        };
+        shade_one(ctx, shader, tracks, path, hit.as_ref(), &mut w);
         // Bounded batches: a point adds a bounded number of shadow rays and deferred entries
         // beyond BATCH before they are traced.
         if b.shadows.len() >= BATCH {
-            resolve_shadows(ctx, &b.shadows, &mut b.shadow_rays, &mut b.occluded, acc);
+            resolve_shadows(
+                ctx,
+                tracks,
+                &b.shadows,
+                &mut b.shadow_rays,
+                &mut b.occluded,
+                acc,
+            );
             b.shadows.clear();
         }
         if shader.pending(extra) >= BATCH {
             shader.flush(ctx, extra, acc);
         }
     }
-    resolve_shadows(ctx, &b.shadows, &mut b.shadow_rays, &mut b.occluded, acc);
+    resolve_shadows(
+        ctx,
+        tracks,
+        &b.shadows,
+        &mut b.shadow_rays,
+        &mut b.occluded,
+        acc,
+    );
     shader.flush(ctx, extra, acc);
     ctx.counters
         .secondary_rays
         .fetch_add(b.next.len() as u64, Ordering::Relaxed);
     std::mem::swap(&mut b.paths, &mut b.next);
 }
+
+/// One path's segment: the medium it crosses (tracking integrators) or the end rule's
+/// transmittance, then the hit's shading or what a path leaving the scene sees.
+fn shade_one<S: Shade>(
+    ctx: &RenderContext,
+    shader: &S,
+    tracks: bool,
+    mut path: PathState<S::PathData>,
+    hit: Option<&Hit>,
+    w: &mut Wave<S::Extra, S::PathData>,
+) {
+    if tracks {
+        path.segment += 1;
+        if let Some(m) = path.medium {
+            let len = path.ray.d.length();
+            let dist = hit.map_or(f32::INFINITY, |h| h.t * len);
+            if let Some(t) = medium_segment(&ctx.scene.media[m as usize], &mut path, dist) {
+                let p = path.ray.o + path.ray.d * (t / len);
+                shader.shade_medium(ctx, path, p, w);
+                return;
+            }
+            if path.beta.max_element() <= 0.0 {
+                return;
+            }
+        }
+    } else if let Some(hit) = hit {
+        path.beta *= crate::accel::transmittance(ctx.scene, Some(hit), &path.ray);
+    }
+    if let Some(hit) = hit {
+        shader.shade(ctx, path, hit, w);
+    } else if ctx.lights.has_infinite() {
+        add(
+            w.acc,
+            path.pixel,
+            shader.emitted_component(&path),
+            shader.escaped(ctx, &path),
+        );
+    }
+}
+
+/// Crosses `dist` units (infinite: the ray leaves the scene) of `medium` along `path`'s ray:
+/// an absorbing medium weighs the throughput by its transmittance; a scattering one samples
+/// where the ray first interacts ([`crate::medium::Medium::sample_distance`], reading the
+/// segment's two [`MEDIUM_DIMS`]) and returns that distance when it falls short of `dist`,
+/// the throughput weighed either way.
+fn medium_segment<T>(
+    medium: &crate::medium::Medium,
+    path: &mut PathState<T>,
+    dist: f32,
+) -> Option<f32> {
+    if !medium.scatters() {
+        path.beta *= medium.transmittance(dist);
+        return None;
+    }
+    path.sampler
+        .set_dimension(MEDIUM_DIMS.wrapping_add(path.segment.wrapping_mul(2)));
+    let (uc, u) = (path.sampler.next_1d(), path.sampler.next_1d());
+    match medium.sample_distance(dist, uc, u) {
+        crate::medium::MediumEvent::Scatter { t, weight } => {
+            path.beta *= weight;
+            Some(t)
+        }
+        crate::medium::MediumEvent::Pass { weight } => {
+            path.beta *= weight;
+            None
+        }
+    }
+}
+
+/// The fraction of light a shadow ray carries to its end through the media it crosses:
+/// segment by segment from `s.medium`, passing through `interface` surfaces (each changes the
+/// medium) and stopped (0) by any other surface, or after [`MAX_CROSSINGS`] boundaries.
+fn shadow_transmittance(ctx: &RenderContext, s: &Shadow) -> Vec3 {
+    let scene = ctx.scene;
+    let end = s.ray.at(s.ray.tmax);
+    let mut ray = s.ray;
+    let mut medium = s.medium;
+    let mut tr = Vec3::ONE;
+    for _ in 0..MAX_CROSSINGS {
+        let hit = ctx.accel.intersect(RayKind::Shadow, &ray);
+        let len = ray.d.length();
+        let Some(h) = hit else {
+            if let Some(m) = medium {
+                tr *= scene.media[m as usize].transmittance(ray.tmax * len);
+            }
+            return tr;
+        };
+        let mesh = &scene.meshes[h.mesh as usize];
+        let (true, Some(mi)) = (
+            scene.materials[mesh.material as usize].interface,
+            mesh.interface,
+        ) else {
+            return Vec3::ZERO;
+        };
+        if let Some(m) = medium {
+            tr *= scene.media[m as usize].transmittance(h.t * len);
+        }
+        let ng = mesh.geometric_normal(h.prim, h.u, h.v);
+        medium = mi.leaving(ray.d, ng);
+        let o = crate::math::spawn_origin(
+            mesh.point(h.prim, h.u, h.v),
+            mesh.point_error(h.prim, h.u, h.v),
+            if ng.dot(ray.d) >= 0.0 { ng } else { -ng },
+        );
+        ray = Ray::segment(o, end - o, 1.0);
+        if tr.max_element() <= 0.0 {
+            return tr;
+        }
+    }
+    Vec3::ZERO
+}
+
+/// Medium boundaries a shadow ray may pass before it is taken as blocked.
+pub const MAX_CROSSINGS: u32 = 64;
 
 /// What a path that leaves the scene sees of the infinite lights, times its throughput: with
 /// full weight after the camera or a delta bounce, else power-heuristic-weighted against light
@@ -274,15 +426,29 @@ pub fn escaped<T>(ctx: &RenderContext, path: &PathState<T>) -> Vec3 {
     path.beta * le
 }
 
-/// Traces a batch of shadow rays and adds the unoccluded contributions.
+/// Traces a batch of shadow rays and adds the unoccluded contributions (for an integrator that
+/// `tracks` media in a scene with media: each ray's [`shadow_transmittance`]).
 fn resolve_shadows(
     ctx: &RenderContext,
+    tracks: bool,
     shadows: &[Shadow],
     rays: &mut Vec<Ray>,
     occluded: &mut Vec<bool>,
     acc: &mut [Radiance],
 ) {
     if shadows.is_empty() {
+        return;
+    }
+    if tracks && !ctx.scene.media.is_empty() {
+        let t = Instant::now();
+        for s in shadows {
+            let tr = shadow_transmittance(ctx, s);
+            add(acc, s.pixel, s.component, s.contrib * tr);
+        }
+        charge(&ctx.counters.ray_ns, t);
+        ctx.counters
+            .shadow_rays
+            .fetch_add(shadows.len() as u64, Ordering::Relaxed);
         return;
     }
     rays.clear();

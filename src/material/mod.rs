@@ -70,6 +70,10 @@ pub struct Material {
     /// `"texture displacement"`: a float texture of heights along the shading normal (pbrt-v4's
     /// bump mapping, see [`crate::interaction::SurfaceInteraction::bsdf`]).
     pub displacement: Option<Tex>,
+    /// pbrt-v4's `interface` material: no surface at all, only the boundary between the media
+    /// of the shape's `MediumInterface`; rays pass straight through (`kind` is then a black
+    /// diffuse stand-in that only integrators refusing such scenes would see).
+    pub interface: bool,
 }
 
 impl From<MaterialKind> for Material {
@@ -77,6 +81,7 @@ impl From<MaterialKind> for Material {
         Material {
             kind,
             displacement: None,
+            interface: false,
         }
     }
 }
@@ -198,16 +203,20 @@ pub fn create(
     loc: &Loc,
     cx: &MaterialContext,
 ) -> Result<Material, SceneError> {
+    if ty == "interface" {
+        params.check_unused()?;
+        let black = DiffuseMaterial {
+            reflectance: Tex::from(crate::math::Vec3::ZERO),
+        };
+        return Ok(Material {
+            interface: true,
+            ..Material::from(MaterialKind::Diffuse(black))
+        });
+    }
     let Some((_, create)) = NAMES.iter().find(|(name, _)| *name == ty) else {
         return Err(SceneError::at(
             loc,
-            match ty {
-                "interface" => "material \"interface\" only bounds participating media, which \
-                                photon does not support (MakeNamedMedium and MediumInterface \
-                                are errors too)"
-                    .to_string(),
-                other => format!("unsupported material type \"{other}\""),
-            },
+            format!("unsupported material type \"{ty}\""),
         ));
     };
     let kind = create(params, loc, cx)?;
@@ -219,7 +228,11 @@ pub fn create(
         _ => None,
     };
     params.check_unused()?;
-    Ok(Material { kind, displacement })
+    Ok(Material {
+        kind,
+        displacement,
+        interface: false,
+    })
 }
 
 impl MaterialKind {

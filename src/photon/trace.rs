@@ -520,7 +520,7 @@ fn trace_one(
         let Some(hit) = accel.intersect(RayKind::Photon, &ray) else {
             break;
         };
-        power *= scene.transmittance(Some(&hit), &ray);
+        power *= crate::accel::transmittance(scene, Some(&hit), &ray);
         let mut si = SurfaceInteraction::new(scene, &hit, &ray);
         let bsdf = si.bsdf(scene, footprint);
         let flags = bsdf.flags();

@@ -114,6 +114,14 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// `MakeNamedMedium` media, indexed by [`crate::medium::MediumInterface`]s.
     pub media: Vec<crate::medium::Medium>,
+    /// The medium the camera sits in (`MediumInterface` before `Camera`: its outside one).
+    pub camera_medium: Option<u32>,
+    /// Why this scene's media need a path that tracks the medium it is in (pbrt-v4's
+    /// semantics: scattering, the camera or a light inside a medium, `interface` surfaces,
+    /// surfaces immersed in a medium): `file:line:col: what`. `None` when every medium is an
+    /// absorbing region closed by the surfaces that name it, which every integrator handles
+    /// (see [`crate::medium`]).
+    pub media_need_tracking: Option<String>,
     pub camera: CameraDesc,
     pub film: FilmDesc,
     pub filter: FilterDesc,
@@ -147,6 +155,8 @@ impl Scene {
             materials,
             lights,
             media: Vec::new(),
+            camera_medium: None,
+            media_need_tracking: None,
             camera: CameraDesc::pinhole(Mat4::IDENTITY, 45.0),
             film: FilmDesc::new(256, 256),
             filter: FilterDesc::Box {
@@ -236,22 +246,6 @@ impl Scene {
     }
 
     /// Bytes the environment maps of `infinite` lights hold (texels and sampling tables).
-    /// What survives of light along `ray` up to `hit` (the segment's medium: the side of the
-    /// hit surface it arrives from, see [`crate::medium`]); 1 without a medium there, or for
-    /// a ray that leaves the scene (`None`: media are closed regions).
-    #[inline]
-    pub fn transmittance(&self, hit: Option<&crate::accel::Hit>, ray: &crate::math::Ray) -> Vec3 {
-        let Some(h) = hit else { return Vec3::ONE };
-        let mesh = &self.meshes[h.mesh as usize];
-        let Some(mi) = &mesh.interface else {
-            return Vec3::ONE;
-        };
-        match mi.arriving(ray.d, mesh.geometric_normal(h.prim, h.u, h.v)) {
-            Some(m) => self.media[m as usize].transmittance(h.t * ray.d.length()),
-            None => Vec3::ONE,
-        }
-    }
-
     pub fn light_map_bytes(&self) -> u64 {
         self.lights
             .iter()

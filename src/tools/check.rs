@@ -1,4 +1,5 @@
-//! `photon check SCENE...`: loads each scene without rendering and prints one line per scene
+//! `photon check SCENE|FOLDER...`: loads each scene (a folder: every scene file under it)
+//! without rendering and prints one line per scene
 //! (triangles, lights, materials, `Texture` directives, a memory estimate), then every problem
 //! the loader found, each with its `file:line:column`, and the loader's notes (what it accepted
 //! but ignores). Exit code 2 if any scene has a problem.
@@ -31,9 +32,38 @@ use std::path::{Path, PathBuf};
 /// `photon check` options.
 #[derive(Args, Debug, Clone)]
 pub struct CheckOptions {
-    /// The scene files to check.
+    /// The scene files to check; a folder stands for every scene file under it (`.pbrt` files
+    /// with a `WorldBegin` in their first MiB, so that included geometry and material files
+    /// are skipped), in name order.
     #[arg(required = true)]
     pub scenes: Vec<PathBuf>,
+}
+
+/// Appends the scene files under folder `dir` (recursively, in name order): `.pbrt` files
+/// whose first MiB holds `WorldBegin` (the rest are files that scenes include).
+fn scenes_under(dir: &Path, out: &mut Vec<PathBuf>) -> Result<(), ToolError> {
+    use std::io::Read;
+    let read = |e: std::io::Error| ToolError(format!("{}: {e}", dir.display()));
+    let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(read)?
+        .map(|e| e.map(|e| e.path()))
+        .collect::<Result<_, _>>()
+        .map_err(read)?;
+    entries.sort();
+    for path in entries {
+        if path.is_dir() {
+            scenes_under(&path, out)?;
+        } else if path.extension().is_some_and(|e| e == "pbrt") {
+            let mut head = Vec::new();
+            let opened =
+                std::fs::File::open(&path).and_then(|f| f.take(1 << 20).read_to_end(&mut head));
+            // An unreadable file is listed: its check says why.
+            if opened.is_err() || head.windows(10).any(|w| w == b"WorldBegin") {
+                out.push(path);
+            }
+        }
+    }
+    Ok(())
 }
 
 /// What `check` found in one scene.
@@ -118,7 +148,22 @@ pub fn check_scene(path: &Path) -> SceneReport {
 /// Checks every scene, printing each report; an error (exit code 2) if any has a problem.
 pub fn run(opts: &CheckOptions) -> Result<(), ToolError> {
     let mut bad = 0;
+    let mut scenes = Vec::new();
     for path in &opts.scenes {
+        if path.is_dir() {
+            let before = scenes.len();
+            scenes_under(path, &mut scenes)?;
+            if scenes.len() == before {
+                return Err(ToolError(format!(
+                    "{}: no scene file (.pbrt with a WorldBegin) under this folder",
+                    path.display()
+                )));
+            }
+        } else {
+            scenes.push(path.clone());
+        }
+    }
+    for path in &scenes {
         let report = check_scene(path);
         say!("{report}");
         bad += usize::from(!report.problems.is_empty());
@@ -126,7 +171,7 @@ pub fn run(opts: &CheckOptions) -> Result<(), ToolError> {
     if bad > 0 {
         return Err(ToolError(format!(
             "{bad} of {} scenes have problems",
-            opts.scenes.len()
+            scenes.len()
         )));
     }
     Ok(())

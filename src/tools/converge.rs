@@ -143,6 +143,10 @@ pub fn run(opts: &ConvergeOptions) -> Result<bool, ToolError> {
         .into_iter()
         .filter(|m| opts.methods.is_empty() || opts.methods.iter().any(|n| n == m.name))
         .collect();
+    for m in &chosen {
+        crate::integrator::check_scene(m.kind, scene)
+            .map_err(|e| ToolError(format!("method {}: {e}", m.name)))?;
+    }
     if chosen.is_empty() {
         let names: Vec<&str> = methods().iter().map(|m| m.name).collect();
         return Err(ToolError(format!(

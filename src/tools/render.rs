@@ -19,8 +19,8 @@ pub struct RenderOptions {
     /// The pbrt-v4 scene file.
     pub scene: PathBuf,
     /// Output EXR (linear RGB plus layers direct/specular/caustic/indirect). Default: the
-    /// Film's filename with .exr, else the scene's name.
-    #[arg(short, long)]
+    /// Film's filename with .exr, else the scene's name. `--outfile` is pbrt-v4's name for it.
+    #[arg(short, long, visible_alias = "outfile")]
     pub output: Option<PathBuf>,
     /// PNG preview (sRGB). Default: the EXR path with .png.
     #[arg(long)]
@@ -45,7 +45,7 @@ pub struct RenderOptions {
     #[arg(long)]
     pub robust: bool,
     /// Worker threads (0 = all cores).
-    #[arg(long, default_value_t = 0, value_parser = usize_in(0, MAX_THREADS))]
+    #[arg(long, visible_alias = "nthreads", default_value_t = 0, value_parser = usize_in(0, MAX_THREADS))]
     pub threads: usize,
     /// Seed of every sample stream.
     #[arg(long, default_value_t = 0)]
@@ -211,6 +211,7 @@ pub fn configure(job: &mut Job, opts: &RenderOptions) {
 /// maps, builds the accelerator, measures pass 1 with a pilot trace and checks again with
 /// the photon maps. `photon render` and the Python module both start here.
 pub fn prepare(job: &mut Job, opts: &RenderOptions) -> Result<Prepared, ToolError> {
+    integrator::check_scene(job.integrator, &job.scene).map_err(ToolError)?;
     let cli = opts.overrides().from_cli();
     let budget = crate::limits::Budget::resolve(opts.max_memory);
     job.check_memory(&job.settings, &budget, cli)

@@ -232,3 +232,64 @@ fn a_closed_standard_output_does_not_stop_the_render() {
     assert_eq!(out.status.code(), Some(0), "stderr: {stderr}");
     assert!(exr.is_file(), "no image written");
 }
+
+#[test]
+fn pbrt_v4_habits_a_bare_scene_outfile_and_nthreads() {
+    let dir = tmp("pbrt-habits");
+    // `photon SCENE.pbrt --outfile X --nthreads N` is `photon render ...`, bit for bit.
+    let render = |args: &[&str], out: &Path| {
+        let r = photon()
+            .args(args)
+            .arg(out)
+            .args(["--res", "16x12", "--spp", "1", "--no-png"])
+            .output()
+            .unwrap();
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        std::fs::read(out).unwrap()
+    };
+    let habits = render(
+        &["scenes/cornell-glass.pbrt", "--nthreads", "1", "--outfile"],
+        &dir.join("habits.exr"),
+    );
+    let ours = render(
+        &[
+            "render",
+            "scenes/cornell-glass.pbrt",
+            "--threads",
+            "2",
+            "-o",
+        ],
+        &dir.join("ours.exr"),
+    );
+    assert!(habits == ours, "the two renders differ");
+    // Anything else that is no subcommand stays an error.
+    expect_error(&["frobnicate"], "unrecognized subcommand");
+}
+
+#[test]
+fn check_takes_folders_of_scenes() {
+    let dir = tmp("check-folder");
+    let sub = dir.join("sub");
+    std::fs::create_dir_all(&sub).unwrap();
+    let scene = "WorldBegin\nInclude \"geometry.pbrt\"\n";
+    std::fs::write(dir.join("a.pbrt"), scene).unwrap();
+    std::fs::write(sub.join("b.pbrt"), "WorldBegin\nShape \"frob\"\n").unwrap();
+    // Included by a.pbrt, no WorldBegin: not a scene of its own.
+    std::fs::write(dir.join("geometry.pbrt"), "Shape \"sphere\"\n").unwrap();
+    std::fs::write(dir.join("notes.txt"), "WorldBegin").unwrap();
+    let r = photon().arg("check").arg(&dir).output().unwrap();
+    let out = String::from_utf8_lossy(&r.stdout);
+    let lines: Vec<&str> = out.lines().filter(|l| !l.starts_with(' ')).collect();
+    assert_eq!(lines.len(), 2, "{out}");
+    assert!(lines[0].contains("a.pbrt: ok"), "{out}");
+    assert!(lines[1].contains("b.pbrt: 1 problem"), "{out}");
+    assert_eq!(r.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(err.contains("1 of 2 scenes have problems"), "{err}");
+    let empty = dir.join("empty");
+    std::fs::create_dir_all(&empty).unwrap();
+    let r = photon().arg("check").arg(&empty).output().unwrap();
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(err.contains("no scene file"), "{err}");
+    assert_eq!(r.status.code(), Some(2));
+}

@@ -144,6 +144,9 @@ pub struct Builder {
     named_media: HashMap<String, u32>,
     /// The camera's medium (the outside medium at `Camera`), when not vacuum.
     camera_medium: Option<(String, Loc)>,
+    camera_medium_index: Option<u32>,
+    /// The first reason the scene's media need tracking (see `Scene::media_need_tracking`).
+    needs_tracking: Option<String>,
     /// `ObjectBegin` definitions: world-space meshes as defined (CTM at definition).
     objects: HashMap<String, Vec<Mesh>>,
     /// The definition being read: its name, meshes and where it began.
@@ -207,6 +210,8 @@ impl Builder {
             media: Vec::new(),
             named_media: HashMap::new(),
             camera_medium: None,
+            camera_medium_index: None,
+            needs_tracking: None,
             objects: HashMap::new(),
             object: None,
         }
@@ -266,14 +271,15 @@ impl Builder {
         if !self.world_begun {
             return Err(SceneError::at(end, "the scene has no WorldBegin"));
         }
-        if let Some((name, loc)) = &self.camera_medium {
-            return Err(SceneError::at(
-                loc,
-                format!(
-                    "the camera is inside medium \"{name}\" (MediumInterface before Camera): \
-                     not supported yet (media must be closed regions the camera is outside of)"
-                ),
-            ));
+        if let Some((name, loc)) = self.camera_medium.clone() {
+            let Some(&i) = self.named_media.get(&name) else {
+                return Err(SceneError::at(
+                    &loc,
+                    format!("undefined medium \"{name}\" (MediumInterface before Camera)"),
+                ));
+            };
+            self.camera_medium_index = Some(i);
+            self.track(&loc, &format!("the camera is inside medium \"{name}\""));
         }
         self.tessellate_spheres();
         self.note_media();
@@ -296,6 +302,8 @@ impl Builder {
             materials: self.materials,
             lights: self.lights,
             media: self.media,
+            camera_medium: self.camera_medium_index,
+            media_need_tracking: self.needs_tracking,
             camera: self.camera,
             film: self.film,
             filter: self.filter,
@@ -524,6 +532,9 @@ impl Builder {
                     ));
                 }
                 let medium = crate::medium::Medium::create(&name, &mut params, &loc)?;
+                if medium.scatters() {
+                    self.track(&loc, &format!("medium \"{name}\" scatters"));
+                }
                 self.named_media.insert(name, self.media.len() as u32);
                 self.media.push(medium);
             }
@@ -556,14 +567,8 @@ impl Builder {
                 let mut params = read_params(tok)?;
                 let portal = params.loc("portal").cloned();
                 if !self.gs.media.1.is_empty() {
-                    return Err(SceneError::at(
-                        &at,
-                        format!(
-                            "a light inside medium \"{}\" is not supported yet (media must \
-                             be closed regions the lights are outside of)",
-                            self.gs.media.1
-                        ),
-                    ));
+                    let why = format!("a light is inside medium \"{}\"", self.gs.media.1);
+                    self.track(&at, &why);
                 }
                 let light = light_source(
                     &ty,
@@ -965,14 +970,20 @@ impl Builder {
         super::extent::check_shape(&mesh, &at)?;
         mesh.interface = self.interface(&at)?;
         if let (Some(_), Some(_)) = (&mesh.interface, &self.gs.area) {
-            return Err(SceneError::at(
-                &at,
-                "an emitting shape on a medium boundary is not supported yet (media must be \
-                 closed regions the lights are outside of)",
-            ));
+            self.track(&at, "an emitting shape lies on a medium boundary");
         }
         self.note_motion(&at);
         mesh.material = self.material_index();
+        if self.materials[mesh.material as usize].interface {
+            if mesh.interface.is_none() {
+                return Err(SceneError::at(
+                    &at,
+                    "a shape with material \"interface\" needs a MediumInterface with two \
+                     different media (it is only a boundary between them)",
+                ));
+            }
+            self.track(&at, "a shape has material \"interface\"");
+        }
         if let (Some(a), Some(_), Some(loc), None) =
             (&alpha, &self.gs.area, &alpha_at, &self.object)
         {
@@ -1024,6 +1035,13 @@ impl Builder {
         Ok(())
     }
 
+    /// Records the first reason the scene's media need the path tracer's medium tracking.
+    fn track(&mut self, at: &Loc, why: &str) {
+        if self.needs_tracking.is_none() {
+            self.needs_tracking = Some(SceneError::at(at, why).to_string());
+        }
+    }
+
     /// A note naming the media and what every integrator does with them.
     fn note_media(&mut self) {
         if self.media.is_empty() {
@@ -1034,14 +1052,25 @@ impl Builder {
             .media
             .iter()
             .map(|m| {
-                let s = m.sigma_a;
-                format!("\"{}\" (sigma_a {} {} {})", m.name, s.x, s.y, s.z)
+                let (a, s) = (m.sigma_a, m.sigma_s);
+                format!(
+                    "\"{}\" (sigma_a {} {} {}, sigma_s {} {} {}, g {})",
+                    m.name, a.x, a.y, a.z, s.x, s.y, s.z, m.g
+                )
             })
             .collect();
+        let what = match &self.needs_tracking {
+            None => "every integrator dims each ray segment inside them by Beer's law \
+                     (photons, camera, gather and bidirectional paths alike)"
+                .to_string(),
+            Some(why) => format!(
+                "only --integrator path renders them (it tracks the medium each ray is in, \
+                 scatters and takes light samples in it); the others refuse the scene because \
+                 {why}"
+            ),
+        };
         self.notes.push(format!(
-            "media: {} absorbing ({}) closed by {boundaries} shapes: every integrator dims each \
-             ray segment inside them by Beer's law (photons, camera, gather and bidirectional \
-             paths alike); nothing scatters in them",
+            "media: {} ({}) bounded by {boundaries} shapes: {what}",
             self.media.len(),
             names.join(", ")
         ));
@@ -1049,20 +1078,28 @@ impl Builder {
 
     /// The medium boundary the current `MediumInterface` makes of a shape at `at`: `None`
     /// when both sides are vacuum.
-    fn interface(&self, at: &Loc) -> Result<Option<crate::medium::MediumInterface>, SceneError> {
-        let (inside, outside, written) = &self.gs.media;
+    fn interface(
+        &mut self,
+        at: &Loc,
+    ) -> Result<Option<crate::medium::MediumInterface>, SceneError> {
+        let (inside, outside, written) = &self.gs.media.clone();
         if inside.is_empty() && outside.is_empty() {
             return Ok(None);
         }
         let written = written.as_ref().unwrap_or(at);
         if inside == outside {
-            return Err(SceneError::at(
+            // pbrt-v4: no boundary; a ray that meets it stays in the medium it was in.
+            if !self.named_media.contains_key(inside) {
+                return Err(SceneError::at(
+                    written,
+                    format!("undefined medium \"{inside}\" (MakeNamedMedium must come first)"),
+                ));
+            }
+            self.track(
                 written,
-                format!(
-                    "a surface with medium \"{inside}\" on both sides is not supported yet \
-                     (only boundaries between two different media are)"
-                ),
-            ));
+                &format!("a surface is immersed in medium \"{inside}\""),
+            );
+            return Ok(None);
         }
         let index = |name: &String| -> Result<Option<u32>, SceneError> {
             if name.is_empty() {

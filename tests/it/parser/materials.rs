@@ -366,7 +366,7 @@ fn interface_material_names_media() {
     );
     let e = load(&path).unwrap_err().to_string();
     assert!(
-        e.contains("s.pbrt:2:10: material \"interface\" only bounds participating media"),
+        e.contains("s.pbrt:3:7: a shape with material \"interface\" needs a MediumInterface"),
         "{e}"
     );
 }

@@ -77,9 +77,9 @@ fn error_unknown_and_unsupported_directives() {
         &["unsupported material type \"hair\""],
     );
     assert_src_err(
-        "WorldBegin\nMakeNamedMaterial \"x\"\n \"string type\" \"interface\"\n",
-        3,
-        &["\"interface\""],
+        "WorldBegin\nMakeNamedMaterial \"x\"\n \"string type\" \"interface\"\nNamedMaterial \"x\"\nShape \"sphere\"\n",
+        5,
+        &["\"interface\" needs a MediumInterface"],
     );
     assert_src_err(
         "WorldBegin\nLightSource \"goniometric\"\n",
@@ -334,12 +334,9 @@ fn error_unterminated_string() {
 #[test]
 fn media_textures_and_curves_are_clear_errors() {
     assert_src_err(
-        "WorldBegin\n\nMakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n",
+        "WorldBegin\n\nMakeNamedMedium \"fog\" \"string type\" \"homogeneous\" \"rgb Le\" [1 1 1]\n",
         3,
-        &[
-            "medium \"fog\" scatters",
-            "scattering media are not supported yet",
-        ],
+        &["emitting media are not supported yet"],
     );
     // A medium that only absorbs loads; its name must be defined before a shape uses it.
     assert_src_err(
