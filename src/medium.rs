@@ -217,7 +217,7 @@ pub fn sample_henyey_greenstein(wo: Vec3, g: f32, u: crate::math::Vec2) -> (Vec3
 
 /// The media on the two sides of a surface (indices into `Scene::media`, `None` = vacuum);
 /// stored on a mesh only where they differ (a medium boundary).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct MediumInterface {
     /// The side the geometric normal points away from.
     pub inside: Option<u32>,

@@ -122,7 +122,18 @@ pub fn estimate(
         what: format!("{}x{}", settings.width, settings.height),
         load_peak: scene.load_peak,
     };
-    if let (IntegratorKind::Photonmap, Some(per)) = (kind, landings) {
+    if let (IntegratorKind::Photonmap, Some(_)) = (kind, &scene.media_need_tracking) {
+        // Media that need tracking: the volume map alone (its photons and at most its grid).
+        let n = settings.photon.volume_photons;
+        let bytes = n
+            .saturating_mul(crate::photon::volume::VOLUME_PHOTON_BYTES)
+            .saturating_add(crate::photon::volume::MAX_GRID_BYTES);
+        e.parts.push(("photon maps", bytes));
+        e.what += &format!(
+            ", {n} volume photons x {} B",
+            crate::photon::volume::VOLUME_PHOTON_BYTES
+        );
+    } else if let (IntegratorKind::Photonmap, Some(per)) = (kind, landings) {
         let t = &settings.photon.trace;
         // Only the maps the scene needs are built (as pass 1 decides: no global map without
         // a diffuse surface, no caustic map without a specular one and a receiver).

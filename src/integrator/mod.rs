@@ -289,14 +289,15 @@ pub struct RenderContext<'a> {
 }
 
 /// Whether `kind` renders `scene` right: only the path tracer tracks the medium each ray is
-/// in, so scenes whose media need that ([`Scene::media_need_tracking`]) are refused by the
-/// others with the file location of the first reason.
+/// in (the photon mapper renders such scenes with it, adding its volume map's beam
+/// estimates), so scenes whose media need that ([`Scene::media_need_tracking`]) are refused
+/// by the others with the file location of the first reason.
 pub fn check_scene(kind: IntegratorKind, scene: &Scene) -> Result<(), String> {
     match (&scene.media_need_tracking, kind) {
-        (None, _) | (Some(_), IntegratorKind::Path) => Ok(()),
+        (None, _) | (Some(_), IntegratorKind::Path | IntegratorKind::Photonmap) => Ok(()),
         (Some(why), _) => Err(format!(
-            "{why}: only --integrator path renders such media yet (--integrator {} handles \
-             absorbing media closed by the surfaces that name them)",
+            "{why}: only --integrator path and photonmap render such media yet (--integrator \
+             {} handles absorbing media closed by the surfaces that name them)",
             clap::ValueEnum::to_possible_value(&kind)
                 .map_or("?".into(), |v| v.get_name().to_string())
         )),
@@ -461,6 +462,9 @@ pub fn render_prepared(
                     return ((x0, y0), vec![Radiance::default(); n]);
                 }
                 let mut px = match kind {
+                    IntegratorKind::Photonmap if scene.media_need_tracking.is_some() => {
+                        path::render_tile(&ctx, x0, y0, x1, y1)
+                    }
                     IntegratorKind::Photonmap if ctx.photons.is_some() => {
                         photon_mapper::render_tile(&ctx, x0, y0, x1, y1)
                     }

@@ -218,6 +218,7 @@ fn continue_path(mut path: PathState, bsdf: &Bsdf, v: &SurfaceInteraction) -> Op
     path.depth = depth;
     path.prev_pdf = bsdf.mis_pdf(v.wo, &bs);
     path.prev_p = v.p;
+    path.prev_delta &= bs.specular;
     path.eta_scale = eta_scale;
     Some(path)
 }

@@ -81,6 +81,10 @@ pub struct PhotonSettings {
     /// Whether the scene or the command line set `maxphotonbounces`; otherwise it follows the
     /// render's `maxdepth` ([`PhotonSettings::follow_depth`]).
     pub bounces_given: bool,
+    /// Photons stored in scattering media ([`crate::photon::volume`]).
+    pub volume_photons: u64,
+    /// Their spheres' radius in beam estimates, a fraction of the scene radius.
+    pub volume_radius: f32,
 }
 
 impl Default for PhotonSettings {
@@ -113,6 +117,8 @@ impl Default for PhotonSettings {
             alpha: 2.0 / 3.0,
             radius_scale2: 1.0,
             bounces_given: false,
+            volume_photons: 250_000,
+            volume_radius: 0.02,
         }
     }
 }
@@ -176,6 +182,10 @@ pub fn parse_kernel(name: &str) -> Option<Kernel> {
 /// Pass 1's products, as pass 2 reads them.
 pub struct PhotonPass {
     pub maps: PhotonMaps,
+    /// The volume photon map, in scenes whose media scatter (then the surface maps are
+    /// empty: the path tracer renders the surfaces, see [`crate::integrator::path`]).
+    pub volume: Option<crate::photon::volume::VolumeMap>,
+    pub volume_stats: crate::photon::volume::VolumeStats,
     /// Precomputed irradiance at a subset of the global photons.
     pub cache: Option<IrradianceCache>,
     /// The global photons that took a diffuse bounce, for guiding the final gather.
@@ -241,13 +251,30 @@ pub fn prepare(
     let lights = &owned_lights;
     let mut s = settings.clone();
     let (need_global, need_caustic, skipped) = needed_maps(scene, s.trace.receiver_alpha);
-    if !need_global {
+    // Media that need tracking: the path tracer renders the surfaces, the volume map the
+    // media; no surface map is traced.
+    let volume_scene = scene.media_need_tracking.is_some();
+    if !need_global || volume_scene {
         s.trace.global_photons = 0;
     }
-    if !need_caustic {
+    if !need_caustic || volume_scene {
         s.trace.caustic_photons = 0;
     }
     let maps = trace::trace(scene, accel, lights, &s.trace);
+    let (volume, volume_stats) = if volume_scene {
+        let (photons, st) = crate::photon::volume::trace(
+            scene,
+            accel,
+            lights,
+            s.volume_photons,
+            s.trace.max_bounces,
+            s.trace.seed,
+        );
+        let r = s.volume_radius * lights.scene_sphere().1;
+        (crate::photon::volume::VolumeMap::build(photons, r), st)
+    } else {
+        (None, Default::default())
+    };
     let (_, radius) = lights.scene_sphere();
     let r2 = |fraction: f32| ((fraction * radius) as f64).powi(2);
     // Progressive: no minimum photon count (a zero where photons are sparse would be a bias
@@ -319,6 +346,8 @@ pub fn prepare(
         });
     PhotonPass {
         maps,
+        volume,
+        volume_stats,
         cache,
         guide_map,
         glossy_map,
@@ -986,6 +1015,18 @@ fn cached_irradiance(
 
 /// The pass-1 statistics as printed lines.
 pub fn describe(pass: &PhotonPass) -> Vec<String> {
+    let vs = &pass.volume_stats;
+    if vs.emitted > 0 {
+        return vec![format!(
+            "volume photons: {} emitted -> {} stored in scattering media in {:.3} s ({:.2} rays/photon), {:.1} MB, sphere radius {:.4}; the surfaces are path-traced (the surface photon maps are not built in a scene whose media need tracking), the media read by beam estimates",
+            vs.emitted,
+            vs.stored,
+            vs.seconds,
+            vs.rays as f64 / vs.emitted.max(1) as f64,
+            pass.volume.as_ref().map_or(0, |v| v.bytes()) as f64 / 1e6,
+            pass.volume.as_ref().map_or(0.0, |v| v.radius()),
+        )];
+    }
     let st = &pass.maps.stats;
     let bytes = std::mem::size_of::<Photon>();
     let mut lines = vec![format!(

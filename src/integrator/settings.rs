@@ -337,6 +337,13 @@ settings! {
     /// GGX alpha up to which a rough glossy surface receives caustic photons (inf: none).
     glossy_alpha: f32 = trace.receiver_alpha, "glossyalpha", "glossy-alpha",
         Some(Range::closed(0.0, f64::INFINITY));
+    /// Photons stored in scattering media for the volume map (scenes with such media only).
+    volume_photons: u64 = volume_photons, "volumephotons", "volume-photons",
+        Some(Range::closed(0.0, MAX_PHOTONS as f64));
+    /// Radius of the volume photons' spheres in beam estimates, as a fraction of the scene's
+    /// bounding radius.
+    volume_radius: f32 = volume_radius, "volumeradius", "volume-radius",
+        Some(Range::above(0.0, MAX_RADIUS as f64));
 }
 
 /// The range of the progressive radius schedule's `alpha` (`"float alpha"`, `--alpha`).

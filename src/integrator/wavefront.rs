@@ -310,9 +310,20 @@ fn shade_one<S: Shade>(
     if tracks {
         path.segment += 1;
         if let Some(m) = path.medium {
+            let medium = &ctx.scene.media[m as usize];
             let len = path.ray.d.length();
             let dist = hit.map_or(f32::INFINITY, |h| h.t * len);
-            if let Some(t) = medium_segment(&ctx.scene.media[m as usize], &mut path, dist) {
+            // Camera segments and those after delta bounces only: later ones sample their
+            // scattering as the path tracer does (a beam per segment of every path would
+            // cost far more than it removes in noise there).
+            let volume = ctx.photons.and_then(|p| p.volume.as_ref());
+            if let (Some(map), true, true) = (volume, medium.scatters(), path.prev_delta) {
+                // The photon mapper: the volume map's beam estimate gives all the light the
+                // medium scatters towards the ray; the ray goes on to its hit dimmed.
+                let beam = map.beam(path.ray.o, path.ray.d / len, dist, medium);
+                add(w.acc, path.pixel, Component::Indirect, path.beta * beam);
+                path.beta *= medium.transmittance(dist);
+            } else if let Some(t) = medium_segment(medium, &mut path, dist) {
                 let p = path.ray.o + path.ray.d * (t / len);
                 shader.shade_medium(ctx, path, p, w);
                 return;

@@ -36,6 +36,7 @@ pub mod map;
 pub mod projection;
 pub mod stored;
 pub mod trace;
+pub mod volume;
 
 pub use cache::IrradianceCache;
 pub use estimate::{EstimateParams, Kernel};

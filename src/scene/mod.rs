@@ -114,6 +114,10 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// `MakeNamedMedium` media, indexed by [`crate::medium::MediumInterface`]s.
     pub media: Vec<crate::medium::Medium>,
+    /// Per light of `lights`, the media around it (pbrt-v4: an area light's shape's
+    /// `MediumInterface`, a `LightSource`'s outside medium on both sides); may be shorter
+    /// than `lights` (vacuum).
+    pub light_media: Vec<crate::medium::MediumInterface>,
     /// The medium the camera sits in (`MediumInterface` before `Camera`: its outside one).
     pub camera_medium: Option<u32>,
     /// Why this scene's media need a path that tracks the medium it is in (pbrt-v4's
@@ -155,6 +159,7 @@ impl Scene {
             materials,
             lights,
             media: Vec::new(),
+            light_media: Vec::new(),
             camera_medium: None,
             media_need_tracking: None,
             camera: CameraDesc::pinhole(Mat4::IDENTITY, 45.0),

@@ -154,7 +154,8 @@ fn light_through_an_ink_slab_reaches_the_floor_dimmed_by_beers_law() {
 }
 
 #[test]
-fn media_only_the_path_tracer_tracks_are_refused_by_the_others_with_their_location() {
+fn media_that_need_tracking_are_refused_by_the_bidirectional_and_direct_integrators_with_their_location(
+) {
     let dir = TempDir::new("photon-media");
     for (text, line, want) in [
         (
@@ -196,17 +197,20 @@ fn media_only_the_path_tracer_tracks_are_refused_by_the_others_with_their_locati
         ),
     ] {
         let scene = loader::load(&dir.write("m.pbrt", text)).expect("loads");
-        assert!(photon::integrator::check_scene(IntegratorKind::Path, &scene).is_ok());
+        for kind in [IntegratorKind::Path, IntegratorKind::Photonmap] {
+            assert!(photon::integrator::check_scene(kind, &scene).is_ok());
+        }
         for kind in [
-            IntegratorKind::Photonmap,
             IntegratorKind::Direct,
             IntegratorKind::Vcm,
             IntegratorKind::Bdpt,
+            IntegratorKind::Lighttracer,
+            IntegratorKind::Bpm,
         ] {
             let e = photon::integrator::check_scene(kind, &scene).unwrap_err();
             assert!(e.contains(&format!("m.pbrt:{line}:")), "{e}");
             assert!(
-                e.contains(want) && e.contains("only --integrator path"),
+                e.contains(want) && e.contains("only --integrator path and photonmap"),
                 "{e}"
             );
         }
@@ -392,4 +396,100 @@ fn an_ink_cube_in_a_room_photon_mapper_against_the_path_tracer() {
     // and 1.011..1.075.
     assert!((mean - 1.0).abs() < 0.03, "mean ratio {mean}");
     assert!(lo > 0.94 && hi < 1.06, "blocks {lo}..{hi}");
+}
+
+/// A closed white box of forward-scattering fog (chromatic) under a square lamp inside it:
+/// the camera looks in through an `interface` front.
+fn fog_box(integrator: &str) -> String {
+    let extra = if integrator == "photonmap" {
+        r#" "integer volumephotons" 200000"#
+    } else {
+        ""
+    };
+    format!(
+        r#"LookAt 0 1 6.8  0 1 0  0 1 0
+Camera "perspective" "float fov" 19.5
+Film "rgb" "integer xresolution" 32 "integer yresolution" 32
+PixelFilter "box" "float xradius" 0.5 "float yradius" 0.5
+Integrator "{integrator}" "integer maxdepth" 5{extra}
+WorldBegin
+MakeNamedMedium "fog" "string type" "homogeneous" "float g" 0.4
+    "rgb sigma_a" [ 0.05 0.1 0.05 ] "rgb sigma_s" [ 0.3 0.5 0.8 ]
+Material "diffuse" "rgb reflectance" [ 0.25 0.2 0.15 ]
+Shape "trianglemesh" "point3 P" [ -1 0 -1  -1 0 1  1 0 1  1 0 -1 ] "integer indices" [ 0 1 2 0 2 3 ]
+Shape "trianglemesh" "point3 P" [ 1 2 1  -1 2 1  -1 2 -1  1 2 -1 ] "integer indices" [ 0 1 2 0 2 3 ]
+Shape "trianglemesh" "point3 P" [ -1 0 -1  -1 2 -1  1 2 -1  1 0 -1 ] "integer indices" [ 0 1 2 0 2 3 ]
+Shape "trianglemesh" "point3 P" [ 1 0 -1  1 2 -1  1 2 1  1 0 1 ] "integer indices" [ 0 1 2 0 2 3 ]
+Shape "trianglemesh" "point3 P" [ -1 0 1  -1 2 1  -1 2 -1  -1 0 -1 ] "integer indices" [ 0 1 2 0 2 3 ]
+AttributeBegin
+  MediumInterface "fog" ""
+  Material "interface"
+  Shape "trianglemesh" "point3 P" [ -1 2 1  -1 0 1  1 0 1  1 2 1 ]
+      "normal N" [ 0 0 1 0 0 1 0 0 1 0 0 1 ] "integer indices" [ 0 1 2 0 2 3 ]
+AttributeEnd
+AttributeBegin
+  MediumInterface "fog"
+  AreaLightSource "diffuse" "rgb L" [ 8 8 8 ]
+  Material "diffuse" "rgb reflectance" [ 0 0 0 ]
+  Shape "trianglemesh" "point3 P" [ -0.4 1.98 -0.4  0.4 1.98 -0.4  0.4 1.98 0.4  -0.4 1.98 0.4 ]
+      "normal N" [ 0 -1 0 0 -1 0 0 -1 0 0 -1 0 ] "integer indices" [ 0 1 2 0 2 3 ]
+AttributeEnd
+"#
+    )
+}
+
+#[test]
+fn fog_box_photon_mapper_beams_against_the_path_tracer() {
+    let dir = TempDir::new("photon-media");
+    let path = loader::load(&dir.write("path.pbrt", fog_box("path"))).expect("loads");
+    let want = common::render_with(
+        &path,
+        IntegratorKind::Path,
+        BackendKind::Embree,
+        (32, 32, 1024),
+        2,
+        1,
+    );
+    let pm = loader::load(&dir.write("pm.pbrt", fog_box("photonmap"))).expect("loads");
+    let got = common::render_with(
+        &pm,
+        IntegratorKind::Photonmap,
+        BackendKind::Embree,
+        (32, 32, 16),
+        2,
+        1,
+    );
+    assert!(
+        got.notes.iter().any(|n| n.starts_with("volume photons: ")),
+        "{:?}",
+        got.notes
+    );
+    let (a, b) = (channel_means(&got.image), channel_means(&want.image));
+    let ratio = a / b;
+    // 4x4 blocks of 8x8 pixels, luminance.
+    let lum = |p: [f32; 3]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+    let block = |img: &photon::imageio::RgbImage, bx: usize, by: usize| -> f32 {
+        (0..8)
+            .flat_map(|y| (0..8).map(move |x| (bx * 8 + x, by * 8 + y)))
+            .map(|(x, y)| lum(img.pixels[y * 32 + x]))
+            .sum::<f32>()
+    };
+    let blocks: Vec<f32> = (0..16)
+        .map(|i| block(&got.image, i % 4, i / 4) / block(&want.image, i % 4, i / 4))
+        .collect();
+    eprintln!("fog box photonmap / path: channels {ratio} ({a} / {b}), blocks {blocks:?}");
+    assert!((ratio - Vec3::ONE).abs().max_element() < 0.02, "{ratio}");
+    for (i, r) in blocks.iter().enumerate() {
+        assert!((r - 1.0).abs() < 0.08, "block {i}: {r} ({blocks:?})");
+    }
+    // The volume photons and the beams do not depend on the thread count.
+    let one = common::render_with(
+        &pm,
+        IntegratorKind::Photonmap,
+        BackendKind::Embree,
+        (32, 32, 16),
+        1,
+        1,
+    );
+    assert_eq!(one.image.pixels, got.image.pixels, "1 and 2 threads differ");
 }

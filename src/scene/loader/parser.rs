@@ -145,6 +145,8 @@ pub struct Builder {
     /// The camera's medium (the outside medium at `Camera`), when not vacuum.
     camera_medium: Option<(String, Loc)>,
     camera_medium_index: Option<u32>,
+    /// Per light (as `lights`), the media around it.
+    light_media: Vec<crate::medium::MediumInterface>,
     /// The first reason the scene's media need tracking (see `Scene::media_need_tracking`).
     needs_tracking: Option<String>,
     /// `ObjectBegin` definitions: world-space meshes as defined (CTM at definition).
@@ -211,6 +213,7 @@ impl Builder {
             named_media: HashMap::new(),
             camera_medium: None,
             camera_medium_index: None,
+            light_media: Vec::new(),
             needs_tracking: None,
             objects: HashMap::new(),
             object: None,
@@ -302,6 +305,7 @@ impl Builder {
             materials: self.materials,
             lights: self.lights,
             media: self.media,
+            light_media: self.light_media,
             camera_medium: self.camera_medium_index,
             media_need_tracking: self.needs_tracking,
             camera: self.camera,
@@ -585,7 +589,9 @@ impl Builder {
                     ));
                 }
                 self.note_motion(&at);
+                let medium = self.light_medium(&at)?;
                 self.lights.push(light);
+                self.light_media.push(medium);
             }
             "Include" | "Import" => {
                 let (name, _) = string_arg(tok, "a file name")?;
@@ -1021,11 +1027,13 @@ impl Builder {
             };
             let l = spec.radiance(area).map_err(|m| SceneError::at(&at, m))?;
             mesh.area_light = Some(self.lights.len() as u32);
+            let medium = self.light_medium(&at)?;
             self.lights.push(crate::scene::Light::Area {
                 mesh: self.meshes.len() as u32,
                 l,
                 two_sided: spec.two_sided,
             });
+            self.light_media.push(medium);
         }
         if let Some(spec) = sphere {
             self.spheres.push((self.meshes.len(), spec));
@@ -1033,6 +1041,30 @@ impl Builder {
         self.meshes.push(mesh);
         self.mesh_locs.push(at);
         Ok(())
+    }
+
+    /// The media around a light defined now (pbrt-v4: an area light's shape's
+    /// `MediumInterface`, a `LightSource`'s current outside medium on both sides).
+    fn light_medium(&self, at: &Loc) -> Result<crate::medium::MediumInterface, SceneError> {
+        let (inside, outside, written) = &self.gs.media;
+        let written = written.as_ref().unwrap_or(at);
+        let index = |name: &String| -> Result<Option<u32>, SceneError> {
+            if name.is_empty() {
+                return Ok(None);
+            }
+            self.named_media.get(name).map(|&i| Some(i)).ok_or_else(|| {
+                SceneError::at(
+                    written,
+                    format!("undefined medium \"{name}\" (MakeNamedMedium must come first)"),
+                )
+            })
+        };
+        let outside = index(outside)?;
+        let inside = match self.gs.area {
+            Some(_) => index(inside)?,
+            None => outside,
+        };
+        Ok(crate::medium::MediumInterface { inside, outside })
     }
 
     /// Records the first reason the scene's media need the path tracer's medium tracking.
@@ -1064,8 +1096,9 @@ impl Builder {
                      (photons, camera, gather and bidirectional paths alike)"
                 .to_string(),
             Some(why) => format!(
-                "only --integrator path renders them (it tracks the medium each ray is in, \
-                 scatters and takes light samples in it); the others refuse the scene because \
+                "--integrator path tracks the medium each ray is in, scatters and takes light \
+                 samples in it; photonmap renders the surfaces so and the media by beam \
+                 estimates of its volume photon map; the others refuse the scene because \
                  {why}"
             ),
         };

@@ -1,0 +1,518 @@
+//! The volume photon map (Jensen & Christensen 1998) read by beam radiance estimates (Jarosz,
+//! Zwicker & Jensen 2008), for scenes with scattering media (issue 18).
+//!
+//! - **Tracing** ([`trace`]): photons leave the lights (chosen by power, each photon's numbers
+//!   keyed by the seed and its index, so the map does not depend on thread count) in the
+//!   medium of their light (`MediumInterface` of the area light's shape, or the one current at
+//!   `LightSource`), cross `interface` surfaces, scatter off surfaces by their BSDF in
+//!   importance mode with Russian and RGB roulette ([`super::trace::scatter`]), and in a
+//!   scattering medium sample their next interaction ([`Medium::sample_distance`]). At each
+//!   medium interaction the photon is stored with the power it scatters (`sigma_s T / pdf`
+//!   folded in) and its direction of travel, then continues in a Henyey-Greenstein direction,
+//!   surviving with probability `min(1, max(albedo weight))`. Photons are emitted in batches
+//!   until `target` are stored (cut at a photon's end, so every emitted photon's stores are
+//!   all in or all out; the powers are divided by the photons emitted up to there).
+//! - **Beam estimate** ([`VolumeMap::beam`]): every photon is a sphere of radius `r`; a ray
+//!   segment gathers the photons whose sphere it crosses,
+//!   `L = sum_i p(wo, -d_i) Phi_i T(t_i) / (pi r^2)`, with `t_i` the ray's closest approach to
+//!   photon `i` and `T` the transmittance of the segment's medium up to there: all the light
+//!   the medium scatters towards the ray, single and multiple scattering alike, with no
+//!   distance sampling. The photons are binned in a dense grid of cells at least `2r` wide
+//!   (each photon listed in every cell its sphere's box touches, at most 8); a 3D DDA walks the
+//!   cells the segment crosses and counts a photon only in the cell that holds the ray's point
+//!   of closest approach to it, so no photon counts twice.
+//! - The radius is fixed for a render (`volumeradius`, a fraction of the scene's bounding
+//!   radius); progressive radius reduction is not done yet.
+use crate::accel::{Accel, RayKind};
+use crate::interaction::SurfaceInteraction;
+use crate::light::Lights;
+use crate::math::{spawn_origin, Ray, Vec2, Vec3};
+use crate::medium::{henyey_greenstein, sample_henyey_greenstein, Medium, MediumEvent};
+use crate::sampling::{hash, mix64, to_unit};
+use crate::scene::Scene;
+use rayon::prelude::*;
+
+/// One photon stored in a medium.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VolumePhoton {
+    pub p: Vec3,
+    /// Unit direction the photon travelled in when it scattered here.
+    pub d: Vec3,
+    /// The power it scatters here.
+    pub power: Vec3,
+}
+
+/// Bytes a stored volume photon costs at its peak, for the memory model: the photon with the
+/// tracer's growth slack (2 x 36), and while the grid is built up to 8 (cell, photon) pairs
+/// (8 x 8) beside the 8 references they become (8 x 4).
+pub const VOLUME_PHOTON_BYTES: u64 = 2 * 36 + 8 * 8 + 8 * 4;
+
+/// Bytes of the dense cell grid at most ([`MAX_CELLS_PER_AXIS`] cubed, 8 bytes a cell).
+pub const MAX_GRID_BYTES: u64 = (MAX_CELLS_PER_AXIS as u64).pow(3) * 8;
+
+/// The grid has at most this many cells along an axis (cells widen past `2r` to keep to it).
+pub const MAX_CELLS_PER_AXIS: u32 = 128;
+
+/// Photons emitted per batch between checks of the stored count.
+const BATCH: u64 = 1 << 16;
+
+/// Photons per parallel work item within a batch.
+const CHUNK: u64 = 1 << 10;
+
+/// What [`trace`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct VolumeStats {
+    pub emitted: u64,
+    pub stored: u64,
+    pub rays: u64,
+    pub seconds: f64,
+}
+
+/// Traces photons from `lights` until `target` are stored in scattering media (or `64 *
+/// target` were emitted). Deterministic for a seed, whatever the thread count.
+pub fn trace(
+    scene: &Scene,
+    accel: &Accel,
+    lights: &Lights,
+    target: u64,
+    max_bounces: u32,
+    seed: u64,
+) -> (Vec<VolumePhoton>, VolumeStats) {
+    let start = std::time::Instant::now();
+    let powers = lights.powers();
+    let total: f32 = powers.iter().sum();
+    let mut stats = VolumeStats::default();
+    if target == 0 || total <= 0.0 || !scene.media.iter().any(|m| m.scatters()) {
+        return (Vec::new(), stats);
+    }
+    let cdf: Vec<f32> = powers
+        .iter()
+        .scan(0.0, |a, p| {
+            *a += p / total;
+            Some(*a)
+        })
+        .collect();
+    let mut out: Vec<VolumePhoton> = Vec::new();
+    let mut emitted = 0u64;
+    while (out.len() as u64) < target && emitted < target.saturating_mul(64) {
+        if crate::interrupt::requested().is_some() {
+            break;
+        }
+        let lo = emitted;
+        // Each chunk's stores in photon order, and its rays.
+        let parts: Vec<(Vec<(u64, VolumePhoton)>, u64)> = (0..BATCH / CHUNK)
+            .into_par_iter()
+            .map(|c| {
+                let mut v = Vec::new();
+                let mut rays = 0;
+                for i in lo + c * CHUNK..lo + (c + 1) * CHUNK {
+                    let light = (&cdf[..], &powers[..], total);
+                    rays += trace_one(
+                        scene,
+                        accel,
+                        lights,
+                        light,
+                        i,
+                        seed,
+                        max_bounces,
+                        &mut |ph| v.push((i, ph)),
+                    );
+                }
+                (v, rays)
+            })
+            .collect();
+        // Photon i's stores go in whole while fewer than `target` are stored when it starts.
+        let mut stop_at = None;
+        let mut last = None;
+        'parts: for (v, rays) in parts {
+            stats.rays += rays;
+            for (i, ph) in v {
+                if out.len() as u64 >= target && last != Some(i) {
+                    stop_at = Some(i);
+                    break 'parts;
+                }
+                last = Some(i);
+                out.push(ph);
+            }
+        }
+        emitted = stop_at.unwrap_or(lo + BATCH);
+    }
+    // Powers were traced per photon emitted from its light: divide by the photons emitted.
+    let inv = 1.0 / emitted.max(1) as f32;
+    for ph in &mut out {
+        ph.power *= inv;
+    }
+    stats.emitted = emitted;
+    stats.stored = out.len() as u64;
+    stats.seconds = start.elapsed().as_secs_f64();
+    (out, stats)
+}
+
+/// Traces photon `i`: calls `store` at each medium interaction; returns the rays it cast.
+#[allow(clippy::too_many_arguments)]
+fn trace_one(
+    scene: &Scene,
+    accel: &Accel,
+    lights: &Lights,
+    (cdf, powers, total): (&[f32], &[f32], f32),
+    i: u64,
+    seed: u64,
+    max_bounces: u32,
+    store: &mut dyn FnMut(VolumePhoton),
+) -> u64 {
+    let key = hash(&[seed, 0x766f_6c75_6d65, i]);
+    let mut dim = 0u64;
+    let mut next = || {
+        dim += 1;
+        to_unit(mix64(key ^ dim.wrapping_mul(0x9E37_79B9_7F4A_7C15)))
+    };
+    let u_light = next();
+    let light = cdf
+        .iter()
+        .position(|&c| u_light < c)
+        .unwrap_or(cdf.len() - 1);
+    let p_light = powers[light] / total;
+    if p_light <= 0.0 {
+        return 0;
+    }
+    let (u_pos, u_dir) = (Vec2::new(next(), next()), Vec2::new(next(), next()));
+    let Some(e) = lights.emit_aimed(&scene.meshes, light, u_pos, u_dir, None) else {
+        return 0;
+    };
+    let mut power = e.flux / p_light;
+    let mi = scene.light_media.get(light).copied().unwrap_or_default();
+    let mut medium = if e.n == Vec3::ZERO {
+        mi.outside
+    } else {
+        mi.leaving(e.dir, e.n)
+    };
+    let o = if e.n == Vec3::ZERO {
+        e.p
+    } else {
+        spawn_origin(e.p, e.err, if e.n.dot(e.dir) >= 0.0 { e.n } else { -e.n })
+    };
+    let mut ray = Ray::new(o, e.dir);
+    let mut rays = 0;
+    // Scattering vertices so far: a photon stored at its k-th is read by a camera ray as the
+    // light of a path of k vertices, so photons are stored up to the render's maxdepth
+    // (`max_bounces + 1`, as the surface maps' bounces are counted).
+    let mut vertices = 0u32;
+    let max_vertices = max_bounces.saturating_add(1);
+    // Crossings of `interface` surfaces are no bounce; they are bounded all the same.
+    for _ in 0..max_vertices.saturating_mul(4).max(8) {
+        rays += 1;
+        let hit = accel.intersect(RayKind::Photon, &ray);
+        let len = ray.d.length();
+        let dist = hit.as_ref().map_or(f32::INFINITY, |h| h.t * len);
+        if let Some(m) = medium {
+            let med: &Medium = &scene.media[m as usize];
+            if med.scatters() {
+                match med.sample_distance(dist, next(), next()) {
+                    MediumEvent::Scatter { t, weight } => {
+                        let d = ray.d / len;
+                        let p = ray.o + d * t;
+                        let arriving = power;
+                        power *= weight;
+                        store(VolumePhoton { p, d, power });
+                        vertices += 1;
+                        if vertices >= max_vertices {
+                            return rays;
+                        }
+                        // Roulette on the albedo weight (power relative to what arrived).
+                        let q = (power / arriving.max(Vec3::splat(1e-30)))
+                            .max_element()
+                            .min(1.0);
+                        if q.is_nan() || q <= 0.0 || next() >= q {
+                            return rays;
+                        }
+                        power /= q;
+                        let (wi, _) =
+                            sample_henyey_greenstein(-d, med.g, Vec2::new(next(), next()));
+                        ray = Ray::new(p, wi);
+                        continue;
+                    }
+                    MediumEvent::Pass { weight } => power *= weight,
+                }
+            } else {
+                power *= med.transmittance(dist);
+            }
+        }
+        let Some(hit) = hit else {
+            return rays;
+        };
+        let mut si = SurfaceInteraction::new(scene, &hit, &ray);
+        let material = si.material(scene);
+        if material.interface {
+            let d = ray.d;
+            if let Some(mi) = &si.mesh.interface {
+                medium = mi.leaving(d, si.ng);
+            }
+            ray = Ray::new(si.spawn(d), d);
+            continue;
+        }
+        vertices += 1;
+        if vertices >= max_vertices {
+            return rays;
+        }
+        let footprint = crate::camera::Footprint::of_file(scene);
+        let bsdf = si.bsdf(scene, footprint);
+        let mut sampler = crate::sampling::Sampler::new(
+            crate::sampling::Pattern::Independent,
+            seed,
+            hash(&[0x766f_6c75_6d65, i, vertices as u64]),
+            0,
+            1,
+        );
+        let Some(sc) = super::trace::scatter(&si, &bsdf, &mut sampler) else {
+            return rays;
+        };
+        power *= sc.power_scale;
+        if let Some(mi) = &si.mesh.interface {
+            medium = mi.leaving(sc.ray.d, si.ng);
+        }
+        ray = sc.ray;
+    }
+    rays
+}
+
+/// Stored volume photons binned for beam estimates.
+pub struct VolumeMap {
+    photons: Vec<VolumePhoton>,
+    radius: f32,
+    lo: Vec3,
+    cell: f32,
+    dims: [i32; 3],
+    /// Per cell, `(start, count)` into `refs`.
+    cells: Vec<(u32, u32)>,
+    refs: Vec<u32>,
+}
+
+impl VolumeMap {
+    /// Bins `photons` as spheres of `radius`; `None` when there are none.
+    pub fn build(photons: Vec<VolumePhoton>, radius: f32) -> Option<VolumeMap> {
+        if photons.is_empty() || radius.is_nan() || radius <= 0.0 {
+            return None;
+        }
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for ph in &photons {
+            lo = lo.min(ph.p);
+            hi = hi.max(ph.p);
+        }
+        lo -= Vec3::splat(radius);
+        hi += Vec3::splat(radius);
+        let extent = (hi - lo).max_element();
+        let cell = (2.0 * radius).max(extent / MAX_CELLS_PER_AXIS as f32 * 1.0001);
+        let dims = ((hi - lo) / cell).ceil().max(Vec3::ONE);
+        let dims = [dims.x as i32, dims.y as i32, dims.z as i32];
+        let index = |c: [i32; 3]| ((c[2] * dims[1] + c[1]) * dims[0] + c[0]) as usize;
+        let clampc = |v: Vec3| -> [i32; 3] {
+            let c = ((v - lo) / cell).floor();
+            [
+                (c.x as i32).clamp(0, dims[0] - 1),
+                (c.y as i32).clamp(0, dims[1] - 1),
+                (c.z as i32).clamp(0, dims[2] - 1),
+            ]
+        };
+        let mut pairs: Vec<(u32, u32)> = Vec::new();
+        for (i, ph) in photons.iter().enumerate() {
+            let (a, b) = (
+                clampc(ph.p - Vec3::splat(radius)),
+                clampc(ph.p + Vec3::splat(radius)),
+            );
+            for z in a[2]..=b[2] {
+                for y in a[1]..=b[1] {
+                    for x in a[0]..=b[0] {
+                        pairs.push((index([x, y, z]) as u32, i as u32));
+                    }
+                }
+            }
+        }
+        pairs.sort_unstable();
+        let n = (dims[0] * dims[1] * dims[2]) as usize;
+        let mut cells = vec![(0u32, 0u32); n];
+        let mut k = 0;
+        while k < pairs.len() {
+            let c = pairs[k].0;
+            let start = k;
+            while k < pairs.len() && pairs[k].0 == c {
+                k += 1;
+            }
+            cells[c as usize] = (start as u32, (k - start) as u32);
+        }
+        let refs = pairs.into_iter().map(|(_, i)| i).collect();
+        Some(VolumeMap {
+            photons,
+            radius,
+            lo,
+            cell,
+            dims,
+            cells,
+            refs,
+        })
+    }
+
+    pub fn len(&self) -> usize {
+        self.photons.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.photons.is_empty()
+    }
+
+    pub fn radius(&self) -> f32 {
+        self.radius
+    }
+
+    /// Bytes held.
+    pub fn bytes(&self) -> u64 {
+        (self.photons.len() * std::mem::size_of::<VolumePhoton>()
+            + self.cells.len() * 8
+            + self.refs.len() * 4) as u64
+    }
+
+    /// The beam radiance estimate along the segment `o + t d`, `t` in `[0, t_max]` (`d` unit,
+    /// `t_max` may be infinite) through `medium`: the radiance its photons scatter towards
+    /// `-d`, each weighed by the medium's transmittance from `o` to its closest approach.
+    pub fn beam(&self, o: Vec3, d: Vec3, t_max: f32, medium: &Medium) -> Vec3 {
+        let hi = self.lo
+            + Vec3::new(
+                self.dims[0] as f32,
+                self.dims[1] as f32,
+                self.dims[2] as f32,
+            ) * self.cell;
+        // Clip the segment to the grid (slabs).
+        let inv = d.recip();
+        let (t0, t1) = ((self.lo - o) * inv, (hi - o) * inv);
+        let tmin = t0.min(t1).max_element().max(0.0);
+        let tmax = t0.max(t1).min_element().min(t_max);
+        if tmin.is_nan() || tmax.is_nan() || tmin > tmax {
+            return Vec3::ZERO;
+        }
+        let r2 = self.radius * self.radius;
+        let norm = 1.0 / (std::f32::consts::PI * r2);
+        let st = medium.sigma_t();
+        let mut sum = Vec3::ZERO;
+        // 3D DDA (Amanatides & Woo) from the entry point.
+        let p = o + d * tmin;
+        let rel = (p - self.lo) / self.cell;
+        let mut c = [0i32; 3];
+        let mut step = [0i32; 3];
+        let mut next_t = [f32::INFINITY; 3];
+        let mut delta = [f32::INFINITY; 3];
+        for a in 0..3 {
+            c[a] = (rel[a].floor() as i32).clamp(0, self.dims[a] - 1);
+            if d[a] > 0.0 {
+                step[a] = 1;
+                let edge = self.lo[a] + (c[a] + 1) as f32 * self.cell;
+                next_t[a] = (edge - o[a]) / d[a];
+                delta[a] = self.cell / d[a];
+            } else if d[a] < 0.0 {
+                step[a] = -1;
+                let edge = self.lo[a] + c[a] as f32 * self.cell;
+                next_t[a] = (edge - o[a]) / d[a];
+                delta[a] = -self.cell / d[a];
+            }
+        }
+        let mut ta = tmin;
+        loop {
+            let axis = if next_t[0] < next_t[1] {
+                if next_t[0] < next_t[2] {
+                    0
+                } else {
+                    2
+                }
+            } else if next_t[1] < next_t[2] {
+                1
+            } else {
+                2
+            };
+            let tb = next_t[axis].min(tmax);
+            let last = next_t[axis] >= tmax;
+            let (start, count) =
+                self.cells[((c[2] * self.dims[1] + c[1]) * self.dims[0] + c[0]) as usize];
+            for &i in &self.refs[start as usize..(start + count) as usize] {
+                let ph = &self.photons[i as usize];
+                let v = ph.p - o;
+                let t = v.dot(d);
+                // Counted in the cell holding the closest approach only (the last cell
+                // takes the segment's end, the first its start).
+                if t < ta || (t >= tb && !last) || t > tmax {
+                    continue;
+                }
+                if (v - d * t).length_squared() > r2 {
+                    continue;
+                }
+                let tr = Vec3::select(st.cmpgt(Vec3::ZERO), (-st * t).exp(), Vec3::ONE);
+                sum += ph.power * tr * henyey_greenstein(d.dot(ph.d), medium.g);
+            }
+            if last {
+                break;
+            }
+            c[axis] += step[axis];
+            if c[axis] < 0 || c[axis] >= self.dims[axis] {
+                break;
+            }
+            ta = tb;
+            next_t[axis] += delta[axis];
+        }
+        sum * norm
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The beam estimate against a brute-force sum over all photons, on random segments
+    /// through a cloud of photons (every photon counted once, none missed).
+    #[test]
+    fn beam_equals_brute_force_over_all_photons() {
+        let photons: Vec<VolumePhoton> = (0..5000u64)
+            .map(|i| {
+                let h = |k: u64| to_unit(hash(&[i, k]));
+                VolumePhoton {
+                    p: Vec3::new(h(0), h(1), h(2)) * Vec3::new(2.0, 1.0, 0.5),
+                    d: Vec3::new(h(3) - 0.5, h(4) - 0.5, h(5) - 0.5).normalize(),
+                    power: Vec3::new(h(6), h(7), h(8)),
+                }
+            })
+            .collect();
+        let medium = Medium {
+            name: "m".into(),
+            sigma_a: Vec3::new(0.1, 0.2, 0.0),
+            sigma_s: Vec3::splat(0.5),
+            g: 0.4,
+        };
+        for radius in [0.01f32, 0.05, 0.3] {
+            let map = VolumeMap::build(photons.clone(), radius).unwrap();
+            for j in 0..200u64 {
+                let h = |k: u64| to_unit(hash(&[99, j, k]));
+                let o = Vec3::new(h(0) * 3.0 - 0.5, h(1) * 2.0 - 0.5, h(2) * 1.5 - 0.5);
+                let d = Vec3::new(h(3) - 0.5, h(4) - 0.5, h(5) - 0.5).normalize();
+                let t_max = if j % 3 == 0 {
+                    f32::INFINITY
+                } else {
+                    h(6) * 2.0
+                };
+                let got = map.beam(o, d, t_max, &medium);
+                let mut want = Vec3::ZERO;
+                for ph in &photons {
+                    let v = ph.p - o;
+                    let t = v.dot(d);
+                    if t < 0.0 || t > t_max || (v - d * t).length_squared() > radius * radius {
+                        continue;
+                    }
+                    want += ph.power
+                        * medium.transmittance(t)
+                        * henyey_greenstein(d.dot(ph.d), medium.g)
+                        / (std::f32::consts::PI * radius * radius);
+                }
+                let err = (got - want).abs().max_element();
+                assert!(
+                    err <= 1e-4 * want.max_element().max(1.0),
+                    "r {radius} ray {j}: {got} vs {want}"
+                );
+            }
+        }
+    }
+}
