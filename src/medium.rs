@@ -26,15 +26,20 @@
 //!   three channels); at a scattering point the path takes a light sample through the phase
 //!   function (MIS against phase sampling) and continues in a phase-sampled direction. Shadow
 //!   rays pass `interface` surfaces and take each medium's transmittance on the way.
-//! - The other integrators (photon mapping, direct, the bidirectional ones) keep the first
-//!   step's rule: a medium absorbs only and is a region closed by the surfaces that name it,
+//! - `--integrator photonmap` renders such scenes as the path tracer does, except that camera
+//!   segments (and those after delta bounces) in a scattering medium read all the light it
+//!   scatters towards them from the volume photon map by a beam estimate
+//!   ([`crate::photon::volume`]) and go on to their hit dimmed by the transmittance; the
+//!   surface photon maps are not built there.
+//! - The other integrators (direct, the bidirectional ones), and the photon mapper in scenes
+//!   within it, keep the first step's rule: a medium absorbs only and is a region closed by the surfaces that name it,
 //!   with the camera and every light outside, so a ray segment is inside a medium exactly when
 //!   it ends on a boundary surface from that medium's side, and its transmittance is
 //!   `exp(-sigma_a * length)` ([`crate::accel::transmittance`]); photons, camera paths, gather
 //!   rays and bidirectional subpaths all take that factor at every hit. A scene outside that
 //!   rule (scattering, the camera or a light in a medium, `interface` shapes, immersed
 //!   surfaces) is refused by them with the line of the first reason
-//!   ([`crate::scene::Scene::media_need_tracking`]). The volume photon map is still to come.
+//!   ([`crate::scene::Scene::media_need_tracking`]).
 //!
 //! Emitting media, grid media and `preset`s are located errors.
 use crate::math::Vec3;
