@@ -545,11 +545,17 @@ pub fn render_for_time(
     totals.components = parts;
     totals.seconds = start.elapsed().as_secs_f64();
     let scale = radius_scale2(settings.photon.alpha as f64, k.saturating_sub(1)).sqrt();
+    let photons = if scene.media_need_tracking.is_some() {
+        format!("{} volume photons", settings.photon.volume_photons)
+    } else {
+        format!(
+            "{} + {} photons",
+            settings.photon.trace.global_photons, settings.photon.trace.caustic_photons
+        )
+    };
     totals.notes.push(format!(
-        "progressive: {k} passes, {spp_done} spp ({} spp in the last), {} + {} photons per pass, radii now x{scale:.3} of the k-nearest radius",
+        "progressive: {k} passes, {spp_done} spp ({} spp in the last), {photons} per pass, radii now x{scale:.3} of the first pass's",
         last_spp,
-        settings.photon.trace.global_photons,
-        settings.photon.trace.caustic_photons
     ));
     (totals, spp_done)
 }

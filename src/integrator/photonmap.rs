@@ -117,7 +117,7 @@ impl Default for PhotonSettings {
             alpha: 2.0 / 3.0,
             radius_scale2: 1.0,
             bounces_given: false,
-            volume_photons: 250_000,
+            volume_photons: 100_000,
             volume_radius: 0.02,
         }
     }
@@ -270,7 +270,8 @@ pub fn prepare(
             s.trace.max_bounces,
             s.trace.seed,
         );
-        let r = s.volume_radius * lights.scene_sphere().1;
+        // Progressive passes shrink it with the surface maps' radii (`radius_scale2`).
+        let r = s.volume_radius * lights.scene_sphere().1 * (s.radius_scale2 as f32).sqrt();
         (crate::photon::volume::VolumeMap::build(photons, r), st)
     } else {
         (None, Default::default())

@@ -253,7 +253,9 @@ pub fn render_image(
     let mut notes = Vec::new();
     // Fixed maps grow with the budget; progressive passes keep the file's counts.
     let given = opts.photon.global_photons.is_some() || opts.photon.caustic_photons.is_some();
-    let photonmap = opts.integrator == IntegratorKind::Photonmap;
+    // In a scene whose media need tracking the photon mapper builds its volume map alone.
+    let photonmap = opts.integrator == IntegratorKind::Photonmap
+        && job.scene.media_need_tracking.is_none();
     if photonmap && !given && !settings.photon.progressive {
         // The budget's counts, halved until the memory estimate fits; the file's counts
         // (already checked) are the floor.
