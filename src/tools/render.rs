@@ -254,8 +254,8 @@ pub fn render_image(
     // Fixed maps grow with the budget; progressive passes keep the file's counts.
     let given = opts.photon.global_photons.is_some() || opts.photon.caustic_photons.is_some();
     // In a scene whose media need tracking the photon mapper builds its volume map alone.
-    let photonmap = opts.integrator == IntegratorKind::Photonmap
-        && job.scene.media_need_tracking.is_none();
+    let photonmap =
+        opts.integrator == IntegratorKind::Photonmap && job.scene.media_need_tracking.is_none();
     if photonmap && !given && !settings.photon.progressive {
         // The budget's counts, halved until the memory estimate fits; the file's counts
         // (already checked) are the floor.
