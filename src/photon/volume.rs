@@ -313,6 +313,10 @@ impl VolumeMap {
                 (c.z as i32).clamp(0, dims[2] - 1),
             ]
         };
+        // Photons in the order of the cell holding them: a cell's list then reads few,
+        // mostly consecutive cache lines.
+        let mut photons = photons;
+        photons.sort_by_cached_key(|ph| index(clampc(ph.p)) as u32);
         let mut pairs: Vec<(u32, u32)> = Vec::new();
         for (i, ph) in photons.iter().enumerate() {
             let (a, b) = (
