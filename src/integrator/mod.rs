@@ -228,8 +228,12 @@ pub struct Counters {
     pub shadow_rays: AtomicU64,
     /// Thread-nanoseconds spent inside batched ray queries of the render loop.
     pub ray_ns: AtomicU64,
-    /// Thread-nanoseconds spent in photon-map lookups (caustic estimates, gather lookups).
+    /// Thread-nanoseconds spent in photon-map lookups (caustic estimates, gather lookups,
+    /// beam estimates).
     pub lookup_ns: AtomicU64,
+    /// Beam estimates of the volume photon map, and the photons they gathered.
+    pub beams: AtomicU64,
+    pub beam_photons: AtomicU64,
 }
 
 /// Adds the time since `start` to `counter` (thread-nanoseconds).
@@ -247,6 +251,8 @@ impl Counters {
             (&self.shadow_rays, &other.shadow_rays),
             (&self.ray_ns, &other.ray_ns),
             (&self.lookup_ns, &other.lookup_ns),
+            (&self.beams, &other.beams),
+            (&self.beam_photons, &other.beam_photons),
         ] {
             x.fetch_add(y.load(Ordering::Relaxed), Ordering::Relaxed);
         }
@@ -407,8 +413,11 @@ pub fn render_prepared(
     };
     let mut notes = photons.map(photonmap::describe).unwrap_or_default();
     let (photon_seconds, map_build_seconds) = photons.map_or((0.0, 0.0), |p| {
-        let st = &p.maps.stats;
-        (st.trace_seconds, st.build_seconds + p.cache_seconds)
+        let (st, vs) = (&p.maps.stats, &p.volume_stats);
+        (
+            st.trace_seconds + vs.seconds,
+            st.build_seconds + p.cache_seconds + vs.build_seconds,
+        )
     });
     let ctx = RenderContext {
         scene,

@@ -272,7 +272,13 @@ pub fn prepare(
         );
         // Progressive passes shrink it with the surface maps' radii (`radius_scale2`).
         let r = s.volume_radius * lights.scene_sphere().1 * (s.radius_scale2 as f32).sqrt();
-        (crate::photon::volume::VolumeMap::build(photons, r), st)
+        let t = Instant::now();
+        let map = crate::photon::volume::VolumeMap::build(photons, r);
+        let st = crate::photon::volume::VolumeStats {
+            build_seconds: t.elapsed().as_secs_f64(),
+            ..st
+        };
+        (map, st)
     } else {
         (None, Default::default())
     };
@@ -1019,11 +1025,12 @@ pub fn describe(pass: &PhotonPass) -> Vec<String> {
     let vs = &pass.volume_stats;
     if vs.emitted > 0 {
         return vec![format!(
-            "volume photons: {} emitted -> {} stored in scattering media in {:.3} s ({:.2} rays/photon), {:.1} MB, sphere radius {:.4}; the surfaces are path-traced (the surface photon maps are not built in a scene whose media need tracking), the media read by beam estimates",
+            "volume photons: {} emitted -> {} stored in scattering media in {:.3} s ({:.2} rays/photon), binned in {:.3} s, {:.1} MB, sphere radius {:.4}; the surfaces are path-traced (the surface photon maps are not built in a scene whose media need tracking), the media read by beam estimates",
             vs.emitted,
             vs.stored,
             vs.seconds,
             vs.rays as f64 / vs.emitted.max(1) as f64,
+            vs.build_seconds,
             pass.volume.as_ref().map_or(0, |v| v.bytes()) as f64 / 1e6,
             pass.volume.as_ref().map_or(0.0, |v| v.radius()),
         )];

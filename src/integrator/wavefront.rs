@@ -320,7 +320,13 @@ fn shade_one<S: Shade>(
             if let (Some(map), true, true) = (volume, medium.scatters(), path.prev_delta) {
                 // The photon mapper: the volume map's beam estimate gives all the light the
                 // medium scatters towards the ray; the ray goes on to its hit dimmed.
-                let beam = map.beam(path.ray.o, path.ray.d / len, dist, medium);
+                let t = Instant::now();
+                let (beam, n) = map.beam(path.ray.o, path.ray.d / len, dist, medium);
+                charge(&ctx.counters.lookup_ns, t);
+                ctx.counters.beams.fetch_add(1, Ordering::Relaxed);
+                ctx.counters
+                    .beam_photons
+                    .fetch_add(n as u64, Ordering::Relaxed);
                 add(w.acc, path.pixel, Component::Indirect, path.beta * beam);
                 path.beta *= medium.transmittance(dist);
             } else if let Some(t) = medium_segment(medium, &mut path, dist) {

@@ -65,7 +65,9 @@ pub struct VolumeStats {
     pub emitted: u64,
     pub stored: u64,
     pub rays: u64,
+    /// Tracing, and binning ([`VolumeMap::build`], filled in by its caller).
     pub seconds: f64,
+    pub build_seconds: f64,
 }
 
 /// Traces photons from `lights` until `target` are stored in scattering media (or `64 *
@@ -376,8 +378,9 @@ impl VolumeMap {
 
     /// The beam radiance estimate along the segment `o + t d`, `t` in `[0, t_max]` (`d` unit,
     /// `t_max` may be infinite) through `medium`: the radiance its photons scatter towards
-    /// `-d`, each weighed by the medium's transmittance from `o` to its closest approach.
-    pub fn beam(&self, o: Vec3, d: Vec3, t_max: f32, medium: &Medium) -> Vec3 {
+    /// `-d`, each weighed by the medium's transmittance from `o` to its closest approach;
+    /// and how many photons it gathered.
+    pub fn beam(&self, o: Vec3, d: Vec3, t_max: f32, medium: &Medium) -> (Vec3, u32) {
         let hi = self.lo
             + Vec3::new(
                 self.dims[0] as f32,
@@ -390,12 +393,13 @@ impl VolumeMap {
         let tmin = t0.min(t1).max_element().max(0.0);
         let tmax = t0.max(t1).min_element().min(t_max);
         if tmin.is_nan() || tmax.is_nan() || tmin > tmax {
-            return Vec3::ZERO;
+            return (Vec3::ZERO, 0);
         }
         let r2 = self.radius * self.radius;
         let norm = 1.0 / (std::f32::consts::PI * r2);
         let st = medium.sigma_t();
         let mut sum = Vec3::ZERO;
+        let mut gathered = 0u32;
         // 3D DDA (Amanatides & Woo) from the entry point.
         let p = o + d * tmin;
         let rel = (p - self.lo) / self.cell;
@@ -448,6 +452,7 @@ impl VolumeMap {
                 }
                 let tr = Vec3::select(st.cmpgt(Vec3::ZERO), (-st * t).exp(), Vec3::ONE);
                 sum += ph.power * tr * henyey_greenstein(d.dot(ph.d), medium.g);
+                gathered += 1;
             }
             if last {
                 break;
@@ -459,7 +464,7 @@ impl VolumeMap {
             ta = tb;
             next_t[axis] += delta[axis];
         }
-        sum * norm
+        (sum * norm, gathered)
     }
 }
 
@@ -498,7 +503,7 @@ mod tests {
                 } else {
                     h(6) * 2.0
                 };
-                let got = map.beam(o, d, t_max, &medium);
+                let got = map.beam(o, d, t_max, &medium).0;
                 let mut want = Vec3::ZERO;
                 for ph in &photons {
                     let v = ph.p - o;

@@ -574,6 +574,15 @@ fn print_stats(out: &crate::integrator::RenderOutput, threads: usize) {
         shading_s,
         pct(shading_s)
     );
+    let beams = c.beams.load(Relaxed);
+    if beams > 0 {
+        let gathered = c.beam_photons.load(Relaxed);
+        say!(
+            "beam estimates: {beams} (camera segments and those after delta bounces in scattering media), {:.1} volume photons each, {:.2} us each with the other lookups",
+            gathered as f64 / beams as f64,
+            lookup_s * 1e6 / beams as f64
+        );
+    }
     let rays = (c.camera_rays.load(Relaxed)
         + c.secondary_rays.load(Relaxed)
         + c.shadow_rays.load(Relaxed)) as f64;

@@ -482,6 +482,19 @@ fn fog_box_photon_mapper_beams_against_the_path_tracer() {
     for (i, r) in blocks.iter().enumerate() {
         assert!((r - 1.0).abs() < 0.08, "block {i}: {r} ({blocks:?})");
     }
+    // Every camera ray enters the fog through the front: one beam each, gathering photons.
+    let beams = got
+        .counters
+        .beams
+        .load(std::sync::atomic::Ordering::Relaxed);
+    let gathered = got
+        .counters
+        .beam_photons
+        .load(std::sync::atomic::Ordering::Relaxed);
+    assert!(
+        beams >= 32 * 32 * 16 && gathered > 10 * beams,
+        "{beams} beams, {gathered} photons"
+    );
     // The volume photons and the beams do not depend on the thread count.
     let one = common::render_with(
         &pm,

@@ -1093,7 +1093,8 @@ impl Builder {
             .collect();
         let what = match &self.needs_tracking {
             None => "every integrator dims each ray segment inside them by Beer's law \
-                     (photons, camera, gather and bidirectional paths alike)"
+                     (photons, camera, gather and bidirectional paths alike); nothing scatters, \
+                     so no volume photon map is built"
                 .to_string(),
             Some(why) => format!(
                 "--integrator path tracks the medium each ray is in, scatters and takes light \
