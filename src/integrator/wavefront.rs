@@ -321,14 +321,16 @@ fn shade_one<S: Shade>(
                 // The photon mapper: the volume map's beam estimate gives all the light the
                 // medium scatters towards the ray; the ray goes on to its hit dimmed.
                 let t = Instant::now();
-                let (beam, n) = map.beam(path.ray.o, path.ray.d / len, dist, medium);
+                let d = path.ray.d / len;
+                let tr = medium.transmittance_table(path.ray.o, d, dist);
+                let (beam, n) = map.beam_with(path.ray.o, d, dist, medium.g, &tr);
                 charge(&ctx.counters.lookup_ns, t);
                 ctx.counters.beams.fetch_add(1, Ordering::Relaxed);
                 ctx.counters
                     .beam_photons
                     .fetch_add(n as u64, Ordering::Relaxed);
                 add(w.acc, path.pixel, Component::Indirect, path.beta * beam);
-                path.beta *= medium.transmittance(dist);
+                path.beta *= tr.at(dist);
             } else if let Some(t) = medium_segment(medium, &mut path, dist) {
                 let p = path.ray.o + path.ray.d * (t / len);
                 shader.shade_medium(ctx, path, p, w);
@@ -363,14 +365,22 @@ fn medium_segment<T>(
     path: &mut PathState<T>,
     dist: f32,
 ) -> Option<f32> {
-    if !medium.scatters() {
+    let len = path.ray.d.length();
+    let (o, d) = (path.ray.o, path.ray.d / len);
+    if medium.density.is_none() && !medium.scatters() {
         path.beta *= medium.transmittance(dist);
         return None;
     }
     path.sampler
         .set_dimension(MEDIUM_DIMS.wrapping_add(path.segment.wrapping_mul(2)));
     let (uc, u) = (path.sampler.next_1d(), path.sampler.next_1d());
-    match medium.sample_distance(dist, uc, u) {
+    if !medium.scatters() {
+        let key = crate::sampling::hash(&[uc.to_bits() as u64, u.to_bits() as u64]);
+        let mut rng = crate::medium::grid::Rng::new(key);
+        path.beta *= medium.transmittance_along(o, d, dist, &mut rng);
+        return None;
+    }
+    match medium.sample_interaction(o, d, dist, uc, u) {
         crate::medium::MediumEvent::Scatter { t, weight } => {
             path.beta *= weight;
             Some(t)
@@ -396,7 +406,7 @@ fn shadow_transmittance(ctx: &RenderContext, s: &Shadow) -> Vec3 {
         let len = ray.d.length();
         let Some(h) = hit else {
             if let Some(m) = medium {
-                tr *= scene.media[m as usize].transmittance(ray.tmax * len);
+                tr *= along(&scene.media[m as usize], &ray, ray.tmax * len);
             }
             return tr;
         };
@@ -408,7 +418,7 @@ fn shadow_transmittance(ctx: &RenderContext, s: &Shadow) -> Vec3 {
             return Vec3::ZERO;
         };
         if let Some(m) = medium {
-            tr *= scene.media[m as usize].transmittance(h.t * len);
+            tr *= along(&scene.media[m as usize], &ray, h.t * len);
         }
         let ng = mesh.geometric_normal(h.prim, h.u, h.v);
         medium = mi.leaving(ray.d, ng);
@@ -423,6 +433,16 @@ fn shadow_transmittance(ctx: &RenderContext, s: &Shadow) -> Vec3 {
         }
     }
     Vec3::ZERO
+}
+
+/// A shadow segment's transmittance through `medium` over `dist` (ratio tracking in a grid,
+/// its numbers keyed by the segment itself, so the image stays independent of scheduling).
+fn along(medium: &crate::medium::Medium, ray: &Ray, dist: f32) -> Vec3 {
+    let d = ray.d.normalize();
+    let bits = |v: Vec3| v.to_array().map(|x| x.to_bits() as u64);
+    let (o, dd) = (bits(ray.o), bits(d));
+    let key = crate::sampling::hash(&[o[0], o[1], o[2], dd[0], dd[1], dd[2]]);
+    medium.transmittance_along(ray.o, d, dist, &mut crate::medium::grid::Rng::new(key))
 }
 
 /// Medium boundaries a shadow ray may pass before it is taken as blocked.

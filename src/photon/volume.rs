@@ -208,10 +208,10 @@ fn trace_one(
         let dist = hit.as_ref().map_or(f32::INFINITY, |h| h.t * len);
         if let Some(m) = medium {
             let med: &Medium = &scene.media[m as usize];
+            let d = ray.d / len;
             if med.scatters() {
-                match med.sample_distance(dist, next(), next()) {
+                match med.sample_interaction(ray.o, d, dist, next(), next()) {
                     MediumEvent::Scatter { t, weight } => {
-                        let d = ray.d / len;
                         let p = ray.o + d * t;
                         let arriving = power;
                         power *= weight;
@@ -236,7 +236,8 @@ fn trace_one(
                     MediumEvent::Pass { weight } => power *= weight,
                 }
             } else {
-                power *= med.transmittance(dist);
+                let mut rng = crate::medium::grid::Rng::new(hash(&[key, 0x7472, rays]));
+                power *= med.transmittance_along(ray.o, d, dist, &mut rng);
             }
         }
         let Some(hit) = hit else {
@@ -381,6 +382,19 @@ impl VolumeMap {
     /// `-d`, each weighed by the medium's transmittance from `o` to its closest approach;
     /// and how many photons it gathered.
     pub fn beam(&self, o: Vec3, d: Vec3, t_max: f32, medium: &Medium) -> (Vec3, u32) {
+        let tr = medium.transmittance_table(o, d, t_max);
+        self.beam_with(o, d, t_max, medium.g, &tr)
+    }
+
+    /// [`Self::beam`] with the segment's transmittance already tabled.
+    pub fn beam_with(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        t_max: f32,
+        g: f32,
+        tr: &crate::medium::TransmittanceTable,
+    ) -> (Vec3, u32) {
         let hi = self.lo
             + Vec3::new(
                 self.dims[0] as f32,
@@ -397,7 +411,6 @@ impl VolumeMap {
         }
         let r2 = self.radius * self.radius;
         let norm = 1.0 / (std::f32::consts::PI * r2);
-        let st = medium.sigma_t();
         let mut sum = Vec3::ZERO;
         let mut gathered = 0u32;
         // 3D DDA (Amanatides & Woo) from the entry point.
@@ -450,8 +463,7 @@ impl VolumeMap {
                 if (v - d * t).length_squared() > r2 {
                     continue;
                 }
-                let tr = Vec3::select(st.cmpgt(Vec3::ZERO), (-st * t).exp(), Vec3::ONE);
-                sum += ph.power * tr * henyey_greenstein(d.dot(ph.d), medium.g);
+                sum += ph.power * tr.at(t) * henyey_greenstein(d.dot(ph.d), g);
                 gathered += 1;
             }
             if last {
@@ -491,6 +503,7 @@ mod tests {
             sigma_a: Vec3::new(0.1, 0.2, 0.0),
             sigma_s: Vec3::splat(0.5),
             g: 0.4,
+            density: None,
         };
         for radius in [0.01f32, 0.05, 0.3] {
             let map = VolumeMap::build(photons.clone(), radius).unwrap();

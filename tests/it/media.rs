@@ -562,3 +562,77 @@ fn fog_box_photon_mapper_beams_against_the_path_tracer() {
     );
     assert_eq!(one.image.pixels, got.image.pixels, "1 and 2 threads differ");
 }
+
+/// A `uniformgrid` medium: its density `1 + z / 2` along the ink cube's axis (linear
+/// between the voxel centres, which reach past the cube), so the ink along the axis is the
+/// homogeneous cube's: `exp(-2 sigma_a)`, tracked by ratio tracking in the path tracer and the
+/// photon mapper (grid media need tracking: the others refuse them).
+#[test]
+fn a_density_grid_dims_the_sky_by_its_integral() {
+    // Two samples across x and y (one would fade away from its centre, as pbrt-v4's grid does).
+    let values: Vec<String> = (0..32)
+        .map(|i| format!("{}", 1.0 + 0.5 * (-1.75 + 0.5 * (i / 4) as f32)))
+        .collect();
+    let grid = format!(
+        r#"MakeNamedMedium "ink" "string type" "uniformgrid"
+    "integer nx" 2 "integer ny" 2 "integer nz" 8 "float density" [ {} ]
+    "point3 p0" [ -5 -5 -2 ] "point3 p1" [ 5 5 2 ]
+    "rgb sigma_a" [ {} {} {} ] "rgb sigma_s" [ 0 0 0 ]
+AttributeBegin
+  MediumInterface "ink" ""
+  Material "dielectric" "float eta" 1
+"#,
+        values.join(" "),
+        SIGMA_A[0],
+        SIGMA_A[1],
+        SIGMA_A[2]
+    );
+    let text = cube_scene(r#""ink" """#).replace(&ink(r#""ink" """#), &grid);
+    assert!(text.contains("uniformgrid"));
+    let want = Vec3::from_array(SIGMA_A.map(|s| (-2.0 * s).exp()));
+    let dir = TempDir::new("photon-media");
+    let scene = loader::load(&dir.write("grid.pbrt", text)).expect("loads");
+    for kind in [IntegratorKind::Path, IntegratorKind::Photonmap] {
+        let out = common::render_with(&scene, kind, BackendKind::Embree, (16, 16, 128), 2, 7);
+        let got = channel_means(&out.image);
+        let err = ((got - want) / want).abs().max_element();
+        assert!(err < 0.01, "{kind:?}: {got} against {want}");
+    }
+    let e = photon::integrator::check_scene(IntegratorKind::Bdpt, &scene).unwrap_err();
+    assert!(e.contains("is a density grid"), "{e}");
+}
+
+#[test]
+fn single_scattering_in_a_fog_slab_held_in_a_density_grid() {
+    // The slab's fog as a grid of density 2 with halved coefficients: the same closed form.
+    let (sigma_a, sigma_s) = ([0.5f32, 0.2, 0.0], [0.5f32, 1.0, 2.0]);
+    let g = 0.5f32;
+    let text = fog_slab(g, sigma_a.map(|v| v / 2.0), sigma_s.map(|v| v / 2.0)).replace(
+        r#""string type" "homogeneous""#,
+        r#""string type" "uniformgrid" "integer nx" 2 "integer ny" 2 "integer nz" 2
+    "float density" [ 2 2 2 2 2 2 2 2 ] "point3 p0" [ -100 -100 -2 ] "point3 p1" [ 100 100 1 ]"#,
+    );
+    let dir = TempDir::new("photon-media");
+    let scene = loader::load(&dir.write("fog.pbrt", text)).expect("scene loads");
+    let out = common::render_with(
+        &scene,
+        IntegratorKind::Path,
+        BackendKind::Embree,
+        (16, 16, 256),
+        2,
+        3,
+    );
+    let got = channel_means(&out.image);
+    let cos_travel = -0.5f64;
+    let p = (1.0 - (g as f64).powi(2))
+        / (4.0
+            * std::f64::consts::PI
+            * (1.0 + (g as f64).powi(2) - 2.0 * g as f64 * cos_travel).powf(1.5));
+    for c in 0..3 {
+        let st = (sigma_a[c] + sigma_s[c]) as f64;
+        let k = 1.0 + 1.0 / 0.5;
+        let want = sigma_s[c] as f64 * p * (1.0 - (-st * k).exp()) / (st * k);
+        let err = (got[c] as f64 / want - 1.0).abs();
+        assert!(err < 0.02, "channel {c}: {} against {want}", got[c]);
+    }
+}

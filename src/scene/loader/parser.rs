@@ -535,9 +535,14 @@ impl Builder {
                         format!("medium \"{name}\" is defined twice"),
                     ));
                 }
-                let medium = crate::medium::Medium::create(&name, &mut params, &loc)?;
+                let medium_from_world = self.gs.ctm.inverse();
+                let medium =
+                    crate::medium::Medium::create(&name, &mut params, &loc, medium_from_world)?;
                 if medium.scatters() {
                     self.track(&loc, &format!("medium \"{name}\" scatters"));
+                }
+                if medium.density.is_some() {
+                    self.track(&loc, &format!("medium \"{name}\" is a density grid"));
                 }
                 self.named_media.insert(name, self.media.len() as u32);
                 self.media.push(medium);
