@@ -79,6 +79,25 @@ impl DensityGrid {
         )
     }
 
+    /// The part `[t0, t1]` of the ray `o + t d` (world space) where the density may be non-zero
+    /// (the box `p0..p1` grown by half a voxel); `t0 > t1` when it misses.
+    pub fn clip(&self, o: Vec3, d: Vec3) -> (f32, f32) {
+        let om = self.medium_from_world.transform_point3(o);
+        let dm = self.medium_from_world.transform_vector3(d);
+        let half = (self.p1 - self.p0)
+            / Vec3::new(self.n[0] as f32, self.n[1] as f32, self.n[2] as f32)
+            * 0.5;
+        let (lo, hi) = (self.p0 - half, self.p1 + half);
+        let inv = dm.recip();
+        let (a, b) = ((lo - om) * inv, (hi - om) * inv);
+        let t0 = a.min(b).max_element().max(0.0);
+        let t1 = a.max(b).min_element();
+        if t0.is_nan() || t1.is_nan() {
+            return (1.0, 0.0);
+        }
+        (t0, t1)
+    }
+
     /// The ray parameter step that moves half the smallest voxel along world direction `d`
     /// (the beam estimates' marching step).
     pub fn half_voxel_step(&self, d: Vec3) -> f32 {

@@ -137,6 +137,23 @@ impl Medium {
                 "emitting media are not supported yet (Le must be 0)".into(),
             );
         }
+        if let Some(grid) = &density {
+            // The trackers step by the majorant: beyond this optical depth per voxel they would
+            // take more steps than a render can afford (and such a voxel is opaque anyway).
+            let voxel = ((grid.p1 - grid.p0)
+                / Vec3::new(grid.n[0] as f32, grid.n[1] as f32, grid.n[2] as f32))
+            .min_element();
+            let depth = (sigma_a + sigma_s).max_element() * grid.max * voxel;
+            if depth.is_nan() || depth > MAX_VOXEL_DEPTH {
+                return bad(
+                    "density",
+                    format!(
+                        "the densest voxel is {depth:e} optical depths thick (sigma_t x density x \
+                         voxel size); at most {MAX_VOXEL_DEPTH:e} are tracked"
+                    ),
+                );
+            }
+        }
         Ok(Medium {
             name: name.to_string(),
             sigma_a,
@@ -163,10 +180,13 @@ impl Medium {
             return Vec3::ONE;
         }
         let st = self.sigma_t();
-        let (mut t, mut tr) = (0.0f32, Vec3::ONE);
+        // Nothing to cross outside the grid's box.
+        let (t0, t1) = grid.clip(o, d);
+        let end = dist.min(t1);
+        let (mut t, mut tr) = (t0, Vec3::ONE);
         for _ in 0..MAX_COLLISIONS {
             t -= (1.0 - rng.uniform()).ln() / maj;
-            if t >= dist {
+            if t >= end {
                 return tr;
             }
             tr *= Vec3::ONE - st * (grid.density(o + d * t) / maj);
@@ -200,10 +220,13 @@ impl Medium {
             u.to_bits() as u64,
         ]));
         let (st, ss) = (self.sigma_t(), self.sigma_s);
-        let (mut t, mut w) = (0.0f32, Vec3::ONE);
+        // Outside the grid's box every collision would be a null one of weight 1.
+        let (t0, t1) = grid.clip(o, d);
+        let end = dist.min(t1);
+        let (mut t, mut w) = (t0, Vec3::ONE);
         for _ in 0..MAX_COLLISIONS {
             t -= (1.0 - rng.uniform()).ln() / maj;
-            if t >= dist {
+            if t >= end {
                 return MediumEvent::Pass { weight: w };
             }
             let rho = grid.density(o + d * t);
@@ -229,9 +252,11 @@ impl Medium {
             return TransmittanceTable::Beer(st);
         };
         let step = grid.half_voxel_step(d);
-        // A grid bounds its medium: past 4096 steps (or an infinite segment) the tail is
-        // marched in coarser steps.
-        let end = if t_max.is_finite() { t_max } else { 1e4 * step };
+        // Marched to the end of the grid's box (no density beyond), in at most 4096 steps.
+        let end = t_max.min(grid.clip(o, d).1).max(0.0);
+        if !end.is_finite() || end <= 0.0 {
+            return TransmittanceTable::Beer(Vec3::ZERO); // the segment misses the grid
+        }
         let steps = ((end / step).ceil() as usize).clamp(1, 4096);
         let h = end / steps as f32;
         let mut depth = Vec::with_capacity(steps + 1);
@@ -395,6 +420,10 @@ fn read_grid(
         max,
     })
 }
+
+/// The optical depth across one voxel of a grid medium's densest voxel that the trackers
+/// accept (their steps average `1 / majorant`).
+pub const MAX_VOXEL_DEPTH: f32 = 1e4;
 
 /// `exp(-sigma_t dist)` per channel, 1 where `sigma_t` is 0 (also for an infinite `dist`).
 #[inline]
@@ -730,6 +759,10 @@ mod tests {
             (
                 r#""string type" "uniformgrid" "float density" [ 1 ] "point3 p1" [ 1 0 1 ]"#,
                 "p1 must exceed p0",
+            ),
+            (
+                r#""string type" "uniformgrid" "float density" [ 1e38 1 ] "integer nx" 2"#,
+                "optical depths thick",
             ),
         ] {
             let e = create(text).unwrap_err().to_string();

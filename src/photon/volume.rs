@@ -138,6 +138,9 @@ pub fn trace(
             }
         }
         emitted = stop_at.unwrap_or(lo + BATCH);
+        if out.is_empty() && emitted >= 4 * BATCH {
+            break; // no photon reaches a scattering medium
+        }
     }
     // Powers were traced per photon emitted from its light: divide by the photons emitted.
     let inv = 1.0 / emitted.max(1) as f32;
