@@ -259,6 +259,18 @@ AttributeEnd
     )
 }
 
+/// [`fog_slab`]'s pixel value in one channel: the closed form of single scattering, with the
+/// textbook Henyey-Greenstein density (the light travels along `-from`, then along +z: the
+/// cosine between the two directions of travel is -0.5) written apart from the renderer's.
+fn single_scattering(g: f32, sigma_a: f32, sigma_s: f32) -> f64 {
+    let (g, cos_travel) = (g as f64, -0.5f64);
+    let p = (1.0 - g * g)
+        / (4.0 * std::f64::consts::PI * (1.0 + g * g - 2.0 * g * cos_travel).powf(1.5));
+    let st = (sigma_a + sigma_s) as f64;
+    let k = 1.0 + 1.0 / 0.5;
+    sigma_s as f64 * p * (1.0 - (-st * k).exp()) / (st * k)
+}
+
 #[test]
 fn single_scattering_in_a_fog_slab_matches_the_closed_form() {
     // Chromatic extinction exercises the per-channel distance sampling.
@@ -276,16 +288,8 @@ fn single_scattering_in_a_fog_slab_matches_the_closed_form() {
             3,
         );
         let got = channel_means(&out.image);
-        // The light travels along -from, scatters into +z: cos between the two is -0.5.
-        let cos_travel = -0.5f64;
-        let p = (1.0 - (g as f64).powi(2))
-            / (4.0
-                * std::f64::consts::PI
-                * (1.0 + (g as f64).powi(2) - 2.0 * g as f64 * cos_travel).powf(1.5));
         for c in 0..3 {
-            let st = (sigma_a[c] + sigma_s[c]) as f64;
-            let k = 1.0 + 1.0 / 0.5;
-            let want = sigma_s[c] as f64 * p * (1.0 - (-st * k).exp()) / (st * k);
+            let want = single_scattering(g, sigma_a[c], sigma_s[c]);
             let err = (got[c] as f64 / want - 1.0).abs();
             assert!(err < 0.01, "g {g} channel {c}: {} against {want}", got[c]);
         }
@@ -623,15 +627,8 @@ fn single_scattering_in_a_fog_slab_held_in_a_density_grid() {
         3,
     );
     let got = channel_means(&out.image);
-    let cos_travel = -0.5f64;
-    let p = (1.0 - (g as f64).powi(2))
-        / (4.0
-            * std::f64::consts::PI
-            * (1.0 + (g as f64).powi(2) - 2.0 * g as f64 * cos_travel).powf(1.5));
     for c in 0..3 {
-        let st = (sigma_a[c] + sigma_s[c]) as f64;
-        let k = 1.0 + 1.0 / 0.5;
-        let want = sigma_s[c] as f64 * p * (1.0 - (-st * k).exp()) / (st * k);
+        let want = single_scattering(g, sigma_a[c], sigma_s[c]);
         let err = (got[c] as f64 / want - 1.0).abs();
         assert!(err < 0.02, "channel {c}: {} against {want}", got[c]);
     }
