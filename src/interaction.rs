@@ -229,6 +229,16 @@ impl<'s> SurfaceInteraction<'s> {
         Ray::new(self.spawn(w), w)
     }
 
+    /// The medium a ray leaving this point along world direction `d` travels in: the side of
+    /// the mesh's medium boundary it goes to, or `current` where the surface is no boundary
+    /// (pbrt-v4's `GetMedium`).
+    pub fn medium_leaving(&self, d: Vec3, current: Option<u32>) -> Option<u32> {
+        match &self.mesh.interface {
+            Some(mi) => mi.leaving(d, self.ng),
+            None => current,
+        }
+    }
+
     /// The shadow ray to a light sample: from past this point's error bound to just short of
     /// the light point (itself moved past its own bound towards this side).
     pub fn shadow_ray(&self, s: &LightSample) -> Ray {

@@ -103,7 +103,7 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<()
     if si.material(ctx.scene).interface {
         // No surface: the ray goes on into the medium behind the boundary, no bounce taken.
         let d = path.ray.d;
-        path.medium = next_medium(&si, d, path.medium);
+        path.medium = si.medium_leaving(d, path.medium);
         path.ray = Ray::new(si.spawn(d), d);
         wave.next.push(path);
         return;
@@ -182,7 +182,7 @@ fn light_sample(
         ray: v.shadow_ray(&s),
         contrib,
         component: component(path.depth == 0),
-        medium: next_medium(v, s.wi, path.medium),
+        medium: v.medium_leaving(s.wi, path.medium),
     })
 }
 
@@ -199,20 +199,11 @@ fn continue_path(mut path: PathState, bsdf: &Bsdf, v: &SurfaceInteraction) -> Op
         eta_scale *= bs.eta * bs.eta;
     }
     let depth = path.depth + 1;
-    if depth > RR_MIN_BOUNCES {
-        let survive = max_component(beta * eta_scale);
-        if survive < 1.0 {
-            if u_rr >= survive {
-                return None;
-            }
-            beta /= survive;
-        }
-    }
-    if beta.max_element() <= 0.0 || !beta.is_finite() {
+    if !roulette(&mut beta, eta_scale, depth, u_rr) {
         return None;
     }
     let wi = v.frame.to_world(bs.wi);
-    path.medium = next_medium(v, wi, path.medium);
+    path.medium = v.medium_leaving(wi, path.medium);
     path.ray = v.spawn_ray(wi);
     path.beta = beta;
     path.depth = depth;
@@ -223,14 +214,20 @@ fn continue_path(mut path: PathState, bsdf: &Bsdf, v: &SurfaceInteraction) -> Op
     Some(path)
 }
 
-/// The medium a ray leaving `v` along world direction `d` travels in: the side of `v`'s
-/// medium boundary it goes to, or `current` where the surface is no boundary (pbrt-v4's
-/// `GetMedium`).
-fn next_medium(v: &SurfaceInteraction, d: Vec3, current: Option<u32>) -> Option<u32> {
-    match &v.mesh.interface {
-        Some(mi) => mi.leaving(d, v.ng),
-        None => current,
+/// Russian roulette for a path reaching bounce `depth` (from bounce `RR_MIN_BOUNCES + 1` on:
+/// survive with `min(1, max_component(beta * eta_scale))`, dividing `beta` by it); false when
+/// the path ends (killed, or a throughput that is zero or not finite).
+fn roulette(beta: &mut Vec3, eta_scale: f32, depth: u32, u_rr: f32) -> bool {
+    if depth > RR_MIN_BOUNCES {
+        let survive = max_component(*beta * eta_scale);
+        if survive < 1.0 {
+            if u_rr >= survive {
+                return false;
+            }
+            *beta /= survive;
+        }
     }
+    beta.max_element() > 0.0 && beta.is_finite()
 }
 
 /// Shades a scattering point `p` in the path's medium (the throughput already holds
@@ -274,16 +271,7 @@ fn shade_medium(ctx: &RenderContext, mut path: PathState, p: Vec3, wave: &mut Wa
     let u_rr = path.sampler.next_1d();
     let (wi, pdf) = sample_henyey_greenstein(wo, g, u);
     let depth = path.depth + 1;
-    if depth > RR_MIN_BOUNCES {
-        let survive = max_component(path.beta * path.eta_scale);
-        if survive < 1.0 {
-            if u_rr >= survive {
-                return;
-            }
-            path.beta /= survive;
-        }
-    }
-    if path.beta.max_element() <= 0.0 || !path.beta.is_finite() {
+    if !roulette(&mut path.beta, path.eta_scale, depth, u_rr) {
         return;
     }
     path.ray = Ray::new(p, wi);

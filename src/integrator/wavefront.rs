@@ -123,8 +123,8 @@ pub trait Shade: Sync {
     fn emitted_component(&self, path: &PathState<Self::PathData>) -> Component;
     /// Whether this integrator tracks the medium each path is in (pbrt-v4's semantics:
     /// segments in a medium sample scattering, [`Shade::shade_medium`] shades the points, and
-    /// shadow rays pass `interface` surfaces, taking each medium's transmittance). Integrators
-    /// that do not weigh a segment by the medium on the side of the surface it ends on
+    /// shadow rays pass `interface` surfaces, taking each medium's transmittance). The others
+    /// weigh a segment by the medium on the side of the surface it ends on
     /// ([`crate::accel::transmittance`]), which is exact for absorbing regions closed by the
     /// surfaces that name them.
     fn tracks_media(&self) -> bool {
@@ -171,9 +171,24 @@ struct Buffers<T> {
     next: Vec<PathState<T>>,
     rays: Vec<Ray>,
     hits: Vec<Option<Hit>>,
+    shadows: ShadowQueue,
+}
+
+/// Shadow rays waiting to be traced, with the buffers their batch query reuses.
+#[derive(Default)]
+struct ShadowQueue {
     shadows: Vec<Shadow>,
-    shadow_rays: Vec<Ray>,
+    rays: Vec<Ray>,
     occluded: Vec<bool>,
+}
+
+impl ShadowQueue {
+    /// Traces the waiting shadow rays, adds what gets through, and empties the queue.
+    fn resolve(&mut self, ctx: &RenderContext, tracks: bool, acc: &mut [Radiance]) {
+        let (rays, occluded) = (&mut self.rays, &mut self.occluded);
+        resolve_shadows(ctx, tracks, &self.shadows, rays, occluded, acc);
+        self.shadows.clear();
+    }
 }
 
 impl<T> Default for Buffers<T> {
@@ -183,9 +198,7 @@ impl<T> Default for Buffers<T> {
             next: Vec::new(),
             rays: Vec::new(),
             hits: Vec::new(),
-            shadows: Vec::new(),
-            shadow_rays: Vec::new(),
-            occluded: Vec::new(),
+            shadows: ShadowQueue::default(),
         }
     }
 }
@@ -254,42 +267,27 @@ fn wave<S: Shade>(
     b.rays.clear();
     b.rays.extend(b.paths.iter().map(|p| p.ray));
     intersect_batch(ctx, kind, &b.rays, &mut b.hits);
-    b.shadows.clear();
+    b.shadows.shadows.clear();
     b.next.clear();
     let tracks = shader.tracks_media();
     for (path, hit) in b.paths.drain(..).zip(b.hits.iter()) {
         let mut w = Wave {
             acc,
-            shadows: &mut b.shadows,
+            shadows: &mut b.shadows.shadows,
             next: &mut b.next,
             extra,
         };
         shade_one(ctx, shader, tracks, path, hit.as_ref(), &mut w);
         // Bounded batches: a point adds a bounded number of shadow rays and deferred entries
         // beyond BATCH before they are traced.
-        if b.shadows.len() >= BATCH {
-            resolve_shadows(
-                ctx,
-                tracks,
-                &b.shadows,
-                &mut b.shadow_rays,
-                &mut b.occluded,
-                acc,
-            );
-            b.shadows.clear();
+        if b.shadows.shadows.len() >= BATCH {
+            b.shadows.resolve(ctx, tracks, acc);
         }
         if shader.pending(extra) >= BATCH {
             shader.flush(ctx, extra, acc);
         }
     }
-    resolve_shadows(
-        ctx,
-        tracks,
-        &b.shadows,
-        &mut b.shadow_rays,
-        &mut b.occluded,
-        acc,
-    );
+    b.shadows.resolve(ctx, tracks, acc);
     shader.flush(ctx, extra, acc);
     ctx.counters
         .secondary_rays

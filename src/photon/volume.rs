@@ -250,9 +250,7 @@ fn trace_one(
         let material = si.material(scene);
         if material.interface {
             let d = ray.d;
-            if let Some(mi) = &si.mesh.interface {
-                medium = mi.leaving(d, si.ng);
-            }
+            medium = si.medium_leaving(d, medium);
             ray = Ray::new(si.spawn(d), d);
             continue;
         }
@@ -273,9 +271,7 @@ fn trace_one(
             return rays;
         };
         power *= sc.power_scale;
-        if let Some(mi) = &si.mesh.interface {
-            medium = mi.leaving(sc.ray.d, si.ng);
-        }
+        medium = si.medium_leaving(sc.ray.d, medium);
         ray = sc.ray;
     }
     rays
