@@ -21,15 +21,86 @@ pub enum FilterDesc {
     Gaussian { radius: Vec2, sigma: f32 },
 }
 
+/// The part of the image a render computes: pbrt-v4's `cropwindow` (fractions of the image,
+/// `Film "float cropwindow"` or `--cropwindow`) or `pixelbounds` (pixels, `Film "integer
+/// pixelbounds"` or `--pixelbounds`; it wins where both are given, as in pbrt-v4).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Crop {
+    /// `[x0, x1, y0, y1]` as fractions of the image, each axis ordered and within [0, 1].
+    Window([f32; 4]),
+    /// `[x0, x1, y0, y1]` in pixels, half-open, each axis ordered.
+    Pixels([u32; 4]),
+}
+
+impl Crop {
+    /// `[x0, x1, y0, y1]` as given (comma- or space-separated numbers), for `--cropwindow`
+    /// (`pixels` false: fractions, ordered and clamped to [0, 1] per axis as pbrt-v4 does) or
+    /// `--pixelbounds` (`pixels` true: non-negative integers with x0 < x1 and y0 < y1).
+    pub fn parse(text: &str, pixels: bool) -> Result<Crop, String> {
+        let fields: Vec<&str> = text
+            .split(|c: char| c == ',' || c.is_whitespace())
+            .filter(|f| !f.is_empty())
+            .collect();
+        if fields.len() != 4 {
+            return Err(format!(
+                "expected four values x0,x1,y0,y1, got {}",
+                fields.len()
+            ));
+        }
+        if pixels {
+            let mut v = [0u32; 4];
+            for (v, f) in v.iter_mut().zip(&fields) {
+                *v = f.parse().map_err(|_| {
+                    format!(
+                        "expected a pixel index, got \"{}\"",
+                        crate::scene::clip_for_message(f, 24)
+                    )
+                })?;
+            }
+            if v[0] >= v[1] || v[2] >= v[3] {
+                return Err(format!(
+                    "no pixel in [{}, {}) x [{}, {}): expected x0 < x1 and y0 < y1",
+                    v[0], v[1], v[2], v[3]
+                ));
+            }
+            return Ok(Crop::Pixels(v));
+        }
+        let mut v = [0f32; 4];
+        for (v, f) in v.iter_mut().zip(&fields) {
+            *v = f
+                .parse::<f32>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| {
+                    format!(
+                        "expected a finite number, got \"{}\"",
+                        crate::scene::clip_for_message(f, 24)
+                    )
+                })?;
+        }
+        Ok(Crop::window(v))
+    }
+
+    /// A crop window from four fractions, each axis ordered and clamped to [0, 1].
+    pub fn window(c: [f32; 4]) -> Crop {
+        let axis = |a: f32, b: f32| [a.min(b).clamp(0.0, 1.0), a.max(b).clamp(0.0, 1.0)];
+        let ([x0, x1], [y0, y1]) = (axis(c[0], c[1]), axis(c[2], c[3]));
+        Crop::Window([x0, x1, y0, y1])
+    }
+}
+
 /// The pixels `[x0, x1) x [y0, y1)` (returned as `[x0, x1, y0, y1]`) a render of a `w x h`
-/// image computes: all of them, or those of the film's `cropwindow` (fractions `[x0, x1, y0,
-/// y1]`), rounded as pbrt-v4 does: each bound is `ceil(resolution * fraction)`.
-pub fn pixel_bounds(crop: Option<[f32; 4]>, w: u32, h: u32) -> [u32; 4] {
-    let Some(c) = crop else {
-        return [0, w, 0, h];
-    };
-    let at = |res: u32, f: f32| ((res as f32 * f).ceil() as u32).min(res);
-    [at(w, c[0]), at(w, c[1]), at(h, c[2]), at(h, c[3])]
+/// image computes: all of them, those of the crop window (each bound `ceil(resolution *
+/// fraction)`, as pbrt-v4 rounds), or the pixel bounds clipped to the image.
+pub fn pixel_bounds(crop: Option<Crop>, w: u32, h: u32) -> [u32; 4] {
+    match crop {
+        None => [0, w, 0, h],
+        Some(Crop::Window(c)) => {
+            let at = |res: u32, f: f32| ((res as f32 * f).ceil() as u32).min(res);
+            [at(w, c[0]), at(w, c[1]), at(h, c[2]), at(h, c[3])]
+        }
+        Some(Crop::Pixels(p)) => [p[0].min(w), p[1].min(w), p[2].min(h), p[3].min(h)],
+    }
 }
 
 /// Resolution of the tabulated Gaussian tabulated CDF.

@@ -31,6 +31,7 @@ pub mod memory;
 pub mod mesh;
 pub mod params;
 pub mod photon;
+pub mod progress;
 pub mod sampling;
 pub mod scene;
 pub mod texture;

@@ -15,6 +15,8 @@ use std::process::ExitCode;
 #[command(
     name = "photon",
     version,
+    args_override_self = true,
+    after_help = "Every on/off flag --x also has the form --no-x (the last one given wins).",
     about = "A two-pass photon-mapping renderer for pbrt-v4 scenes"
 )]
 struct Cli {
@@ -51,29 +53,26 @@ enum Command {
 /// version print as usual.
 fn parse() -> Result<Cli, ExitCode> {
     use clap::error::ErrorKind;
-    Cli::try_parse_from(with_subcommand(std::env::args_os().collect())).map_err(|e| {
-        match e.kind() {
-            ErrorKind::DisplayHelp
-            | ErrorKind::DisplayVersion
-            | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
-                let _ = e.print();
-                ExitCode::SUCCESS
-            }
-            _ => {
-                let text = e.to_string();
-                let lines: Vec<&str> = text
-                    .lines()
-                    .map(str::trim)
-                    .take_while(|l| {
-                        !l.starts_with("Usage:") && !l.starts_with("For more information")
-                    })
-                    .filter(|l| !l.is_empty())
-                    .collect();
-                let line = lines.join(" ");
-                let line = line.strip_prefix("error: ").unwrap_or(&line);
-                let _ = writeln!(std::io::stderr(), "photon: {}", one_line(line));
-                ExitCode::from(2)
-            }
+    let args = negations(with_subcommand(std::env::args_os().collect()));
+    Cli::try_parse_from(args).map_err(|e| match e.kind() {
+        ErrorKind::DisplayHelp
+        | ErrorKind::DisplayVersion
+        | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+            let _ = e.print();
+            ExitCode::SUCCESS
+        }
+        _ => {
+            let text = e.to_string();
+            let lines: Vec<&str> = text
+                .lines()
+                .map(str::trim)
+                .take_while(|l| !l.starts_with("Usage:") && !l.starts_with("For more information"))
+                .filter(|l| !l.is_empty())
+                .collect();
+            let line = lines.join(" ");
+            let line = line.strip_prefix("error: ").unwrap_or(&line);
+            let _ = writeln!(std::io::stderr(), "photon: {}", one_line(line));
+            ExitCode::from(2)
         }
     })
 }
@@ -96,6 +95,44 @@ fn with_subcommand(mut args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString>
         args.insert(1, "render".into());
     }
     args
+}
+
+/// `--no-x` for every on/off flag `--x` of the subcommand (unless `--no-x` is a flag of its
+/// own, as `--no-png` is): a switch that takes a value (`--final-gather[=BOOL]`) becomes
+/// `--x=false`; a plain flag (`--progressive`) is taken back, with the `--x` before it. The
+/// last of `--x` and `--no-x` wins, as clap lets a later flag override an earlier one.
+fn negations(args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString> {
+    use clap::CommandFactory;
+    let cli = Cli::command();
+    let Some(sub) = (args.get(1).and_then(|a| a.to_str()))
+        .and_then(|name| cli.get_subcommands().find(|c| c.get_name() == name))
+    else {
+        return args;
+    };
+    let longs: Vec<&str> = sub.get_arguments().filter_map(|a| a.get_long()).collect();
+    let mut out: Vec<std::ffi::OsString> = Vec::with_capacity(args.len());
+    for (i, arg) in args.iter().enumerate() {
+        let negated = arg.to_str().and_then(|a| a.strip_prefix("--no-"));
+        let Some(name) = negated.filter(|n| !longs.contains(&&*format!("no-{n}"))) else {
+            out.push(arg.clone());
+            continue;
+        };
+        let target = sub.get_arguments().find(|a| a.get_long() == Some(name));
+        match target {
+            _ if i < 2 || args[1..i].iter().any(|a| a == "--") => out.push(arg.clone()),
+            Some(a) if matches!(a.get_action(), clap::ArgAction::SetTrue) => {
+                out.retain(|o| o.to_str() != Some(&format!("--{name}")));
+            }
+            Some(a)
+                if a.is_require_equals_set()
+                    && a.get_num_args().is_some_and(|r| r.min_values() == 0) =>
+            {
+                out.push(format!("--{name}=false").into());
+            }
+            _ => out.push(arg.clone()),
+        }
+    }
+    out
 }
 
 /// An error as the one line photon prints after `photon: ` (at most

@@ -20,6 +20,7 @@
 pub mod decode;
 pub mod exr;
 pub mod metrics;
+pub mod pfm;
 pub mod png;
 
 pub use exr::{
@@ -27,6 +28,7 @@ pub use exr::{
     write_exr_channels, write_exr_with, ExrChannel, ExrCompression, ExrExtra, ExrLayout, ExrPixel,
     ExrSamples, ExrStored,
 };
+pub use pfm::write_pfm;
 pub use png::write_png;
 
 use std::fmt;

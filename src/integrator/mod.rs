@@ -97,8 +97,9 @@ pub struct RenderSettings {
     pub photon: photonmap::PhotonSettings,
     /// Samples per pixel of each pass when rendering in passes (`"integer passspp"`).
     pub pass_spp: u32,
-    /// The film's `cropwindow` (fractions of `width x height`; see [`film::pixel_bounds`]).
-    pub crop: Option<[f32; 4]>,
+    /// The film's `cropwindow` or `pixelbounds`, or `--cropwindow`/`--pixelbounds` (see
+    /// [`film::pixel_bounds`]).
+    pub crop: Option<film::Crop>,
     /// pbrt-v4's imaging ratio (`exposure time * iso / 100`): every pixel is scaled by it.
     pub imaging_ratio: f32,
     /// The film's `maxcomponentvalue` (see [`film::clamp_sample`]), after the imaging ratio.

@@ -96,6 +96,22 @@ pub trait Value: Copy + std::fmt::Debug + Send + Sync + 'static {
     ) -> Result<Self, SceneError>;
     /// Parses a command-line value, checked against `range`.
     fn parse(text: &str, range: Option<Range>) -> Result<Self, String>;
+    /// True for on/off settings: on the command line `--x` (on), `--no-x` (off) or
+    /// `--x=BOOL`, as every on/off flag of photon is spelled.
+    const SWITCH: bool = false;
+}
+
+/// The command line's number of values of a setting of type `T`: 0 or 1 for switches.
+pub fn num_args<T: Value>() -> clap::builder::ValueRange {
+    match T::SWITCH {
+        true => (0..=1).into(),
+        false => 1.into(),
+    }
+}
+
+/// The value of a switch given without one (`--x`: on).
+pub fn missing_value<T: Value>() -> Option<&'static str> {
+    T::SWITCH.then_some("true")
 }
 
 /// `x` checked against `range` (no range: anything).
@@ -171,6 +187,7 @@ impl Value for f32 {
 
 impl Value for bool {
     const PBRT_TYPE: &'static str = "bool";
+    const SWITCH: bool = true;
     fn read(
         params: &mut ParamSet,
         key: &str,
@@ -242,7 +259,10 @@ macro_rules! settings {
             $(
                 $(#[doc = $doc])+
                 #[arg(long = $flag, allow_negative_numbers = true,
-                      value_parser = parser::<$ty>($range))]
+                      value_parser = parser::<$ty>($range),
+                      num_args = num_args::<$ty>(),
+                      require_equals = <$ty as Value>::SWITCH,
+                      default_missing_value = missing_value::<$ty>())]
                 pub $field: Option<$ty>,
             )*
         }

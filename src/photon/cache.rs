@@ -71,10 +71,12 @@ impl IrradianceCache {
         } else {
             0
         };
+        crate::progress::begin("irradiance cache", len.div_ceil(CACHE_SPACING) as u64);
         let (positions, points): (Vec<Vec3>, Vec<CachePoint>) = (0..len)
             .into_par_iter()
             .step_by(CACHE_SPACING)
             .map_init(KnnResult::new, |buf, i| {
+                crate::progress::add(1);
                 let p = photons[i].pos();
                 let normal = normals[i];
                 let (irradiance, _, r2) =

@@ -414,12 +414,18 @@ fn shoot(
             (0..n.div_ceil(CHUNK)).map(move |c| (i, c * CHUNK, ((c + 1) * CHUNK).min(n)))
         })
         .collect();
+    let name = match kind {
+        MapKind::Global => "global photons",
+        MapKind::Caustic => "caustic photons",
+    };
+    crate::progress::begin(name, counts.iter().sum());
     let parts: Vec<(Vec<Landing>, u64, u64)> = work
         .par_iter()
         .map(|&(light, lo, hi)| {
             if crate::interrupt::requested().is_some() {
                 return (Vec::new(), 0, 0); // stopping: the caller's render is discarded
             }
+            crate::progress::add(hi - lo);
             let mut out = Vec::new();
             let (mut first_specular, mut rays) = (0u64, 0u64);
             let map = &maps[light];

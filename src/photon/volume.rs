@@ -96,7 +96,9 @@ pub fn trace(
         .collect();
     let mut out: Vec<VolumePhoton> = Vec::new();
     let mut emitted = 0u64;
+    crate::progress::begin("volume photons", target);
     while (out.len() as u64) < target && emitted < target.saturating_mul(64) {
+        crate::progress::set("volume photons", out.len() as u64, target);
         if crate::interrupt::requested().is_some() {
             break;
         }

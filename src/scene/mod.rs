@@ -60,9 +60,9 @@ pub struct FilmDesc {
     /// Each camera sample's colour is scaled so that its largest CIE XYZ component (the
     /// default `cie1931` sensor's values, after the imaging ratio) is at most this.
     pub max_component: f32,
-    /// `cropwindow` `[x0, x1, y0, y1]` as fractions of the image, ordered and clamped to
-    /// [0, 1]; only the pixels pbrt-v4's rounding puts inside are rendered.
-    pub crop: Option<[f32; 4]>,
+    /// `cropwindow` or `pixelbounds`: only the pixels inside are rendered (see
+    /// [`crate::film::Crop`]).
+    pub crop: Option<crate::film::Crop>,
     /// `whitebalance`: the colour temperature (kelvin) adapted to sRGB's white; 0: none.
     pub white_balance: f32,
 }

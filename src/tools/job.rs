@@ -44,6 +44,11 @@ pub struct Overrides {
     pub progressive: bool,
     /// Samples per pixel of each pass.
     pub pass_spp: Option<u32>,
+    /// `--cropwindow` / `--pixelbounds` (instead of the film's).
+    pub crop: Option<crate::film::Crop>,
+    /// pbrt-v4's `--quick`: a quarter of the resolution on each axis and one sample per pixel,
+    /// applied after `res` and `spp`.
+    pub quick: bool,
 }
 
 impl Overrides {
@@ -139,6 +144,13 @@ impl<'a> Job<'a> {
         s.photon.progressive |= o.progressive;
         if let Some(n) = o.pass_spp {
             s.pass_spp = n.max(1);
+        }
+        if o.crop.is_some() {
+            s.crop = o.crop;
+        }
+        if o.quick {
+            (s.width, s.height) = ((s.width / 4).max(1), (s.height / 4).max(1));
+            s.spp = 1;
         }
         self
     }

@@ -1,11 +1,14 @@
 //! The subcommands of the `photon` binary, one module each, callable from tests too.
 
 /// `println!` that a closed or failing standard output does not stop: `photon render | head
-/// -1` loses the rest of the text, not the render (`println!` panics on EPIPE).
+/// -1` loses the rest of the text, not the render (`println!` panics on EPIPE). Silent after
+/// [`set_quiet`].
 macro_rules! say {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
-        let _ = writeln!(std::io::stdout(), $($arg)*);
+        if !$crate::tools::quiet() {
+            let _ = writeln!(std::io::stdout(), $($arg)*);
+        }
     }};
 }
 
@@ -13,10 +16,25 @@ macro_rules! say {
 macro_rules! say_part {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
-        let mut out = std::io::stdout();
-        let _ = write!(out, $($arg)*);
-        let _ = out.flush();
+        if !$crate::tools::quiet() {
+            let mut out = std::io::stdout();
+            let _ = write!(out, $($arg)*);
+            let _ = out.flush();
+        }
     }};
+}
+
+static QUIET: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// `render --quiet`: from now on the subcommands print nothing on standard output (errors and
+/// warnings still go to standard error).
+pub fn set_quiet(quiet: bool) {
+    QUIET.store(quiet, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// True after [`set_quiet`]`(true)`.
+pub fn quiet() -> bool {
+    QUIET.load(std::sync::atomic::Ordering::Relaxed)
 }
 
 /// `eprintln!` that a closed or failing standard error does not stop (see `say!`).
@@ -36,6 +54,7 @@ pub mod display;
 pub mod job;
 pub mod merge;
 pub mod output;
+pub mod progress;
 pub mod render;
 pub mod render_passes;
 

@@ -91,6 +91,40 @@ pub struct OutputFile {
 #[derive(Clone, Debug)]
 pub struct Outputs {
     pub files: Vec<OutputFile>,
+    /// The format of the first file (a render's `-o`): see [`ImageFormat::of`].
+    pub format: ImageFormat,
+}
+
+/// The format of a rendered image, chosen by `-o`'s extension as pbrt-v4 does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// Linear OpenEXR with the component layers (and the default PNG preview beside it).
+    Exr,
+    /// 8-bit sRGB PNG only (`--exposure` applies).
+    Png,
+    /// Linear float PFM (RGB only, as pbrt-v4 writes it).
+    Pfm,
+}
+
+impl ImageFormat {
+    /// The format `path` names by its extension (any case): `.exr`, `.png`, `.pfm`; a path
+    /// without one (a device such as `/dev/null`) is EXR; any other extension is an error
+    /// naming `flag`.
+    pub fn of(flag: &str, path: &Path) -> Result<ImageFormat, String> {
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase());
+        match ext.as_deref() {
+            None | Some("exr") => Ok(ImageFormat::Exr),
+            Some("png") => Ok(ImageFormat::Png),
+            Some("pfm") => Ok(ImageFormat::Pfm),
+            Some(other) => Err(format!(
+                "{flag} {}: unknown image format \".{}\" (photon writes .exr, .png and .pfm)",
+                path.display(),
+                crate::scene::clip_for_message(other, 16)
+            )),
+        }
+    }
 }
 
 /// A writer of one output into the path it is given (called again for the fallback file when
@@ -266,23 +300,35 @@ impl Outputs {
             }
             planned.push(f);
         }
-        Ok(Outputs { files: planned })
+        Ok(Outputs {
+            files: planned,
+            format: ImageFormat::Exr,
+        })
     }
 
-    /// A render's outputs: the EXR (`-o`) and the optional PNG preview (`--png`).
+    /// The outputs of a partial image (`render --passes`, `merge`): the EXR (`-o`), which
+    /// keeps the sums and counts, and the optional PNG preview of its mean (`--png`).
     pub fn plan(exr: &Path, png: Option<&Path>) -> Result<Outputs, String> {
-        let ext = exr
-            .extension()
-            .map(|e| e.to_string_lossy().to_ascii_lowercase());
-        if ext.as_deref() == Some("png") {
+        if ImageFormat::of("-o", exr)? != ImageFormat::Exr {
             return Err(format!(
-                "-o {}: -o names the EXR; the PNG preview goes to --png",
+                "-o {}: a partial image (--passes, --progressive, merge) is an EXR; the PNG preview goes to --png",
                 exr.display()
             ));
         }
         let mut files = vec![("-o", exr)];
         files.extend(png.map(|p| ("--png", p)));
         Outputs::plan_files(&files)
+    }
+
+    /// A finished render's outputs: `-o` in the format its extension names (see
+    /// [`ImageFormat::of`]) and the optional PNG preview (`--png`).
+    pub fn plan_image(image: &Path, png: Option<&Path>) -> Result<Outputs, String> {
+        let format = ImageFormat::of("-o", image)?;
+        let mut files = vec![("-o", image)];
+        files.extend(png.map(|p| ("--png", p)));
+        let mut planned = Outputs::plan_files(&files)?;
+        planned.format = format;
+        Ok(planned)
     }
 
     /// Writes each file with its writer (one per planned file, in order) to a temporary, then
@@ -430,7 +476,8 @@ impl Outputs {
         Err(last)
     }
 
-    /// A render's EXR (with its component layers) and PNG preview, as planned by [`Self::plan`].
+    /// A render's image (an EXR with its component layers, or the PNG or PFM `-o` names) and
+    /// PNG preview, as planned by [`Self::plan_image`].
     pub fn write(
         &self,
         image: &RgbImage,
@@ -450,9 +497,17 @@ impl Outputs {
         pixel: ExrPixel,
         exposure: f32,
     ) -> Vec<Writer<'a>> {
-        let mut writers: Vec<Writer> = vec![Box::new(move |tmp: &Path| {
-            imageio::write_exr(tmp, image, layers, pixel).map_err(|e| kind_only(&e))
-        })];
+        let mut writers: Vec<Writer> = vec![match self.format {
+            ImageFormat::Exr => Box::new(move |tmp: &Path| {
+                imageio::write_exr(tmp, image, layers, pixel).map_err(|e| kind_only(&e))
+            }),
+            ImageFormat::Png => Box::new(move |tmp: &Path| {
+                imageio::write_png(tmp, image, exposure).map_err(|e| kind_only(&e))
+            }),
+            ImageFormat::Pfm => Box::new(move |tmp: &Path| {
+                imageio::write_pfm(tmp, image).map_err(|e| kind_only(&e))
+            }),
+        }];
         if self.files.len() > 1 {
             writers.push(Box::new(move |tmp: &Path| {
                 imageio::write_png(tmp, image, exposure).map_err(|e| kind_only(&e))

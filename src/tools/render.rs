@@ -7,8 +7,6 @@ use crate::imageio::{self, ExrPixel};
 use crate::integrator::{self, IntegratorKind, RenderSettings};
 use crate::limits::{MAX_DEPTH, MAX_EXPOSURE, MAX_LIGHT_SAMPLES, MAX_PASSES, MAX_SPP, MAX_THREADS};
 use crate::sampling::Pattern;
-use indicatif::{ProgressBar, ProgressStyle};
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 use std::time::Instant;
@@ -18,11 +16,13 @@ use std::time::Instant;
 pub struct RenderOptions {
     /// The pbrt-v4 scene file.
     pub scene: PathBuf,
-    /// Output EXR (linear RGB plus layers direct/specular/caustic/indirect). Default: the
-    /// Film's filename with .exr, else the scene's name. `--outfile` is pbrt-v4's name for it.
+    /// Output image, in the format its extension names: `.exr` (linear RGB plus layers
+    /// direct/specular/caustic/indirect, and a PNG preview beside it), `.png` (8-bit sRGB
+    /// only), `.pfm` (linear RGB only). Default: the Film's filename with .exr, else the
+    /// scene's name. `--outfile` is pbrt-v4's name for it. Renders in passes write EXR.
     #[arg(short, long, visible_alias = "outfile")]
     pub output: Option<PathBuf>,
-    /// PNG preview (sRGB). Default: the EXR path with .png.
+    /// PNG preview (sRGB). Default: the EXR path with .png (none when -o is a PNG or PFM).
     #[arg(long)]
     pub png: Option<PathBuf>,
     /// Skip the PNG preview.
@@ -38,6 +38,19 @@ pub struct RenderOptions {
     /// Resolution WxH (default: the Film's).
     #[arg(long, value_parser = parse_resolution)]
     pub res: Option<(u32, u32)>,
+    /// Render only this part of the image, `x0,x1,y0,y1` as fractions (pbrt-v4's flag; the
+    /// film's `cropwindow` otherwise). The image written is the crop's size.
+    #[arg(long, value_name = "X0,X1,Y0,Y1", allow_hyphen_values = true,
+          value_parser = |s: &str| crate::film::Crop::parse(s, false))]
+    pub cropwindow: Option<crate::film::Crop>,
+    /// Render only the pixels `[x0, x1) x [y0, y1)` (pbrt-v4's flag; wins over --cropwindow).
+    #[arg(long, value_name = "X0,X1,Y0,Y1",
+          value_parser = |s: &str| crate::film::Crop::parse(s, true))]
+    pub pixelbounds: Option<crate::film::Crop>,
+    /// pbrt-v4's quick look: a quarter of the resolution on each axis and one sample per
+    /// pixel (after --res and --spp).
+    #[arg(long)]
+    pub quick: bool,
     /// Ray-query backend.
     #[arg(long, value_enum, default_value_t = BackendKind::Embree)]
     pub backend: BackendKind,
@@ -65,6 +78,14 @@ pub struct RenderOptions {
     /// Write half floats instead of 32-bit floats.
     #[arg(long)]
     pub half: bool,
+    /// Print nothing but errors and warnings (pbrt-v4's flag): no banner, no statistics, no
+    /// progress.
+    #[arg(long, short)]
+    pub quiet: bool,
+    /// Progress as a plain line every second, even on a terminal (without a terminal: every
+    /// 5 s; on a terminal: a bar per stage).
+    #[arg(long, short)]
+    pub verbose: bool,
     /// Split the wall time into ray queries, photon lookups, shading, photon tracing and map
     /// building.
     #[arg(long)]
@@ -183,6 +204,8 @@ impl RenderOptions {
             merge_radius: self.merge_radius,
             progressive: self.passes.progressive,
             pass_spp: self.passes.pass_spp,
+            crop: self.pixelbounds.or(self.cropwindow),
+            quick: self.quick,
         }
     }
 }
@@ -300,6 +323,9 @@ pub fn render_image(
 }
 
 pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
+    super::set_quiet(opts.quiet);
+    let _progress =
+        super::progress::Reporter::start(super::progress::Mode::pick(opts.quiet, opts.verbose));
     // Load and validate everything before any work is done.
     let mut job = Job::load(&opts.scene, opts.max_memory)?.with(&opts.overrides());
     configure(&mut job, opts);
@@ -307,14 +333,19 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
         .output
         .clone()
         .unwrap_or_else(|| default_output(job.scene.film.filename.as_deref(), &opts.scene));
+    let format = super::output::ImageFormat::of("-o", &exr).map_err(ToolError)?;
     let png = match opts.no_png {
         true => None,
-        false => opts
-            .png
-            .clone()
-            .or_else(|| super::output::default_png(&exr)),
+        false => opts.png.clone().or_else(|| match format {
+            super::output::ImageFormat::Exr => super::output::default_png(&exr),
+            _ => None,
+        }),
     };
-    let outputs = Outputs::plan(&exr, png.as_deref()).map_err(ToolError)?;
+    let outputs = match opts.passes.active(opts.time.is_some()) {
+        true => Outputs::plan(&exr, png.as_deref()),
+        false => Outputs::plan_image(&exr, png.as_deref()),
+    }
+    .map_err(ToolError)?;
     let checkpoint = super::render_passes::plan_checkpoint(&opts.passes, &outputs)?;
     let mut prepared = prepare(&mut job, opts)?;
     let threads = prepared.pool.current_num_threads();
@@ -346,14 +377,11 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     // finished are kept in a fallback file and -o is left as it was (see `stopped`).
     crate::interrupt::install();
     let mut watch = Watch {
-        bar: progress_bar(),
         tiles: [AtomicU64::new(0), AtomicU64::new(0)],
         display,
     };
     let out = render_image(&job, &mut prepared, opts, &watch);
-    if let Some(b) = &watch.bar {
-        b.finish_and_clear();
-    }
+    crate::progress::end();
     if let Some(d) = watch.display.take() {
         d.finish();
     }
@@ -451,11 +479,15 @@ fn banner(opts: &RenderOptions, job: &Job, build_s: f64, threads: usize) {
             settings.imaging_ratio
         );
     }
+    // In passes the samples are the passes' (see render_passes: "passes: A..B of N spp").
+    let spp = match opts.passes.active(opts.time.is_some()) {
+        true => format!("passes of {} spp", settings.pass_spp.max(1)),
+        false => format!("{} spp", settings.spp),
+    };
     say!(
-        "render: {}x{}, {} spp ({:?}; file sampler \"{}\"), integrator {:?} (file asks for \"{}\"), max depth {}, {} threads",
+        "render: {}x{}, {spp} ({:?}; file sampler \"{}\"), integrator {:?} (file asks for \"{}\"), max depth {}, {} threads",
         settings.width,
         settings.height,
-        settings.spp,
         settings.pattern,
         scene.sampler.name,
         opts.integrator,
@@ -503,7 +535,6 @@ fn stopped(
 /// What a render on the command line reports to: the progress bar and the tile count (kept
 /// for the message of a stopped render), and the live preview.
 struct Watch {
-    bar: Option<ProgressBar>,
     /// Tiles done and in all.
     tiles: [AtomicU64; 2],
     display: Option<super::display::Display>,
@@ -513,10 +544,7 @@ impl integrator::Observer for Watch {
     fn tile_done(&self, done: u64, total: u64) {
         self.tiles[0].fetch_max(done, Relaxed);
         self.tiles[1].store(total, Relaxed);
-        if let Some(b) = &self.bar {
-            b.set_length(total);
-            b.set_position(done);
-        }
+        crate::progress::set("image tiles", done, total);
     }
 
     fn tile_pixels(&self, x0: u32, y0: u32, x1: u32, y1: u32, px: &[crate::film::Radiance]) {
@@ -535,19 +563,6 @@ impl integrator::Observer for Watch {
             d.image(image, layers, pass);
         }
     }
-}
-
-/// A progress bar on stderr, only when stderr is a terminal.
-fn progress_bar() -> Option<ProgressBar> {
-    if !std::io::stderr().is_terminal() {
-        return None;
-    }
-    let bar = ProgressBar::new(1);
-    bar.set_style(
-        ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} tiles, eta {eta}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    Some(bar)
 }
 
 /// The render-loop accounting of `--stats`. Ray-query and lookup times are summed over worker

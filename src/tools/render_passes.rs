@@ -145,13 +145,20 @@ pub fn run(
                     let now = t0.elapsed().as_secs_f64();
                     longest = longest.max(now - last);
                     last = now;
-                    say_err!(
-                    "pass {} done: {:.3} s, of which photon tracing {:.1}% and map building {:.1}%",
-                    acc.passes.end - 1,
-                    out.seconds,
-                    100.0 * out.photon_seconds / out.seconds.max(1e-9),
-                    100.0 * out.map_build_seconds / out.seconds.max(1e-9)
-                );
+                    let k = acc.passes.end;
+                    let of = match until_budget {
+                        true => String::new(),
+                        false => format!("/{end}"),
+                    };
+                    let eta = pass_eta(now, k - first, end - k, opts.time);
+                    if !opts.quiet {
+                        say_err!(
+                            "pass {k}{of} done: {:.3} s, of which photon tracing {:.1}% and map building {:.1}%; {eta}",
+                            out.seconds,
+                            100.0 * out.photon_seconds / out.seconds.max(1e-9),
+                            100.0 * out.map_build_seconds / out.seconds.max(1e-9)
+                        );
+                    }
                     if let Some(c) = checkpoint {
                         if last_checkpoint.elapsed().as_secs_f64() >= po.every {
                             match write_partial(c, acc) {
@@ -187,6 +194,19 @@ pub fn run(
         crate::interrupt::raise(sig);
     }
     saved
+}
+
+/// What is left after `done` passes in `elapsed` seconds with `left` to go (or until the
+/// time budget `budget`): `eta 12s` or `budget left 12s`.
+fn pass_eta(elapsed: f64, done: u64, left: u64, budget: Option<f64>) -> String {
+    let per_pass = elapsed / done.max(1) as f64;
+    let eta = left as f64 * per_pass;
+    match budget {
+        Some(b) if b - elapsed < eta => {
+            format!("budget left {}", crate::progress::seconds(b - elapsed))
+        }
+        _ => format!("eta {}", crate::progress::seconds(eta)),
+    }
 }
 
 /// Where the passes stop: the range's end, else the file's samples per pixel in passes, else

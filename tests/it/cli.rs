@@ -293,3 +293,196 @@ fn check_takes_folders_of_scenes() {
     assert!(err.contains("no scene file"), "{err}");
     assert_eq!(r.status.code(), Some(2));
 }
+
+/// Renders `scenes/cornell-glass.pbrt` at 16x12, 1 spp, with `args` and `-o out`: stdout and
+/// stderr (the run must succeed).
+fn habit(args: &[&str], out: &Path) -> (String, String) {
+    let r = photon()
+        .args(["scenes/cornell-glass.pbrt", "--res", "16x12", "--spp", "1"])
+        .args(args)
+        .arg("-o")
+        .arg(out)
+        .output()
+        .unwrap();
+    let (o, e) = (
+        String::from_utf8_lossy(&r.stdout).into_owned(),
+        String::from_utf8_lossy(&r.stderr).into_owned(),
+    );
+    assert!(r.status.success(), "{args:?}: {e}");
+    (o, e)
+}
+
+/// `-o` picks the format by extension as pbrt-v4 does: a PNG alone (the pixels of the EXR
+/// render's preview), a PFM alone (the EXR's values exactly), and an unknown extension is a
+/// one-line error naming -o.
+#[test]
+fn output_format_follows_the_extension() {
+    let dir = tmp("formats");
+    habit(&[], &dir.join("ref.exr"));
+    habit(&[], &dir.join("only.png"));
+    habit(&[], &dir.join("only.pfm"));
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["only.pfm", "only.png", "ref.exr", "ref.png"]);
+    let png = |p: &str| image::open(dir.join(p)).unwrap().to_rgb8().into_raw();
+    assert!(
+        png("only.png") == png("ref.png"),
+        "-o x.png differs from the preview"
+    );
+    let exr = photon::imageio::read_exr(&dir.join("ref.exr")).unwrap();
+    let bytes = std::fs::read(dir.join("only.pfm")).unwrap();
+    let pfm = photon::imageio::decode::read_pfm(&bytes).unwrap();
+    assert_eq!((pfm.width, pfm.height), (16, 12));
+    for (a, b) in pfm.texels.iter().zip(&exr.pixels) {
+        assert_eq!(a.to_array(), *b);
+    }
+    let r = photon()
+        .args(["scenes/cornell-glass.pbrt", "--res", "8x8", "-o"])
+        .arg(dir.join("x.tiff"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2));
+    assert!(
+        err.trim().lines().count() == 1 && err.contains("-o ") && err.contains("\".tiff\""),
+        "{err}"
+    );
+    // Renders in passes write partial images: EXR only.
+    let r = photon()
+        .args(["scenes/cornell-glass.pbrt", "--passes", "2", "-o"])
+        .arg(dir.join("p.png"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2));
+    assert!(err.contains("a partial image"), "{err}");
+}
+
+/// `--cropwindow` and `--pixelbounds` (pbrt-v4's flags) render that part of the image: the
+/// pixels of the full render there, bit for bit (every pixel has its own sample stream), and
+/// the same part given either way; the film's `pixelbounds` does the same.
+#[test]
+fn cropwindow_and_pixelbounds() {
+    let dir = tmp("crop");
+    let path = ["--integrator", "path", "--no-png"];
+    habit(&path, &dir.join("full.exr"));
+    let with = |extra: &[&str], name: &str| {
+        let args: Vec<&str> = path.iter().chain(extra).copied().collect();
+        habit(&args, &dir.join(name));
+        photon::imageio::read_exr(&dir.join(name)).unwrap()
+    };
+    let full = photon::imageio::read_exr(&dir.join("full.exr")).unwrap();
+    let crop = with(&["--cropwindow", "0.25,0.75,0.5,1"], "crop.exr");
+    let bounds = with(&["--pixelbounds", "4,12,6,12"], "bounds.exr");
+    assert_eq!((crop.width, crop.height), (8, 6));
+    assert_eq!(crop, bounds);
+    for y in 0..6 {
+        for x in 0..8 {
+            assert_eq!(crop.get(x, y), full.get(x + 4, y + 6), "pixel {x},{y}");
+        }
+    }
+    // In the file: Film "integer pixelbounds" (it wins over a cropwindow, as in pbrt-v4).
+    let scene = std::fs::read_to_string("scenes/cornell-glass.pbrt").unwrap();
+    let film = "Film \"rgb\" \"integer pixelbounds\" [4 12 6 12] \"float cropwindow\" [0 1 0 1]";
+    let scene = scene.replacen("Film \"rgb\"", film, 1);
+    assert!(scene.contains(film), "the scene has a Film \"rgb\"");
+    let file = dir.join("pb.pbrt");
+    std::fs::write(&file, scene).unwrap();
+    let r = photon()
+        .arg(&file)
+        .args([
+            "--res",
+            "16x12",
+            "--spp",
+            "1",
+            "--integrator",
+            "path",
+            "--no-png",
+            "-o",
+        ])
+        .arg(dir.join("file.exr"))
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let from_file = photon::imageio::read_exr(&dir.join("file.exr")).unwrap();
+    assert_eq!(from_file, bounds);
+    for bad in ["4,2,0,1", "1,2,3", "a,b,c,d"] {
+        expect_error(
+            &["render", "scenes/cornell-glass.pbrt", "--pixelbounds", bad],
+            "--pixelbounds",
+        );
+    }
+}
+
+/// `--quick` (a quarter of the resolution, 1 spp), `--quiet` (nothing on stdout), and the
+/// uniform on/off flags: `--no-x` is `--x=false`, the last given wins.
+#[test]
+fn quick_quiet_and_negated_flags() {
+    let dir = tmp("quick");
+    let (out, _) = habit(
+        &["--quick", "--res", "64x48", "--spp", "16"],
+        &dir.join("q.exr"),
+    );
+    assert!(out.contains("render: 16x12, 1 spp"), "{out}");
+    let (out, err) = habit(&["--quiet"], &dir.join("quiet.exr"));
+    assert!(out.is_empty() && err.is_empty(), "{out}{err}");
+    assert!(dir.join("quiet.exr").exists());
+    let image = |args: &[&str], name: &str| {
+        habit(args, &dir.join(name));
+        std::fs::read(dir.join(name)).unwrap()
+    };
+    let on = image(&[], "on.exr");
+    let off = image(&["--final-gather=false"], "off.exr");
+    assert!(on != off, "final gathering changes the image");
+    assert!(image(&["--no-final-gather"], "no.exr") == off);
+    assert!(image(&["--final-gather", "--no-final-gather"], "no2.exr") == off);
+    assert!(image(&["--no-final-gather", "--final-gather"], "yes.exr") == on);
+    let (out, _) = habit(&["--passes", "1", "--progressive"], &dir.join("p.exr"));
+    assert!(out.contains("fresh progressive"), "{out}");
+    let (out, _) = habit(
+        &["--passes", "1", "--progressive", "--no-progressive"],
+        &dir.join("p.exr"),
+    );
+    assert!(out.contains("Jensen's fixed"), "{out}");
+}
+
+/// Without a terminal, progress comes as plain `progress: ` lines (every second with `-v`),
+/// with k/N and an ETA; passes say k/N and what is left.
+#[test]
+fn progress_lines_without_a_terminal() {
+    let dir = tmp("progress");
+    let r = photon()
+        .args([
+            "scenes/cornell-glass.pbrt",
+            "--res",
+            "128x128",
+            "--spp",
+            "64",
+        ])
+        .args(["--global-photons", "1000000", "-v", "--no-png", "-o"])
+        .arg(dir.join("v.exr"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.success(), "{err}");
+    let lines: Vec<&str> = err.lines().collect();
+    assert!(
+        !lines.is_empty(),
+        "no progress line in a run of over a second"
+    );
+    for l in &lines {
+        assert!(
+            l.starts_with("progress: ") && l.contains("%), ") && l.contains(" eta "),
+            "{l}"
+        );
+    }
+    let (_, err) = habit(&["--passes", "2", "--no-png"], &dir.join("p.exr"));
+    assert!(
+        err.contains("pass 1/2 done") && err.contains("pass 2/2 done"),
+        "{err}"
+    );
+    assert!(err.contains("; eta "), "{err}");
+}

@@ -261,7 +261,7 @@ fn spheres_relmse(dir: &Path, name: &str, extra: &[&str]) -> f64 {
             "--caustic-photons",
             "5000",
         ])
-        .args(["--final-gather", "false", "--no-png", "-o"])
+        .args(["--no-final-gather", "--no-png", "-o"])
         .arg(&out)
         .args(extra)
         .output()

@@ -1769,7 +1769,8 @@ fn screen_window(params: &mut ParamSet) -> Result<Option<[f32; 4]>, SceneError> 
 }
 
 /// `Film "rgb"` or `"gbuffer"`: `xresolution`, `yresolution`, `filename`, `iso`, `sensor`
-/// (`"cie1931"` only), `whitebalance`, `maxcomponentvalue`, `cropwindow`; `gbuffer`'s
+/// (`"cie1931"` only), `whitebalance`, `maxcomponentvalue`, `cropwindow`, `pixelbounds`;
+/// `gbuffer`'s
 /// `coordinatesystem` (it only places the extra channels, which photon does not write: the
 /// returned note says so).
 fn film(
@@ -1837,23 +1838,39 @@ fn sensor(params: &mut ParamSet) -> Result<f32, SceneError> {
     Ok(t)
 }
 
-/// `cropwindow`: four values, each axis ordered and clamped to [0, 1] as pbrt-v4 does; an error
-/// if no pixel of the `res` image lies inside (pbrt-v4's "degenerate pixel bounds").
-fn crop_window(params: &mut ParamSet, res: [u32; 2]) -> Result<Option<[f32; 4]>, SceneError> {
-    let Some(c) = params.get_floats("cropwindow")? else {
-        return Ok(None);
+/// `cropwindow` (four fractions, each axis ordered and clamped to [0, 1] as pbrt-v4 does) or
+/// `pixelbounds` (four pixel indices, half-open; it wins over `cropwindow` as in pbrt-v4); an
+/// error if no pixel of the `res` image lies inside (pbrt-v4's "degenerate pixel bounds").
+fn crop_window(
+    params: &mut ParamSet,
+    res: [u32; 2],
+) -> Result<Option<crate::film::Crop>, SceneError> {
+    use crate::film::Crop;
+    let window = params.get_floats("cropwindow")?;
+    let bounds = params.get_ints("pixelbounds")?;
+    let (crop, key) = match (bounds, window) {
+        (Some(b), _) => {
+            let p = params.peek("pixelbounds").expect("given");
+            if b.len() != 4 || b.iter().any(|&v| v < 0) {
+                return Err(p.err("expected four non-negative pixel indices x0 x1 y0 y1"));
+            }
+            let b = [b[0] as u32, b[1] as u32, b[2] as u32, b[3] as u32];
+            (Crop::Pixels(b), "pixelbounds")
+        }
+        (None, Some(c)) => {
+            let p = params.peek("cropwindow").expect("given");
+            if c.len() != 4 || c.iter().any(|v| !v.is_finite()) {
+                return Err(p.err("expected four finite values x0 x1 y0 y1"));
+            }
+            (Crop::window([c[0], c[1], c[2], c[3]]), "cropwindow")
+        }
+        (None, None) => return Ok(None),
     };
-    let p = params.peek("cropwindow").expect("given");
-    if c.len() != 4 || c.iter().any(|v| !v.is_finite()) {
-        return Err(p.err("expected four finite values x0 x1 y0 y1"));
-    }
-    let axis = |a: f32, b: f32| [a.min(b).clamp(0.0, 1.0), a.max(b).clamp(0.0, 1.0)];
-    let ([x0, x1], [y0, y1]) = (axis(c[0], c[1]), axis(c[2], c[3]));
-    let crop = [x0, x1, y0, y1];
     let b = crate::film::pixel_bounds(Some(crop), res[0], res[1]);
     if b[0] >= b[1] || b[2] >= b[3] {
+        let p = params.peek(key).expect("given");
         return Err(p.err(format!(
-            "no pixel of the {}x{} image lies inside [{x0}, {x1}] x [{y0}, {y1}]",
+            "no pixel of the {}x{} image lies inside {crop:?}",
             res[0], res[1]
         )));
     }

@@ -160,7 +160,10 @@ WorldBegin
     );
     assert_eq!((s.film.iso, s.film.max_component), (250.0, 10.0));
     // Ordered and clamped to [0, 1] per axis, as pbrt-v4 does.
-    assert_eq!(s.film.crop, Some([0.1, 0.9, 0.0, 1.0]));
+    assert_eq!(
+        s.film.crop,
+        Some(photon::film::Crop::Window([0.1, 0.9, 0.0, 1.0]))
+    );
     assert_eq!(s.film.imaging_ratio(s.camera.exposure_time), 1.25);
     assert_eq!(s.film.white_balance, 0.0);
     let s = ok("Film \"rgb\" \"float whitebalance\" 9000\nWorldBegin\n");

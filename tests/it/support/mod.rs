@@ -197,7 +197,10 @@ pub fn check_run(r: &Run) -> Result<(), String> {
     match r.code {
         Some(0) => Ok(()),
         Some(2) => {
-            let lines: Vec<&str> = r.stderr.lines().collect();
+            // Progress lines (a long run without a terminal) are not part of the error.
+            let lines: Vec<&str> = (r.stderr.lines())
+                .filter(|l| !l.starts_with("progress: "))
+                .collect();
             if lines.len() != 1 {
                 return Err(format!("{} stderr lines: {}", lines.len(), r.describe()));
             }
