@@ -228,8 +228,9 @@ pub fn error_colour(e: f64) -> [f32; 3] {
     }
 }
 
-/// How the two images are shown to FLIP ([`flip`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// How the two images are shown to FLIP ([`flip`]); the default is the PNG preview's view
+/// (exposure 0, clip).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FlipOptions {
     /// Exposure in stops applied to both images before the tone curve.
     pub exposure: f32,

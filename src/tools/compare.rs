@@ -61,12 +61,11 @@ pub fn run(opts: &CompareOptions) -> Result<bool, ToolError> {
     let mask = MaskOptions {
         mask_above: opts.mask_above,
     };
-    let m = metrics::compare(&image, &reference, mask).map_err(ToolError)?;
     let flip_opts = FlipOptions {
         exposure: opts.flip_exposure,
         tonemap: opts.flip_tonemap,
     };
-    let flip = metrics::flip(&image, &reference, flip_opts).map_err(ToolError)?;
+    let (m, flip) = measure(&image, &reference, mask, flip_opts).map_err(ToolError)?;
     if let Some(out) = &error_png {
         let errors = metrics::error_image(&image, &reference, mask);
         let (w, h, bytes) = with_legend(&errors)?;
@@ -76,13 +75,23 @@ pub fn run(opts: &CompareOptions) -> Result<bool, ToolError> {
         out.commit(vec![writer])?;
     }
     if opts.json {
-        let mut v = json_value(&m);
-        v["flip"] = flip_json(flip, flip_opts);
-        say!("{v}");
+        say!("{}", to_json(&m, flip, flip_opts));
     } else {
         say!("{} | {}", summary(&m), flip_summary(flip, flip_opts));
     }
     Ok(opts.max_relmse.is_none_or(|t| m.overall.relmse <= t))
+}
+
+/// The metrics of `image` against `reference` ([`metrics::compare`]) and their mean LDR-FLIP
+/// ([`metrics::flip`]): what `photon compare` reports (and the Python module's `compare`).
+pub fn measure(
+    image: &RgbImage,
+    reference: &RgbImage,
+    mask: MaskOptions,
+    flip: FlipOptions,
+) -> Result<(Metrics, f64), String> {
+    let m = metrics::compare(image, reference, mask)?;
+    Ok((m, metrics::flip(image, reference, flip)?))
 }
 
 /// The FLIP part of the text output: the mean and how both images were shown to it.
@@ -225,13 +234,9 @@ fn channel_json(c: &metrics::ChannelError) -> serde_json::Value {
     })
 }
 
-/// The metrics as one line of JSON (non-finite numbers, such as an infinite PSNR, as `null`).
-pub fn to_json(m: &Metrics) -> String {
-    json_value(m).to_string()
-}
-
-/// The metrics as a JSON object (see [`to_json`]).
-pub fn json_value(m: &Metrics) -> serde_json::Value {
+/// The metrics and the FLIP mean `flip` (seen through `opts`) as one line of JSON (non-finite
+/// numbers, such as an infinite PSNR, as `null`): `photon compare --json`.
+pub fn to_json(m: &Metrics, flip: f64, opts: FlipOptions) -> String {
     serde_json::json!({
         "overall": channel_json(&m.overall),
         "r": channel_json(&m.channels[0]),
@@ -241,5 +246,7 @@ pub fn json_value(m: &Metrics) -> serde_json::Value {
         "masked_nonfinite": m.masked_nonfinite,
         "masked_emitter": m.masked_emitter,
         "image_nonfinite": m.image_nonfinite,
+        "flip": flip_json(flip, opts),
     })
+    .to_string()
 }

@@ -101,6 +101,36 @@ fn png_from_convert_compares_within_the_8_bit_quantisation_bound() {
     );
 }
 
+/// A 16-bit PNG is sRGB too: the same image coded in 16 bits compares with its EXR 256 times
+/// more finely quantised than the 8-bit one (relMSE far below the 8-bit bound).
+#[test]
+fn sixteen_bit_png_is_decoded_as_srgb() {
+    let dir = TempDir::new("image-tools-png16");
+    let exr = dir.0.join("ramps.exr");
+    let png = dir.0.join("ramps16.png");
+    let image = ramps();
+    write_exr(&exr, &image, &[], ExrPixel::Float).unwrap();
+    let oetf = photon::imageio::png::srgb_oetf;
+    let words: Vec<u16> = image
+        .pixels
+        .iter()
+        .flat_map(|p| p.map(|v| (oetf(v) * 65535.0).round() as u16))
+        .collect();
+    let (w, h) = (image.width as u32, image.height as u32);
+    image::ImageBuffer::<image::Rgb<u16>, _>::from_raw(w, h, words)
+        .unwrap()
+        .save(&png)
+        .unwrap();
+    let m = compare_json(&png, &exr, &[]);
+    println!("16-bit PNG vs EXR: relMSE {:.3e}", relmse(&m));
+    assert!(relmse(&m) < 1e-9, "{m}");
+    // Read as linear (no sRGB decoding), mid grey would be off by far more.
+    let back = read_linear(&png, None).unwrap();
+    let (x, y) = (20, 10); // inside the square: 0.93, 0.6, 0.2
+    let p = back.get(x, y).unwrap();
+    assert!((p[1] - 0.6).abs() < 1e-4, "{p:?}");
+}
+
 /// EXR -> PFM -> EXR: bit for bit, rows in order (PFM stores them bottom-up), relMSE 0.
 #[test]
 fn pfm_round_trip_is_exact() {
