@@ -5,6 +5,7 @@ use photon::tools::bench::{self, BenchOptions};
 use photon::tools::check::{self, CheckOptions};
 use photon::tools::compare::{self, CompareOptions};
 use photon::tools::converge::{self, ConvergeOptions};
+use photon::tools::convert::{self, ConvertOptions};
 use photon::tools::crosscheck::{self, CrosscheckOptions};
 use photon::tools::merge::{self, MergeOptions};
 use photon::tools::render::{self, RenderOptions};
@@ -28,9 +29,12 @@ struct Cli {
 enum Command {
     /// Render a pbrt-v4 scene to a linear EXR (with per-component layers) and a PNG preview.
     Render(Box<RenderOptions>),
-    /// Compare an EXR with a reference: relMSE, RMSE, MAE, max error, PSNR (exit 1 above
-    /// --max-relmse).
+    /// Compare an image with a reference (EXR, PNG or PFM each): relMSE, RMSE, MAE, max error,
+    /// PSNR and LDR-FLIP (exit 1 above --max-relmse).
     Compare(CompareOptions),
+    /// Convert an EXR, PNG or PFM image to PNG (exposure, tone curve), EXR or PFM (linear),
+    /// optionally cropped or from one EXR layer.
+    Convert(ConvertOptions),
     /// Error against time: each integrator and a few photon-map settings at a series of time
     /// budgets; writes a CSV and a log-log plot.
     Converge(ConvergeOptions),
@@ -149,6 +153,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(opts) => render::run(&opts).map(|()| true),
         Command::Compare(opts) => compare::run(&opts),
+        Command::Convert(opts) => convert::run(&opts).map(|()| true),
         Command::Converge(opts) => converge::run(&opts),
         Command::Crosscheck(opts) => crosscheck::run(&opts),
         Command::Bench(opts) => bench::run(&opts).map(|()| true),

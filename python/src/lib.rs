@@ -18,7 +18,7 @@
 //! Python handle signals: Ctrl-C (KeyboardInterrupt) or an exception from the `progress`
 //! callback stops the render within a tile or a pass and is raised again.
 use numpy::{PyArray1, PyArrayMethods, PyUntypedArrayMethods};
-use photon::imageio::{read_exr, RgbImage};
+use photon::imageio::{read_linear, RgbImage};
 use photon::integrator::{Observer, RenderOutput};
 use photon::interrupt::{self, Signal};
 use photon::scene::Scene;
@@ -385,12 +385,12 @@ impl PyScene {
     }
 }
 
-/// An image argument: an EXR path, or an array of shape (height, width, 3).
+/// An image argument: an EXR, PNG or PFM path, or an array of shape (height, width, 3).
 fn image_of(py: Python<'_>, x: &Bound<'_, PyAny>) -> PyResult<RgbImage> {
     let os = py.import("os")?;
     if x.is_instance(&os.getattr("PathLike")?)? || x.is_instance_of::<pyo3::types::PyString>() {
         let path: PathBuf = x.extract()?;
-        return read_exr(&path).map_err(|e| PhotonError::new_err(e.to_string()));
+        return read_linear(&path, None).map_err(|e| PhotonError::new_err(e.to_string()));
     }
     let np = py.import("numpy")?;
     let a = np.call_method1("ascontiguousarray", (x, "float32"))?;
@@ -412,8 +412,8 @@ fn image_of(py: Python<'_>, x: &Bound<'_, PyAny>) -> PyResult<RgbImage> {
     })
 }
 
-/// `photon compare`'s metrics of `image` against `reference` (EXR paths or arrays), as the
-/// dict `photon compare --json` prints.
+/// `photon compare`'s metrics of `image` against `reference` (EXR, PNG or PFM paths, or
+/// arrays), LDR-FLIP with its defaults included, as the dict `photon compare --json` prints.
 #[pyfunction]
 #[pyo3(signature = (image, reference, downsample=false, mask_above=None))]
 fn compare<'py>(
@@ -424,14 +424,16 @@ fn compare<'py>(
     mask_above: Option<f32>,
 ) -> PyResult<Bound<'py, PyAny>> {
     use photon::imageio::metrics;
+    use photon::tools::compare;
     let (a, b) = (image_of(py, image)?, image_of(py, reference)?);
     let (a, b) = match downsample {
         true => metrics::match_sizes(a, b).map_err(PhotonError::new_err)?,
         false => (a, b),
     };
     let mask = metrics::MaskOptions { mask_above };
-    let m = metrics::compare(&a, &b, mask).map_err(PhotonError::new_err)?;
-    let json = photon::tools::compare::to_json(&m);
+    let flip = metrics::FlipOptions::default();
+    let (m, f) = compare::measure(&a, &b, mask, flip).map_err(PhotonError::new_err)?;
+    let json = compare::to_json(&m, f, flip);
     py.import("json")?.call_method1("loads", (json,))
 }
 

@@ -2,9 +2,106 @@
 //! through [`super::exr`], PFM here, PNG, TGA, JPEG, TIFF... through the `image` crate. Every
 //! size a header declares is checked against [`crate::limits::MAX_IMAGE_PIXELS`] and the
 //! decode's peak reserved in the loader's [`LoadBudget`] before anything is decoded.
+//!
+//! The format is chosen by the file's extension (`.exr`, `.pfm`, `.png`), else by its first
+//! bytes ([`detect_format`]). [`read_linear`] reads the images the tools take (EXR, PNG as
+//! sRGB, PFM) into an [`RgbImage`]; [`write_pfm`] writes a PFM, as pbrt-v4 does.
+use super::{write_atomically, ImageError, RgbImage};
 use crate::limits::LoadBudget;
 use crate::math::Vec3;
 use std::path::Path;
+
+/// An image file's format, as [`detect_format`] tells it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FileFormat {
+    Exr,
+    Png,
+    Pfm,
+    /// Anything else (left to the `image` crate, which guesses from the content too).
+    Other,
+}
+
+impl FileFormat {
+    /// The format of a name's extension (`None` for an extension this module does not know).
+    pub fn from_extension(path: &Path) -> Option<FileFormat> {
+        let ext = path.extension()?.to_string_lossy().to_ascii_lowercase();
+        match ext.as_str() {
+            "exr" => Some(FileFormat::Exr),
+            "png" => Some(FileFormat::Png),
+            "pfm" => Some(FileFormat::Pfm),
+            _ => None,
+        }
+    }
+
+    /// The format of a file starting with `head` (its first 4 bytes or fewer): OpenEXR's magic
+    /// `76 2f 31 01`, PNG's `89 'P' 'N' 'G'`, PFM's `PF` or `Pf` and a white space.
+    pub fn from_magic(head: &[u8]) -> FileFormat {
+        match head {
+            [0x76, 0x2f, 0x31, 0x01, ..] => FileFormat::Exr,
+            [0x89, b'P', b'N', b'G', ..] => FileFormat::Png,
+            [b'P', b'F' | b'f', c, ..] if c.is_ascii_whitespace() => FileFormat::Pfm,
+            _ => FileFormat::Other,
+        }
+    }
+}
+
+/// The format of `path`: by its extension when that is `.exr`, `.png` or `.pfm` (any case),
+/// else by its first bytes ([`FileFormat::from_magic`]; a file that cannot be read is
+/// [`FileFormat::Other`], for the decoder to report).
+pub fn detect_format(path: &Path) -> FileFormat {
+    if let Some(f) = FileFormat::from_extension(path) {
+        return f;
+    }
+    use std::io::Read;
+    let mut head = Vec::with_capacity(4);
+    match std::fs::File::open(path) {
+        Ok(f) => match f.take(4).read_to_end(&mut head) {
+            Ok(_) => FileFormat::from_magic(&head),
+            Err(_) => FileFormat::Other,
+        },
+        Err(_) => FileFormat::Other,
+    }
+}
+
+/// Reads an EXR (its RGB, or the layer `layer`), a PNG (8 or 16 bits, decoded as sRGB) or a
+/// PFM (linear) into a linear image; the format by [`detect_format`]. Errors are one line
+/// naming the file: any other format, a layer asked of a PNG or PFM, a decoding error.
+pub fn read_linear(path: &Path, layer: Option<&str>) -> Result<RgbImage, ImageError> {
+    let format = detect_format(path);
+    if let (Some(layer), FileFormat::Png | FileFormat::Pfm) = (layer, format) {
+        return Err(ImageError::invalid(
+            path,
+            format!(
+                "a {} file has no layers (asked for layer \"{layer}\"; only EXR files have them)",
+                if format == FileFormat::Png {
+                    "PNG"
+                } else {
+                    "PFM"
+                }
+            ),
+        ));
+    }
+    match format {
+        FileFormat::Exr => match layer {
+            Some(l) => super::read_exr_layer(path, l),
+            None => super::read_exr(path),
+        },
+        FileFormat::Png | FileFormat::Pfm => {
+            let budget = LoadBudget::new(crate::limits::default_budget().bytes);
+            let srgb = |v: f32| crate::texture::Encoding::Srgb.decode(v);
+            let t = read_image(path, &srgb, &budget).map_err(|m| ImageError::invalid(path, m))?;
+            Ok(RgbImage {
+                width: t.width,
+                height: t.height,
+                pixels: t.texels.iter().map(Vec3::to_array).collect(),
+            })
+        }
+        FileFormat::Other => Err(ImageError::invalid(
+            path,
+            "not an EXR, PNG or PFM image (neither by its extension nor by its first bytes)",
+        )),
+    }
+}
 
 /// Decoded linear RGB texels, row 0 at the top.
 pub struct Texels {
@@ -30,7 +127,7 @@ pub fn read_image(
     decode_integer: &dyn Fn(f32) -> f32,
     budget: &LoadBudget,
 ) -> Result<Texels, String> {
-    let ext = |x: &str| path.extension().is_some_and(|e| e.eq_ignore_ascii_case(x));
+    let format = detect_format(path);
     let too_many = |w: u64, h: u64| {
         (w.saturating_mul(h) > crate::limits::MAX_IMAGE_PIXELS).then(|| {
             format!(
@@ -39,7 +136,7 @@ pub fn read_image(
             )
         })
     };
-    if ext("pfm") {
+    if format == FileFormat::Pfm {
         // A colour PFM holds 12 bytes per pixel after a short header: the file, then texels.
         let cap = crate::limits::MAX_IMAGE_PIXELS * 12 + 4096;
         let len = std::fs::metadata(path).map_or(0, |m| m.len().min(cap));
@@ -51,7 +148,7 @@ pub fn read_image(
         budget.release(if image.is_ok() { len } else { 2 * len });
         return image;
     }
-    if ext("exr") {
+    if format == FileFormat::Exr {
         let (w, h) = super::read_exr_size(path).map_err(|e| e.to_string())?;
         let (w, h) = (w as u64, h as u64);
         // The decoded image, then the texels copied from it.
@@ -69,6 +166,10 @@ pub fn read_image(
     }
     // The header first: nothing is decoded before the size is checked and reserved.
     let mut reader = image::ImageReader::open(path).map_err(|e| e.to_string())?;
+    if FileFormat::from_extension(path).is_none() {
+        // No extension the crate knows for sure: let it look at the content.
+        reader = reader.with_guessed_format().map_err(|e| e.to_string())?;
+    }
     reader.no_limits(); // the budget below is the limit
     use image::ImageDecoder;
     let decoder = reader.into_decoder().map_err(|e| e.to_string())?;
@@ -177,6 +278,42 @@ pub fn read_pfm(bytes: &[u8]) -> Result<Texels, String> {
     })
 }
 
+/// A PFM file of `image`: `PF`, the size, scale `-1` (little-endian, values as they are), then
+/// the rows of f32 RGB from the bottom up, as [`read_pfm`] reads them back bit for bit.
+pub fn encode_pfm(image: &RgbImage) -> Vec<u8> {
+    let mut bytes = format!("PF\n{} {}\n-1\n", image.width, image.height).into_bytes();
+    bytes.reserve(image.pixels.len() * 12);
+    if image.width > 0 {
+        for row in image.pixels.chunks(image.width).rev() {
+            for p in row {
+                for c in p {
+                    bytes.extend_from_slice(&c.to_le_bytes());
+                }
+            }
+        }
+    }
+    bytes
+}
+
+/// Writes `image` to `path` as a PFM ([`encode_pfm`]), atomically ([`write_atomically`]).
+pub fn write_pfm(path: &Path, image: &RgbImage) -> Result<(), ImageError> {
+    if !image.is_consistent() || image.width == 0 || image.height == 0 {
+        return Err(ImageError::invalid(
+            path,
+            format!(
+                "cannot write a {}x{} image holding {} pixels",
+                image.width,
+                image.height,
+                image.pixels.len()
+            ),
+        ));
+    }
+    let bytes = encode_pfm(image);
+    write_atomically(path, |tmp| {
+        std::fs::write(tmp, &bytes).map_err(|e| ImageError::io(path, e))
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -216,5 +353,37 @@ mod tests {
             .unwrap_err()
             .contains("magic"));
         assert!(read_pfm(b"PF\n1").unwrap_err().contains("truncated"));
+    }
+
+    #[test]
+    fn pfm_written_reads_back_bit_for_bit() {
+        let image = RgbImage {
+            width: 3,
+            height: 2,
+            pixels: (0..6)
+                .map(|i| [i as f32 * 0.1, -1.5e-7 * i as f32, 1e30 / (i + 1) as f32])
+                .collect(),
+        };
+        let back = read_pfm(&encode_pfm(&image)).unwrap();
+        assert_eq!((back.width, back.height), (3, 2));
+        let pixels: Vec<[f32; 3]> = back.texels.iter().map(|t| t.to_array()).collect();
+        assert_eq!(pixels, image.pixels);
+    }
+
+    #[test]
+    fn formats_by_extension_then_by_magic() {
+        assert_eq!(
+            FileFormat::from_extension(Path::new("a.EXR")),
+            Some(FileFormat::Exr)
+        );
+        assert_eq!(FileFormat::from_extension(Path::new("a.tga")), None);
+        assert_eq!(
+            FileFormat::from_magic(&[0x76, 0x2f, 0x31, 0x01]),
+            FileFormat::Exr
+        );
+        assert_eq!(FileFormat::from_magic(b"\x89PNG"), FileFormat::Png);
+        assert_eq!(FileFormat::from_magic(b"Pf\n1"), FileFormat::Pfm);
+        assert_eq!(FileFormat::from_magic(b"PFX"), FileFormat::Other);
+        assert_eq!(FileFormat::from_magic(b"P"), FileFormat::Other);
     }
 }

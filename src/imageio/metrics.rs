@@ -3,7 +3,8 @@
 //! absolute error and PSNR (peak 1, i.e. display white). Pixels whose reference is not finite
 //! are masked and counted; so, optionally, are pixels next to bright emitters in the reference
 //! (where a pixel-filter mismatch alone dominates the error, see `../shared/README.md`).
-use super::RgbImage;
+//! [`flip`] gives NVIDIA's perceptual LDR-FLIP of the two images tone-mapped alike.
+use super::{RgbImage, Tonemap};
 
 /// The `0.01` of relMSE's denominator.
 pub const RELMSE_EPSILON: f64 = 0.01;
@@ -199,28 +200,83 @@ pub fn match_sizes(image: RgbImage, reference: RgbImage) -> Result<(RgbImage, Rg
 }
 
 /// A false-colour image of per-pixel relMSE on a log scale from 1e-4 (black-blue) to 1 (red,
-/// then white above); masked pixels are grey.
+/// then white above); masked pixels are [`MASKED_COLOUR`].
 pub fn error_image(image: &RgbImage, reference: &RgbImage, opts: MaskOptions) -> RgbImage {
     let map = relmse_map(image, reference, opts);
     let mut out = RgbImage::new(image.width, image.height);
     for (o, e) in out.pixels.iter_mut().zip(map) {
-        *o = match e {
-            None => [0.2, 0.2, 0.2],
-            Some(e) => {
-                let t = ((e.max(1e-12).log10() + 4.0) / 4.0).clamp(0.0, 1.25) as f32;
-                if t <= 0.5 {
-                    [0.0, 0.0, t * 2.0]
-                } else if t <= 1.0 {
-                    let s = (t - 0.5) * 2.0;
-                    [s, 0.0, 1.0 - s]
-                } else {
-                    let s = (t - 1.0) * 4.0;
-                    [1.0, s, s]
-                }
-            }
-        };
+        *o = e.map_or(MASKED_COLOUR, error_colour);
     }
     out
+}
+
+/// The (linear) colour of masked pixels in [`error_image`].
+pub const MASKED_COLOUR: [f32; 3] = [0.2, 0.2, 0.2];
+
+/// The (linear) colour of a relative error `e` in [`error_image`]: black to blue from 1e-4 to
+/// 1e-2, blue to red up to 1, red to white up to 10 (`log10 e` from -4 to 1).
+pub fn error_colour(e: f64) -> [f32; 3] {
+    let t = ((e.max(1e-12).log10() + 4.0) / 4.0).clamp(0.0, 1.25) as f32;
+    if t <= 0.5 {
+        [0.0, 0.0, t * 2.0]
+    } else if t <= 1.0 {
+        let s = (t - 0.5) * 2.0;
+        [s, 0.0, 1.0 - s]
+    } else {
+        let s = (t - 1.0) * 4.0;
+        [1.0, s, s]
+    }
+}
+
+/// How the two images are shown to FLIP ([`flip`]); the default is the PNG preview's view
+/// (exposure 0, clip).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FlipOptions {
+    /// Exposure in stops applied to both images before the tone curve.
+    pub exposure: f32,
+    /// The tone curve applied to both images.
+    pub tonemap: Tonemap,
+}
+
+/// Mean LDR-FLIP (NVIDIA's perceptual error, 0 = identical, 1 = the largest difference) of
+/// `image` against `reference`, through the `nv-flip` crate, at its default 67 pixels per
+/// degree. nv-flip exposes LDR-FLIP only, on 8-bit sRGB images: both linear images are first
+/// tone-mapped the same way (`opts`: exposure, curve, sRGB OETF, 8 bits; see
+/// [`super::tonemap`]), as a PNG preview would show them. Every pixel counts (no masks;
+/// non-finite values become black, or white for +inf).
+pub fn flip(image: &RgbImage, reference: &RgbImage, opts: FlipOptions) -> Result<f64, String> {
+    if image.width != reference.width || image.height != reference.height {
+        return Err(format!(
+            "image is {}x{} but the reference is {}x{}",
+            image.width, image.height, reference.width, reference.height
+        ));
+    }
+    let pixels = image.width.checked_mul(image.height);
+    let fits = |n: usize| n.checked_mul(3).is_some_and(|b| u32::try_from(b).is_ok());
+    if !image.is_consistent() || !reference.is_consistent() || !pixels.is_some_and(fits) {
+        return Err(format!(
+            "FLIP takes images up to {} pixels, not {}x{}",
+            u32::MAX / 3,
+            image.width,
+            image.height
+        ));
+    }
+    if pixels == Some(0) {
+        return Ok(0.0);
+    }
+    let (w, h) = (image.width as u32, image.height as u32);
+    let rgb8 = |im: &RgbImage| {
+        let bytes = super::tonemap::to_srgb8(&im.pixels, opts.exposure, opts.tonemap);
+        nv_flip::FlipImageRgb8::with_data(w, h, &bytes)
+    };
+    let map = nv_flip::flip(
+        rgb8(reference),
+        rgb8(image),
+        nv_flip::DEFAULT_PIXELS_PER_DEGREE,
+    );
+    let values = map.to_vec();
+    let sum: f64 = values.iter().map(|&v| f64::from(v)).sum();
+    Ok(sum / values.len() as f64)
 }
 
 #[cfg(test)]
@@ -290,5 +346,21 @@ mod tests {
         assert_eq!(b.pixels[0], [2.5; 3]); // mean of 0, 1, 4, 5
         assert_eq!(a.width, 2);
         assert!(match_sizes(img(3, 3, |_| [0.0; 3]), img(4, 4, |_| [0.0; 3])).is_err());
+    }
+
+    #[test]
+    fn flip_is_zero_against_itself_and_positive_against_another_image() {
+        let opts = FlipOptions {
+            exposure: 0.0,
+            tonemap: Tonemap::Clamp,
+        };
+        let a = img(32, 24, |i| {
+            [(i % 32) as f32 / 32.0, 0.3, (i / 32) as f32 / 24.0]
+        });
+        assert_eq!(flip(&a, &a, opts).unwrap(), 0.0);
+        let b = img(32, 24, |i| [0.9 - (i % 32) as f32 / 40.0, 0.3, 0.1]);
+        let d = flip(&a, &b, opts).unwrap();
+        assert!(d > 0.05 && d <= 1.0, "{d}");
+        assert!(flip(&a, &img(2, 2, |_| [0.0; 3]), opts).is_err());
     }
 }

@@ -1,6 +1,7 @@
 //! Image I/O: linear float images in memory, OpenEXR through OpenEXRCore ([`exr`]), 8-bit sRGB
-//! PNG through the `image` crate ([`png`]), and the decoding of texture and environment-map
-//! files into linear texels ([`decode`]).
+//! PNG through the `image` crate ([`png`]) after a tone curve ([`tonemap`]), the decoding of
+//! texture and environment-map files into linear texels and PFM reading and writing
+//! ([`decode`]), and error metrics against a reference ([`metrics`]).
 //!
 //! Every writer goes through [`write_atomically`]: the image is written to a temporary file in
 //! the destination's directory and renamed over the destination only once it is complete, so a
@@ -20,16 +21,17 @@
 pub mod decode;
 pub mod exr;
 pub mod metrics;
-pub mod pfm;
 pub mod png;
+pub mod tonemap;
 
+pub use decode::{read_linear, write_pfm};
 pub use exr::{
     read_exr, read_exr_attributes, read_exr_layer, read_exr_size, read_exr_uint_layer, write_exr,
     write_exr_channels, write_exr_with, ExrChannel, ExrCompression, ExrExtra, ExrLayout, ExrPixel,
     ExrSamples, ExrStored,
 };
-pub use pfm::write_pfm;
-pub use png::write_png;
+pub use png::{write_png, write_png_tonemapped};
+pub use tonemap::Tonemap;
 
 use std::fmt;
 use std::path::{Path, PathBuf};

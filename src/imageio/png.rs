@@ -1,7 +1,9 @@
 //! 8-bit sRGB PNG output through the `image` crate, for previews of linear renders.
 //!
 //! Each linear value is scaled by `2^exposure_stops`, clamped to [0, 1] (NaN becomes 0),
-//! encoded with the exact piecewise sRGB OETF and rounded to 8 bits.
+//! encoded with the exact piecewise sRGB OETF and rounded to 8 bits; [`write_png_tonemapped`]
+//! applies one of [`super::tonemap`]'s curves instead of the clip.
+use super::tonemap::Tonemap;
 use super::{write_atomically, ImageError, ImageErrorKind, RgbImage};
 use std::path::Path;
 
@@ -28,11 +30,18 @@ pub fn encode_srgb8(v: f32, scale: f32) -> u8 {
 /// Written to a temporary file next to `path` and renamed over it only on success.
 /// Errors: inconsistent image size, sizes beyond `u32`, encoder or file-system failures.
 pub fn write_png(path: &Path, rgb: &RgbImage, exposure_stops: f32) -> Result<(), ImageError> {
-    let size = (u32::try_from(rgb.width), u32::try_from(rgb.height));
-    let (Ok(w), Ok(h)) = size else {
-        return Err(ImageError::invalid(path, "image too large for PNG"));
-    };
-    if !rgb.is_consistent() || w == 0 || h == 0 {
+    write_png_tonemapped(path, rgb, exposure_stops, Tonemap::Clamp)
+}
+
+/// [`write_png`] with the tone curve `tonemap` ([`super::tonemap`]) after the exposure
+/// (`Tonemap::Clamp` is `write_png`).
+pub fn write_png_tonemapped(
+    path: &Path,
+    rgb: &RgbImage,
+    exposure_stops: f32,
+    tonemap: Tonemap,
+) -> Result<(), ImageError> {
+    if !rgb.is_consistent() {
         return Err(ImageError::invalid(
             path,
             format!(
@@ -43,16 +52,38 @@ pub fn write_png(path: &Path, rgb: &RgbImage, exposure_stops: f32) -> Result<(),
             ),
         ));
     }
-    let scale = exposure_stops.exp2();
-    let bytes: Vec<u8> = rgb
-        .pixels
-        .iter()
-        .flat_map(|p| p.map(|v| encode_srgb8(v, scale)))
-        .collect();
+    let bytes = super::tonemap::to_srgb8(&rgb.pixels, exposure_stops, tonemap);
+    write_png_rgb8(path, rgb.width, rgb.height, &bytes)
+}
+
+/// Writes tightly packed 8-bit RGB `bytes` (`width * height * 3`, rows from the top) to `path`
+/// as a PNG, atomically ([`write_atomically`]).
+pub fn write_png_rgb8(
+    path: &Path,
+    width: usize,
+    height: usize,
+    bytes: &[u8],
+) -> Result<(), ImageError> {
+    let size = (u32::try_from(width), u32::try_from(height));
+    let (Ok(w), Ok(h)) = size else {
+        return Err(ImageError::invalid(path, "image too large for PNG"));
+    };
+    if w == 0
+        || h == 0
+        || width.checked_mul(height).and_then(|n| n.checked_mul(3)) != Some(bytes.len())
+    {
+        return Err(ImageError::invalid(
+            path,
+            format!(
+                "cannot write a {width}x{height} image from {} bytes",
+                bytes.len()
+            ),
+        ));
+    }
     write_atomically(path, |tmp| {
         image::save_buffer_with_format(
             tmp,
-            &bytes,
+            bytes,
             w,
             h,
             image::ExtendedColorType::Rgb8,

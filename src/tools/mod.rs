@@ -49,6 +49,7 @@ pub mod bench;
 pub mod check;
 pub mod compare;
 pub mod converge;
+pub mod convert;
 pub mod crosscheck;
 pub mod display;
 pub mod job;

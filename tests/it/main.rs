@@ -23,6 +23,7 @@ mod fuzz;
 mod glossy_paths;
 mod hard_cases;
 mod hostile;
+mod image_tools;
 mod kdtree;
 mod lamp_can;
 mod layers;
