@@ -38,6 +38,7 @@ pub mod merge;
 pub mod output;
 pub mod render;
 pub mod render_passes;
+pub mod upgrade;
 
 use std::fmt;
 
