@@ -256,7 +256,13 @@ fn param_text(p: &Param, indent: usize) -> String {
     let mut s = format!("{} [", quote(&format!("{} {}", p.ty.name(), p.name)));
     let mut col = indent + s.len();
     for (i, v) in vals.iter().enumerate() {
-        if i > 0 && i % group == 0 && col + v.len() + 1 > WRAP {
+        // The whole value (and the closing bracket after the last) must fit.
+        let whole: usize = vals[i..(i + group).min(vals.len())]
+            .iter()
+            .map(|v| v.len() + 1)
+            .sum::<usize>()
+            + if i + group >= vals.len() { 2 } else { 0 };
+        if i > 0 && i % group == 0 && col + whole > WRAP {
             s.push('\n');
             s.push_str(&" ".repeat(indent + 4));
             col = indent + 4;
@@ -1191,11 +1197,14 @@ mod tests {
 
     #[test]
     fn long_arrays_wrap_between_whole_points() {
-        let p: Vec<String> = (0..40).map(|i| format!("{i}.5")).collect();
+        let p: Vec<String> = (0..42).map(|i| format!("{i}.5")).collect();
         let src = format!("Shape \"trianglemesh\" \"point P\" [ {} ]", p.join(" "));
         let text = up(&src).text;
-        for line in text.lines().skip(2) {
-            let numbers = line.split_whitespace().filter(|w| *w != "]").count();
+        assert!(text.lines().count() > 3, "{text}");
+        for line in text.lines().skip(1) {
+            let numbers = (line.split_whitespace())
+                .filter(|w| w.parse::<f32>().is_ok())
+                .count();
             assert_eq!(numbers % 3, 0, "{text}");
         }
         assert!(text.lines().all(|l| l.len() <= WRAP), "{text}");
