@@ -33,8 +33,9 @@
 //!   (`NAME-renamed-N`) and later references follow;
 //! - lights: an RGB `scale`, the `L` of an `infinite` light with a `mapname`, the `I` of a
 //!   `projection` light with one, and the second number of a v3 `blackbody` all fold into the
-//!   float `scale`; `mapname` → `filename`; `samples`/`nsamples` dropped; `AreaLightSource
-//!   "area"` → `"diffuse"`;
+//!   float `scale`; `mapname` → `filename` (for `infinite`, a note that a v3 lat-long map
+//!   must be converted to pbrt-v4's equal-area square one, which pbrt-v4 does not say);
+//!   `samples`/`nsamples` dropped; `AreaLightSource "area"` → `"diffuse"`;
 //! - `Shape`: trianglemesh `uv`/`st` floats → `point2 uv`, `indices` [0 1 2] of a lone triangle
 //!   dropped, loopsubdiv `nlevels` → `levels`, `discarddegenerateUVs`/`shadowalpha` dropped,
 //!   `Kd` → `reflectance`; shapes v4 lacks (`cone`, `paraboloid`, `hyperboloid`, `heightfield`,
@@ -50,7 +51,8 @@
 //! - pbrt-v2 directives pbrt-v4 cannot read (`SurfaceIntegrator`, `VolumeIntegrator`,
 //!   `Renderer`, `Volume`) are kept as comments with a warning.
 //!
-//! Beyond pbrt-v4: `NamedMaterial` follows a renamed named material the way `ObjectInstance`
+//! Beyond pbrt-v4: an `uber` that becomes `diffuse` loses the `eta` made from its `index`
+//! (pbrt-v4 writes it, and then refuses it as unused); `NamedMaterial` follows a renamed named material the way `ObjectInstance`
 //! follows a renamed object; a warning is also given for a dropped `sigma` or textured `Ks`,
 //! whose loss pbrt-v4 does not mention.
 //!
@@ -841,6 +843,10 @@ impl Upgrader {
             "" | "none" => *ty = "interface".into(),
             _ => {}
         }
+        if ty == "diffuse" {
+            // An uber's "index" became an "eta" that diffuse has no use for.
+            extra.retain(|p| p.name != "eta");
+        }
         Ok(extra)
     }
 }
@@ -993,6 +999,15 @@ fn light(
         }
     }
     if let Some(m) = ps.string("mapname").filter(|m| !m.is_empty()) {
+        if ty == "infinite" {
+            work.note(
+                &loc,
+                format!(
+                    "pbrt-v4 reads \"{m}\" as an equal-area (square) map; a pbrt-v3 \
+                     latitude-longitude map needs converting (pbrt-v4's `imgtool makeequiarea`)"
+                ),
+            );
+        }
         ps.remove("mapname", &[ParamType::String]);
         extra.push(string_param("filename", &[&m], &loc));
     }
