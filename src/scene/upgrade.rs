@@ -390,7 +390,10 @@ impl Upgrader {
             if t.kind != TokKind::Word {
                 return Err(tok.err(&t, format!("expected a directive, found {}", t.describe())));
             }
-            out.gap(t.line);
+            if t.text != "WorldEnd" {
+                // (WorldEnd is dropped: no blank line for it.)
+                out.gap(t.line);
+            }
             let mut work = Work {
                 loc: tok.loc(&t),
                 notes: Vec::new(),
