@@ -9,6 +9,7 @@ use photon::tools::convert::{self, ConvertOptions};
 use photon::tools::crosscheck::{self, CrosscheckOptions};
 use photon::tools::merge::{self, MergeOptions};
 use photon::tools::render::{self, RenderOptions};
+use photon::tools::upgrade::{self, UpgradeOptions};
 use std::io::Write;
 use std::process::ExitCode;
 
@@ -51,6 +52,9 @@ enum Command {
     /// memory estimate), then every unsupported feature or error with its file:line:column
     /// (exit 2 if any scene has one).
     Check(CheckOptions),
+    /// Translate a pbrt-v3 scene file to pbrt-v4 syntax, as `pbrt --upgrade` does (warnings
+    /// with file:line:column on stderr; the scene to -o or stdout).
+    Upgrade(UpgradeOptions),
 }
 
 /// Parses the command line; a usage error becomes one line naming the flag (exit 2), help and
@@ -159,6 +163,7 @@ fn main() -> ExitCode {
         Command::Bench(opts) => bench::run(&opts).map(|()| true),
         Command::Merge(opts) => merge::run(&opts).map(|()| true),
         Command::Check(opts) => check::run(&opts).map(|()| true),
+        Command::Upgrade(opts) => upgrade::run(&opts).map(|()| true),
     };
     // A render stopped by SIGINT/SIGTERM has saved what it finished; report the signal.
     if let Some(sig) = photon::interrupt::requested() {

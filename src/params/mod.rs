@@ -201,6 +201,11 @@ impl ParamSet {
         self.params.is_empty()
     }
 
+    /// The parameters in the order written (for tools that rewrite them, `photon upgrade`).
+    pub fn into_vec(self) -> Vec<Param> {
+        self.params
+    }
+
     /// All parameters in the order written.
     pub fn iter(&self) -> impl Iterator<Item = &Param> {
         self.params.iter()

@@ -4,6 +4,7 @@
 //! `loader` reads it from the pbrt-v4 scene format (see the README for the supported subset).
 pub mod generate;
 pub mod loader;
+pub mod upgrade;
 
 use crate::math::{Mat4, Vec2, Vec3};
 use std::path::PathBuf;

@@ -58,6 +58,7 @@ pub mod output;
 pub mod progress;
 pub mod render;
 pub mod render_passes;
+pub mod upgrade;
 
 use std::fmt;
 

@@ -36,4 +36,5 @@ mod regression;
 mod render_scenes;
 mod textures;
 mod thin_tubes;
+mod upgrade;
 mod windows;

@@ -63,6 +63,15 @@ impl Token<'_> {
     }
 }
 
+/// A `# comment` as written (text from the `#` to the end of its line) and where it starts;
+/// kept only by a tokenizer made with [`Tokenizer::keeping_comments`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Comment<'a> {
+    pub text: &'a str,
+    pub line: u32,
+    pub col: u32,
+}
+
 /// A tokenizer over one file's text, with one token of look-ahead.
 pub struct Tokenizer<'a> {
     src: &'a str,
@@ -71,6 +80,8 @@ pub struct Tokenizer<'a> {
     line_start: usize,
     file: Arc<PathBuf>,
     peeked: Option<Token<'a>>,
+    /// The comments skipped so far and not yet taken, when they are kept.
+    comments: Option<Vec<Comment<'a>>>,
 }
 
 impl<'a> Tokenizer<'a> {
@@ -83,7 +94,24 @@ impl<'a> Tokenizer<'a> {
             line_start: 0,
             file,
             peeked: None,
+            comments: None,
         }
+    }
+
+    /// Keeps the comments it skips, for [`Tokenizer::take_comments`] (`photon upgrade` writes
+    /// them back out; the loader drops them).
+    pub fn keeping_comments(mut self) -> Self {
+        self.comments = Some(Vec::new());
+        self
+    }
+
+    /// The comments skipped since the last call, in file order (always empty unless made with
+    /// [`Tokenizer::keeping_comments`]). A peeked token's comments are among them.
+    pub fn take_comments(&mut self) -> Vec<Comment<'a>> {
+        self.comments
+            .as_mut()
+            .map(std::mem::take)
+            .unwrap_or_default()
     }
 
     /// The file being read.
@@ -156,8 +184,16 @@ impl<'a> Tokenizer<'a> {
                 }
                 b' ' | b'\t' | b'\r' | b'\x0c' | b'\x0b' => self.pos += 1,
                 b'#' => {
+                    let start = self.pos;
                     while self.pos < bytes.len() && bytes[self.pos] != b'\n' {
                         self.pos += 1;
+                    }
+                    if let Some(kept) = &mut self.comments {
+                        kept.push(Comment {
+                            text: self.src[start..self.pos].trim_end(),
+                            line: self.line,
+                            col: (start - self.line_start) as u32 + 1,
+                        });
                     }
                 }
                 _ => break,
@@ -310,6 +346,29 @@ mod tests {
         let e = t.next().unwrap_err();
         assert_eq!(e.loc.as_ref().map(|l| (l.line, l.col)), Some((2, 3)));
         assert!(e.msg.contains("unterminated string"));
+    }
+
+    #[test]
+    fn comments_are_kept_only_when_asked() {
+        let src = "# a\nShape # b \r\n\"x\"";
+        let mut t = Tokenizer::new(src, Arc::new(PathBuf::from("t.pbrt"))).keeping_comments();
+        assert_eq!(t.next().unwrap().unwrap().text, "Shape");
+        let got: Vec<_> = t
+            .take_comments()
+            .iter()
+            .map(|c| (c.text, c.line, c.col))
+            .collect();
+        assert_eq!(got, vec![("# a", 1, 1)]);
+        assert_eq!(t.next().unwrap().unwrap().text, "x");
+        let got: Vec<_> = t
+            .take_comments()
+            .iter()
+            .map(|c| (c.text, c.line, c.col))
+            .collect();
+        assert_eq!(got, vec![("# b", 2, 7)]);
+        let mut plain = Tokenizer::new(src, Arc::new(PathBuf::from("t.pbrt")));
+        while plain.next().unwrap().is_some() {}
+        assert!(plain.take_comments().is_empty());
     }
 
     #[test]
