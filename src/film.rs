@@ -50,12 +50,9 @@ impl Crop {
         if pixels {
             let mut v = [0u32; 4];
             for (v, f) in v.iter_mut().zip(&fields) {
-                *v = f.parse().map_err(|_| {
-                    format!(
-                        "expected a pixel index, got \"{}\"",
-                        crate::scene::clip_for_message(f, 24)
-                    )
-                })?;
+                *v = f
+                    .parse()
+                    .map_err(|_| format!("expected a pixel index, got \"{}\"", clip(f)))?;
             }
             if v[0] >= v[1] || v[2] >= v[3] {
                 return Err(format!(
@@ -71,12 +68,7 @@ impl Crop {
                 .parse::<f32>()
                 .ok()
                 .filter(|x| x.is_finite())
-                .ok_or_else(|| {
-                    format!(
-                        "expected a finite number, got \"{}\"",
-                        crate::scene::clip_for_message(f, 24)
-                    )
-                })?;
+                .ok_or_else(|| format!("expected a finite number, got \"{}\"", clip(f)))?;
         }
         Ok(Crop::window(v))
     }
@@ -87,6 +79,11 @@ impl Crop {
         let ([x0, x1], [y0, y1]) = (axis(c[0], c[1]), axis(c[2], c[3]));
         Crop::Window([x0, x1, y0, y1])
     }
+}
+
+/// At most 24 characters of a flag's value, for a message.
+fn clip(text: &str) -> String {
+    text.chars().take(24).collect()
 }
 
 /// The pixels `[x0, x1) x [y0, y1)` (returned as `[x0, x1, y0, y1]`) a render of a `w x h`

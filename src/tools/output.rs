@@ -108,9 +108,12 @@ pub enum ImageFormat {
 
 impl ImageFormat {
     /// The format `path` names by its extension (any case): `.exr`, `.png`, `.pfm`; a path
-    /// without one (a device such as `/dev/null`) is EXR; any other extension is an error
-    /// naming `flag`.
+    /// without one, or a device or FIFO whatever its name (`/dev/null`, `out.fifo`), is EXR;
+    /// any other extension is an error naming `flag`.
     pub fn of(flag: &str, path: &Path) -> Result<ImageFormat, String> {
+        if default_png(path).is_none() {
+            return Ok(ImageFormat::Exr); // a device or FIFO: no extension rule
+        }
         let ext = path
             .extension()
             .map(|e| e.to_string_lossy().to_ascii_lowercase());

@@ -283,7 +283,11 @@ fn case_08_png_never_overwrites_the_exr() {
         GIB,
         T,
     );
-    assert_error(&r, &["-o ", "--png"]);
+    // `-o img.png` now asks for a PNG (pbrt-v4's rule): it replaces img.png with the
+    // render, and no preview is written beside it.
+    assert_eq!(r.code, Some(0), "{}", r.describe());
+    assert!(std::fs::read(&img).unwrap().starts_with(b"\x89PNG"));
+    std::fs::write(&img, "precious").unwrap();
     let exr = d.join("same.exr");
     let r = run_capped(
         [
@@ -377,7 +381,7 @@ fn case_11_the_cornell_box_renders_the_same_at_every_supported_scale() {
             out.clone().into(),
         ];
         let r = run_capped(&args, 2 * GIB, T);
-        let guided: Vec<_> = args[..args.len() - 7]
+        let guided: Vec<_> = args[..args.len() - 6]
             .iter()
             .cloned()
             .chain(["--no-png".into(), "-o".into(), d.join("guided.exr").into()])
