@@ -64,6 +64,7 @@
 
 use crate::params::{Loc, Param, ParamType, ParamValues, SceneError};
 use crate::scene::loader::parser::read_params;
+use crate::scene::loader::parser::string_arg;
 use crate::scene::loader::tokenizer::{Comment, TokKind, Token, Tokenizer};
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -1188,19 +1189,6 @@ fn raw_matrix(tok: &mut Tokenizer) -> Result<Vec<String>, SceneError> {
         ));
     }
     Ok(v)
-}
-
-/// A quoted string argument (its value) and where it is.
-fn string_arg(tok: &mut Tokenizer, what: &str) -> Result<(String, Loc), SceneError> {
-    let t = tok.next_required(what)?;
-    if t.kind != TokKind::Str {
-        return Err(tok.err(
-            &t,
-            format!("expected {what} in quotes, found {}", t.describe()),
-        ));
-    }
-    let value = crate::scene::loader::tokenizer::unescape(t.text).into_owned();
-    Ok((value, tok.loc(&t)))
 }
 
 #[cfg(test)]

@@ -1499,8 +1499,8 @@ fn bracketed16(tok: &mut Tokenizer) -> Result<[f32; 16], SceneError> {
     Ok(m)
 }
 
-/// A quoted string argument and its location.
-fn string_arg(tok: &mut Tokenizer, what: &str) -> Result<(String, Loc), SceneError> {
+/// A quoted string argument and its location (`photon upgrade` reads its arguments so too).
+pub(crate) fn string_arg(tok: &mut Tokenizer, what: &str) -> Result<(String, Loc), SceneError> {
     let t = tok.next_required(what)?;
     if t.kind != TokKind::Str {
         return Err(tok.err(
