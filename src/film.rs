@@ -220,6 +220,14 @@ fn invert(cdf: &[f32], r: f32, u: f32) -> f32 {
     -r + 2.0 * r * (i as f32 + t) / bins as f32
 }
 
+/// The space of `Film "gbuffer"`'s position and normal channels (its `coordinatesystem`;
+/// written by [`crate::integrator::aov`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Space {
+    Camera,
+    World,
+}
+
 /// The parts radiance is split into (Jensen's split), each written as its own image layer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Component {

@@ -122,6 +122,11 @@ pub fn estimate(
         what: format!("{}x{}", settings.width, settings.height),
         load_peak: scene.load_peak,
     };
+    let data = settings.aovs.bytes_per_pixel();
+    if data > 0 {
+        // Exact sizes (the pass's sums, the channels, the variances), not measured.
+        e.parts.push(("data channels", pixels.saturating_mul(data)));
+    }
     if let (IntegratorKind::Photonmap, Some(_)) = (kind, &scene.media_need_tracking) {
         // Media that need tracking: the volume map alone (its photons and at most its grid).
         let n = settings.photon.volume_photons;

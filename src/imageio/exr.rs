@@ -303,6 +303,23 @@ pub struct ExrExtra<'a> {
     pub uint_layers: &'a [(&'a str, &'a [[u32; 3]])],
     /// String attributes of the header, as `(name, value)`.
     pub attributes: &'a [(&'a str, &'a str)],
+    /// Single float channels of any name (`A`, `Z`, `N.X`, `dzdx`, ...), one sample per
+    /// pixel, stored like the RGB image (half or float).
+    pub channels: &'a [(&'a str, &'a [f32])],
+    /// Typed header attributes (`samplesPerPixel`, `worldToCamera`, `chromaticities`, ...).
+    pub typed: &'a [(&'a str, ExrAttr)],
+}
+
+/// A typed EXR header attribute.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ExrAttr {
+    Int(i32),
+    Float(f32),
+    /// A 4x4 matrix (`m44f`), rows first, as pbrt-v4 writes its matrices (`m[row][column]` of
+    /// the matrix that maps column vectors).
+    M44([[f32; 4]; 4]),
+    /// `chromaticities`: red, green, blue and white points as CIE xy pairs.
+    Chromaticities([f32; 8]),
 }
 
 /// Writes `rgb` (channels R, G, B) plus each named extra layer (channels `<name>.R/G/B`) to
@@ -374,11 +391,45 @@ pub fn write_exr_with(
         }
         channels.extend(rgb_channels(path, &format!("{name}."), samples, stored)?);
     }
+    for (name, samples) in extra.channels {
+        let taken = channels
+            .iter()
+            .any(|c| c.name.as_bytes() == name.as_bytes());
+        if name.is_empty() || taken || samples.len() != rgb.width * rgb.height {
+            return Err(ImageError::invalid(
+                path,
+                format!(
+                    "channel {name:?} is empty, repeated or holds {} samples for {}x{}",
+                    samples.len(),
+                    rgb.width,
+                    rgb.height
+                ),
+            ));
+        }
+        channels.push(ChannelSource {
+            name: CString::new(*name).map_err(|_| ImageError::invalid(path, "NUL in a channel"))?,
+            stored,
+            samples: ExrSamples::F32(samples),
+            offset: 0,
+            stride: 1,
+        });
+    }
     let layout = ExrLayout {
         compression: ExrCompression::Zip,
         tile: None,
     };
-    write_part_atomically(path, (width, height), &channels, extra.attributes, layout)
+    let attrs = Attributes {
+        strings: extra.attributes,
+        typed: extra.typed,
+    };
+    write_part_atomically(path, (width, height), &channels, attrs, layout)
+}
+
+/// The header attributes of a written part.
+#[derive(Clone, Copy, Default)]
+struct Attributes<'a> {
+    strings: &'a [(&'a str, &'a str)],
+    typed: &'a [(&'a str, ExrAttr)],
 }
 
 /// Writes `channels` (each `width * height` samples, row-major) to `path` as one part laid
@@ -427,7 +478,7 @@ pub fn write_exr_channels(
             })
         })
         .collect::<Result<Vec<_>, _>>()?;
-    write_part_atomically(path, size, &sources, &[], layout)
+    write_part_atomically(path, size, &sources, Attributes::default(), layout)
 }
 
 impl ExrSamples<'_> {
@@ -444,21 +495,60 @@ fn write_part_atomically(
     path: &Path,
     size: (i32, i32),
     channels: &[ChannelSource],
-    attributes: &[(&str, &str)],
+    attributes: Attributes,
     layout: ExrLayout,
 ) -> Result<(), ImageError> {
-    let attributes = attributes
+    let c = |t: &str| CString::new(t).map_err(|_| ImageError::invalid(path, "NUL in attribute"));
+    let strings = attributes
+        .strings
         .iter()
-        .map(|(k, v)| {
-            Ok((
-                CString::new(*k).map_err(|_| ImageError::invalid(path, "NUL in attribute"))?,
-                CString::new(*v).map_err(|_| ImageError::invalid(path, "NUL in attribute"))?,
-            ))
-        })
+        .map(|(k, v)| Ok((c(k)?, c(v)?)))
+        .collect::<Result<Vec<_>, ImageError>>()?;
+    let typed = attributes
+        .typed
+        .iter()
+        .map(|(k, v)| Ok((c(k)?, *v)))
         .collect::<Result<Vec<_>, ImageError>>()?;
     write_atomically(path, |tmp| {
-        write_part(tmp, path, size, channels, &attributes, layout)
+        write_part(tmp, path, size, channels, (&strings, &typed), layout)
     })
+}
+
+/// Sets the typed attribute `k` of `part` to `v`.
+fn set_typed(ctx: &Context, part: i32, k: &CString, v: &ExrAttr) -> Result<(), ImageError> {
+    // SAFETY (all calls): `ctx.raw` is a live write context; the pointers are valid locals
+    // the library copies from.
+    match *v {
+        ExrAttr::Int(i) => ctx.check("exr_attr_set_int", || unsafe {
+            ffi::exr_attr_set_int(ctx.raw, part, k.as_ptr(), i)
+        }),
+        ExrAttr::Float(f) => ctx.check("exr_attr_set_float", || unsafe {
+            ffi::exr_attr_set_float(ctx.raw, part, k.as_ptr(), f)
+        }),
+        ExrAttr::M44(m) => {
+            let raw = ffi::exr_attr_m44f_t {
+                m: std::array::from_fn(|i| m[i / 4][i % 4]),
+            };
+            ctx.check("exr_attr_set_m44f", || unsafe {
+                ffi::exr_attr_set_m44f(ctx.raw, part, k.as_ptr(), &raw)
+            })
+        }
+        ExrAttr::Chromaticities(c) => {
+            let raw = ffi::exr_attr_chromaticities_t {
+                red_x: c[0],
+                red_y: c[1],
+                green_x: c[2],
+                green_y: c[3],
+                blue_x: c[4],
+                blue_y: c[5],
+                white_x: c[6],
+                white_y: c[7],
+            };
+            ctx.check("exr_attr_set_chromaticities", || unsafe {
+                ffi::exr_attr_set_chromaticities(ctx.raw, part, k.as_ptr(), &raw)
+            })
+        }
+    }
 }
 
 /// The image size as the C API's `i32`s, checking the pixel count matches.
@@ -503,13 +593,16 @@ fn rgb_channels<'a>(
         .collect()
 }
 
+/// String and typed header attributes with their names as C strings.
+type CAttributes<'a> = (&'a [(CString, CString)], &'a [(CString, ExrAttr)]);
+
 /// Writes the whole file `tmp` (errors name `shown`): header, then every chunk, then finish.
 fn write_part(
     tmp: &Path,
     shown: &Path,
     (width, height): (i32, i32),
     channels: &[ChannelSource],
-    attributes: &[(CString, CString)],
+    (attributes, typed): CAttributes,
     layout: ExrLayout,
 ) -> Result<(), ImageError> {
     let ctx = Context::create_write(tmp, shown)?;
@@ -547,6 +640,9 @@ fn write_part(
         ctx.check("exr_attr_set_string", || unsafe {
             ffi::exr_attr_set_string(ctx.raw, part, k.as_ptr(), v.as_ptr())
         })?;
+    }
+    for (k, v) in typed {
+        set_typed(&ctx, part, k, v)?;
     }
     for ch in channels {
         ctx.check("exr_add_channel", || unsafe {
@@ -723,15 +819,19 @@ pub fn read_exr_size(path: &Path) -> Result<(usize, usize), ImageError> {
     Ok((info.width, info.height))
 }
 
-/// Reads the extra layer `layer` (channels `<layer>.R`, `<layer>.G`, `<layer>.B`) of part 0
-/// of `path`, as written by [`write_exr`].
+/// Reads the extra layer `layer` (channels `<layer>.R`, `<layer>.G`, `<layer>.B`, as written
+/// by [`write_exr`], or else `<layer>.X`, `.Y`, `.Z`, as vectors such as normals are) of
+/// part 0 of `path`.
 pub fn read_exr_layer(path: &Path, layer: &str) -> Result<RgbImage, ImageError> {
-    read_rgb_channels(
-        path,
-        ["R", "G", "B"].map(|c| format!("{layer}.{c}")),
-        false,
-        false,
-    )
+    let names = |c: [&str; 3]| c.map(|c| format!("{layer}.{c}"));
+    read_rgb_channels(path, names(["R", "G", "B"]), false, false)
+        .or_else(|e| read_rgb_channels(path, names(["X", "Y", "Z"]), false, false).map_err(|_| e))
+}
+
+/// Reads one float channel `name` of part 0 of `path` (e.g. `A`, `Z`, `dzdx`), row-major.
+pub fn read_exr_channel(path: &Path, name: &str) -> Result<Vec<f32>, ImageError> {
+    let img = read_rgb_channels(path, [name, name, name].map(String::from), false, false)?;
+    Ok(img.pixels.iter().map(|p| p[0]).collect())
 }
 
 /// Reads the `UINT` layer `layer` (as written through [`ExrExtra::uint_layers`]) bit for bit:

@@ -15,6 +15,7 @@
 //! [`wavefront`]); the bidirectional ones (`vcm`, `bdpt`, `lighttracer`: [`vcm`]) splat light
 //! paths anywhere on the film, so they render the whole image at once and it is cut into the
 //! same tiles afterwards.
+pub mod aov;
 pub mod direct;
 pub mod passes;
 pub mod path;
@@ -108,6 +109,10 @@ pub struct RenderSettings {
     pub white_balance: Option<crate::math::Mat3>,
     /// The bidirectional integrators' merge radius and schedule.
     pub vcm: vcm::VcmSettings,
+    /// The data channels to write beside the image ([`aov`]: `--aov`, `Film "gbuffer"`). A
+    /// gbuffer also keeps each pixel's sample variance ([`RenderOutput::variance`]): the
+    /// per-pixel integrators then sum each sample apart before adding it in.
+    pub aovs: aov::Request,
 }
 
 impl RenderSettings {
@@ -167,7 +172,17 @@ impl RenderSettings {
             white_balance: (scene.film.white_balance != 0.0)
                 .then(|| film::white_balance(scene.film.white_balance)),
             vcm: vcm::VcmSettings::default(),
+            aovs: aov::Request {
+                aovs: Vec::new(),
+                gbuffer: scene.film.gbuffer,
+            },
         })
+    }
+
+    /// A sample's colour as the film stores it: the imaging ratio and white balance applied.
+    pub fn film_rgb(&self, v: crate::math::Vec3) -> crate::math::Vec3 {
+        let v = v * self.imaging_ratio;
+        self.white_balance.map_or(v, |m| m * v)
     }
 
     /// The pixels `[x0, x1, y0, y1]` a render computes (the crop window's, at least one).
@@ -206,6 +221,8 @@ impl RenderOutput {
             photons_emitted: 0,
             counters: Counters::default(),
             notes: Vec::new(),
+            variance: None,
+            spp: 0,
         }
     }
 
@@ -280,6 +297,12 @@ pub struct RenderOutput {
     pub counters: Counters,
     /// Statistics lines of the integrator (photon counts, timings, skipped components).
     pub notes: Vec<String>,
+    /// Per pixel of `image`, the sample variance of R, G, B and the variance over the mean
+    /// (pbrt-v4's `Variance` and `RelativeVariance`), when a gbuffer ([`RenderSettings::aovs`])
+    /// asked for it and the integrator renders per pixel over one sample count.
+    pub variance: Option<Vec<[f32; 6]>>,
+    /// Samples per pixel of the image.
+    pub spp: u32,
 }
 
 /// The shared, read-only state every tile renders from.
@@ -293,6 +316,8 @@ pub struct RenderContext<'a> {
     pub counters: Counters,
     /// Pass 1's maps when rendering with the photon mapper.
     pub photons: Option<&'a photonmap::PhotonPass>,
+    /// Per-pixel sample variances, filled tile by tile for a gbuffer ([`RenderSettings::aovs`]).
+    pub variance: Option<std::sync::Mutex<Vec<[f32; 6]>>>,
 }
 
 /// Whether `kind` renders `scene` right: only the path tracer tracks the medium each ray is
@@ -429,6 +454,10 @@ pub fn render_prepared(
         settings: settings.clone(),
         counters: Counters::default(),
         photons,
+        variance: (settings.aovs.gbuffer.is_some() && kind.technique().is_none()).then(|| {
+            let (w, h) = settings.image_size();
+            std::sync::Mutex::new(vec![[0.0; 6]; w as usize * h as usize])
+        }),
     };
     let [bx0, w, by0, h] = settings.pixel_bounds();
     let tiles: Vec<(u32, u32)> = (by0..h)
@@ -530,7 +559,49 @@ pub fn render_prepared(
         }),
         counters: ctx.counters,
         notes,
+        variance: ctx
+            .variance
+            .map(|v| v.into_inner().unwrap_or_else(|e| e.into_inner())),
+        spp: settings.spp,
     }
+}
+
+/// The data channels `settings.aovs` asks for ([`aov`]), in a pass of their own over the
+/// render's pixels, plus a gbuffer's variance channels from `out` (the beauty render). Runs
+/// on the current rayon pool.
+pub fn render_aovs(
+    scene: &Scene,
+    accel: &Accel,
+    settings: &RenderSettings,
+    out: &RenderOutput,
+) -> aov::Channels {
+    let lights = scene.emitters();
+    let ctx = RenderContext {
+        scene,
+        accel,
+        lights: &lights,
+        camera: Camera::new(&scene.camera, settings.width, settings.height),
+        filter: Filter::new(&scene.filter),
+        settings: settings.clone(),
+        counters: Counters::default(),
+        photons: None,
+        variance: None,
+    };
+    let mut channels = aov::render(&ctx, &settings.aovs);
+    if let (Some(_), Some(v)) = (settings.aovs.gbuffer, &out.variance) {
+        let names = [
+            "Variance.R",
+            "Variance.G",
+            "Variance.B",
+            "RelativeVariance.R",
+            "RelativeVariance.G",
+            "RelativeVariance.B",
+        ];
+        for (c, name) in names.iter().enumerate() {
+            channels.push((name.to_string(), v.iter().map(|p| p[c]).collect()));
+        }
+    }
+    channels
 }
 
 /// The sample dimensions of a thin lens's 2D sample: far above every dimension the
@@ -646,5 +717,8 @@ fn merge(a: RenderOutput, na: u32, b: RenderOutput, nb: u32) -> RenderOutput {
         photons_emitted: a.photons_emitted,
         counters: a.counters,
         notes: a.notes,
+        // Variances of renders of different sample counts do not combine into the mean's.
+        variance: None,
+        spp: na + nb,
     }
 }

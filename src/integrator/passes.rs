@@ -260,6 +260,7 @@ impl Partial {
             crate::imageio::ExrExtra {
                 uint_layers: &uint,
                 attributes: &attributes,
+                ..Default::default()
             },
         )
     }
@@ -662,6 +663,8 @@ mod tests {
                 photons_emitted: 0,
                 counters: Default::default(),
                 notes: vec![],
+                variance: None,
+                spp: 1,
             }
         };
         let mut whole = Partial::new(header.clone(), 0);

@@ -528,6 +528,7 @@ pub fn pilot(
         settings: s,
         counters: super::Counters::default(),
         photons: None,
+        variance: None,
     };
     let (_, radius) = lights.scene_sphere();
     let wt = Weights::new(technique, radius * 1e-3, PILOT_SUBPATHS, settings.max_depth);

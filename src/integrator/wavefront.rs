@@ -220,7 +220,12 @@ pub fn render_tile<S: Shade>(
     // when all its waves are done (a sample's light arrives over several waves); without it,
     // straight into `acc` (the sums, and so the image, stay what they always were).
     let clamp = ctx.settings.max_component / ctx.settings.imaging_ratio;
-    let mut one = if clamp.is_finite() {
+    // Per-pixel sample statistics (the gbuffer's variance channels) need each sample alone too.
+    let mut stats = match ctx.variance {
+        Some(_) => vec![Welford::default(); n],
+        None => Vec::new(),
+    };
+    let mut one = if clamp.is_finite() || !stats.is_empty() {
         vec![Radiance::default(); n]
     } else {
         Vec::new()
@@ -245,12 +250,70 @@ pub fn render_tile<S: Shade>(
             wave(ctx, shader, kind, &mut b, &mut extra, sums);
             kind = RayKind::Bounce;
         }
-        for (a, r) in acc.iter_mut().zip(one.iter_mut()) {
-            *a += crate::film::clamp_sample(std::mem::take(r), clamp);
+        for (i, (a, r)) in acc.iter_mut().zip(one.iter_mut()).enumerate() {
+            let r = crate::film::clamp_sample(std::mem::take(r), clamp);
+            if let Some(w) = stats.get_mut(i) {
+                w.add(ctx.settings.film_rgb(r.total()));
+            }
+            *a += r;
         }
+    }
+    if let Some(v) = &ctx.variance {
+        store_variance(ctx, v, &stats, (x0, y0, x1, y1));
     }
     let inv = 1.0 / spp as f32;
     acc.into_iter().map(|r| r * inv).collect()
+}
+
+/// Welford's running mean and sum of squared deviations of one pixel's samples (RGB).
+#[derive(Clone, Copy, Debug, Default)]
+struct Welford {
+    n: f64,
+    mean: [f64; 3],
+    m2: [f64; 3],
+}
+
+impl Welford {
+    fn add(&mut self, x: Vec3) {
+        self.n += 1.0;
+        for c in 0..3 {
+            let d = x[c] as f64 - self.mean[c];
+            self.mean[c] += d / self.n;
+            self.m2[c] += d * (x[c] as f64 - self.mean[c]);
+        }
+    }
+
+    /// pbrt-v4's `VarianceEstimator`: the sample variance (`n - 1`) and the variance over the
+    /// mean (0 for a zero mean), per channel.
+    fn variance(&self) -> [f32; 6] {
+        let var = |c: usize| match self.n > 1.0 {
+            true => self.m2[c] / (self.n - 1.0),
+            false => 0.0,
+        };
+        let rel = |c: usize| match self.mean[c] != 0.0 {
+            true => var(c) / self.mean[c],
+            false => 0.0,
+        };
+        [var(0), var(1), var(2), rel(0), rel(1), rel(2)].map(|v| v as f32)
+    }
+}
+
+/// Writes a tile's variances into the image-wide buffer (the crop window's pixels).
+fn store_variance(
+    ctx: &RenderContext,
+    into: &std::sync::Mutex<Vec<[f32; 6]>>,
+    stats: &[Welford],
+    (x0, y0, x1, y1): (u32, u32, u32, u32),
+) {
+    let [bx0, bx1, by0, _] = ctx.settings.pixel_bounds();
+    let w = (bx1 - bx0) as usize;
+    let mut v = into.lock().unwrap_or_else(|e| e.into_inner());
+    for ((x, y), s) in tile_pixels(x0, y0, x1, y1).zip(stats) {
+        let k = (y - by0) as usize * w + (x - bx0) as usize;
+        if let Some(slot) = v.get_mut(k) {
+            *slot = s.variance();
+        }
+    }
 }
 
 /// Traces the rays of `b.paths` (all of `kind`) as one batch, shades the hits, resolves their

@@ -50,7 +50,7 @@ impl CameraDesc {
     }
 }
 
-/// `Film "rgb"` (or `"gbuffer"`, rendered as an RGB film).
+/// `Film "rgb"` or `"gbuffer"` (an RGB film plus the data channels of `crate::integrator::aov`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct FilmDesc {
     pub xres: u32,
@@ -66,6 +66,9 @@ pub struct FilmDesc {
     pub crop: Option<crate::film::Crop>,
     /// `whitebalance`: the colour temperature (kelvin) adapted to sRGB's white; 0: none.
     pub white_balance: f32,
+    /// `Film "gbuffer"`: the space of its position and normal channels (its
+    /// `coordinatesystem`); `None` for an `"rgb"` film.
+    pub gbuffer: Option<crate::film::Space>,
 }
 
 impl FilmDesc {
@@ -79,6 +82,7 @@ impl FilmDesc {
             max_component: f32::INFINITY,
             crop: None,
             white_balance: 0.0,
+            gbuffer: None,
         }
     }
 

@@ -49,6 +49,8 @@ pub struct Overrides {
     /// pbrt-v4's `--quick`: a quarter of the resolution on each axis and one sample per pixel,
     /// applied after `res` and `spp`.
     pub quick: bool,
+    /// `--aov`: data channels beside the image (added to the film's gbuffer, if any).
+    pub aovs: Vec<crate::integrator::aov::Aov>,
 }
 
 impl Overrides {
@@ -151,6 +153,11 @@ impl<'a> Job<'a> {
         if o.quick {
             (s.width, s.height) = ((s.width / 4).max(1), (s.height / 4).max(1));
             s.spp = 1;
+        }
+        for a in &o.aovs {
+            if !s.aovs.aovs.contains(a) {
+                s.aovs.aovs.push(*a);
+            }
         }
         self
     }

@@ -487,22 +487,24 @@ impl Outputs {
         layers: &[(&str, &RgbImage)],
         pixel: ExrPixel,
         exposure: f32,
+        extra: imageio::ExrExtra,
     ) -> Result<(), OutputError> {
-        self.commit(self.render_writers(image, layers, pixel, exposure))
+        self.commit(self.render_writers(image, layers, pixel, exposure, extra))
     }
 
-    /// The writers of a render's EXR and PNG preview (for [`Self::commit`] or
-    /// [`Self::keep_elsewhere`]).
+    /// The writers of a render's EXR (with `extra`'s data channels and header attributes) and
+    /// PNG preview (for [`Self::commit`] or [`Self::keep_elsewhere`]).
     pub fn render_writers<'a>(
         &self,
         image: &'a RgbImage,
         layers: &'a [(&'a str, &'a RgbImage)],
         pixel: ExrPixel,
         exposure: f32,
+        extra: imageio::ExrExtra<'a>,
     ) -> Vec<Writer<'a>> {
         let mut writers: Vec<Writer> = vec![match self.format {
             ImageFormat::Exr => Box::new(move |tmp: &Path| {
-                imageio::write_exr(tmp, image, layers, pixel).map_err(|e| kind_only(&e))
+                imageio::write_exr_with(tmp, image, layers, pixel, extra).map_err(|e| kind_only(&e))
             }),
             ImageFormat::Png => Box::new(move |tmp: &Path| {
                 imageio::write_png(tmp, image, exposure).map_err(|e| kind_only(&e))

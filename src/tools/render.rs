@@ -106,6 +106,12 @@ pub struct RenderOptions {
     /// `--alpha` (default 0.75 for VCM).
     #[arg(long, allow_hyphen_values = true, value_parser = crate::integrator::vcm::MergeRadius::parse)]
     pub merge_radius: Option<crate::integrator::vcm::MergeRadius>,
+    /// Data channels to write beside the image (EXR only), comma-separated or repeated:
+    /// `alpha` (A), `albedo` and `normal` (the denoiser's guides, at the first surface that is
+    /// not a mirror or smooth glass), `depth` (Z, camera space), `position` (P, world space).
+    /// `Film "gbuffer"` adds pbrt-v4's channels.
+    #[arg(long, value_enum, value_delimiter = ',', value_name = "NAME,...")]
+    pub aov: Vec<crate::integrator::aov::Aov>,
     #[command(flatten)]
     pub photon: crate::integrator::settings::PhotonOverrides,
     #[command(flatten)]
@@ -206,6 +212,7 @@ impl RenderOptions {
             pass_spp: self.passes.pass_spp,
             crop: self.pixelbounds.or(self.cropwindow),
             quick: self.quick,
+            aovs: self.aov.clone(),
         }
     }
 }
@@ -341,6 +348,19 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
             _ => None,
         }),
     };
+    if !opts.aov.is_empty() {
+        if format != super::output::ImageFormat::Exr {
+            let name = exr.display();
+            return Err(ToolError(format!(
+                "--aov: data channels need an EXR image (-o {name} is not one)"
+            )));
+        }
+        if opts.passes.active(opts.time.is_some()) {
+            return Err(ToolError(
+                "--aov: renders in passes write partial images, without data channels".into(),
+            ));
+        }
+    }
     let outputs = match opts.passes.active(opts.time.is_some()) {
         true => Outputs::plan(&exr, png.as_deref()),
         false => Outputs::plan_image(&exr, png.as_deref()),
@@ -399,10 +419,25 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
             Some(_) => None,
             None => Some((tiles[0].load(Relaxed), tiles[1].load(Relaxed))),
         };
-        let writers = outputs.render_writers(&out.image, &layers, pixel, opts.exposure);
+        let extra = imageio::ExrExtra::default();
+        let writers = outputs.render_writers(&out.image, &layers, pixel, opts.exposure, extra);
         let message = stopped(sig, done, &outputs, writers);
         crate::interrupt::raise(sig);
         return Err(ToolError(message));
+    }
+    // The data channels (a pass of their own) and the header's metadata.
+    let settings = &job.settings;
+    let data = match settings.aovs.is_empty() || outputs.format != super::output::ImageFormat::Exr {
+        true => Vec::new(),
+        false => prepared
+            .pool
+            .install(|| integrator::render_aovs(&job.scene, &prepared.accel, settings, &out)),
+    };
+    if settings.aovs.gbuffer.is_some() && out.variance.is_none() {
+        say!(
+            "Film \"gbuffer\": no Variance channels (they need a per-pixel integrator over a \
+             fixed sample count, not --time or a bidirectional one)"
+        );
     }
     for note in &out.notes {
         say!("{note}");
@@ -439,13 +474,62 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
         say_err!("photon: warning: {bad} non-finite pixel values");
     }
 
+    let (strings, typed) = metadata(opts, &job, &out);
+    let strings: Vec<(&str, &str)> = strings.iter().map(|(k, v)| (*k, v.as_str())).collect();
+    let channels: Vec<(&str, &[f32])> = data.iter().map(|(k, v)| (k.as_str(), &v[..])).collect();
+    let extra = imageio::ExrExtra {
+        attributes: &strings,
+        typed: &typed,
+        channels: &channels,
+        ..Default::default()
+    };
     // Outputs: written to temporary files and renamed together (see `output`).
-    outputs.write(&out.image, &layers, pixel, opts.exposure)?;
+    outputs.write(&out.image, &layers, pixel, opts.exposure, extra)?;
     for f in &outputs.files {
         say!("wrote {}", f.shown.display());
     }
     say!("{}", crate::memory::report(&estimate));
     Ok(())
+}
+
+/// String and typed EXR header attributes.
+type Metadata = (
+    Vec<(&'static str, String)>,
+    Vec<(&'static str, imageio::ExrAttr)>,
+);
+
+/// The EXR header's metadata of a finished render: strings (`software`, `integrator`, `seed`,
+/// `scene`; `photon.*` names mark partial images) and pbrt-v4's typed attributes (`samplesPerPixel`, `renderTimeSeconds`,
+/// `worldToCamera`, `worldToNDC`) plus the sRGB `chromaticities` of photon's linear RGB.
+fn metadata(opts: &RenderOptions, job: &Job, out: &integrator::RenderOutput) -> Metadata {
+    use imageio::ExrAttr;
+    let integrator = clap::ValueEnum::to_possible_value(&opts.integrator)
+        .map_or("?".into(), |v| v.get_name().to_string());
+    let strings = vec![
+        ("software", format!("photon {}", env!("CARGO_PKG_VERSION"))),
+        ("integrator", integrator),
+        ("seed", job.settings.seed.to_string()),
+        ("scene", opts.scene.display().to_string()),
+    ];
+    let (camera, ndc) = integrator::aov::camera_matrices(&job.scene.camera);
+    let rows = |m: crate::math::Mat4| {
+        let t = m.transpose().to_cols_array_2d();
+        ExrAttr::M44(t)
+    };
+    let typed = vec![
+        (
+            "samplesPerPixel",
+            ExrAttr::Int(out.spp.min(i32::MAX as u32) as i32),
+        ),
+        ("renderTimeSeconds", ExrAttr::Float(out.seconds as f32)),
+        ("worldToCamera", rows(camera)),
+        ("worldToNDC", rows(ndc)),
+        (
+            "chromaticities",
+            ExrAttr::Chromaticities([0.64, 0.33, 0.30, 0.60, 0.15, 0.06, 0.3127, 0.3290]),
+        ),
+    ];
+    (strings, typed)
 }
 
 /// Prints what is rendered: the scene, its notes, the accelerator, the film and the settings.

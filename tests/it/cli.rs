@@ -245,7 +245,7 @@ fn pbrt_v4_habits_a_bare_scene_outfile_and_nthreads() {
             .output()
             .unwrap();
         assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-        std::fs::read(out).unwrap()
+        common::exr_image_bits(out)
     };
     let habits = render(
         &["scenes/cornell-glass.pbrt", "--nthreads", "1", "--outfile"],
@@ -432,7 +432,7 @@ fn quick_quiet_and_negated_flags() {
     assert!(dir.join("quiet.exr").exists());
     let image = |args: &[&str], name: &str| {
         habit(args, &dir.join(name));
-        std::fs::read(dir.join(name)).unwrap()
+        common::exr_image_bits(&dir.join(name))
     };
     let on = image(&[], "on.exr");
     let off = image(&["--final-gather=false"], "off.exr");

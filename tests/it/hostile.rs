@@ -1022,6 +1022,7 @@ fn issue22_case_19_every_error_is_one_short_line() {
     let extra = photon::imageio::ExrExtra {
         uint_layers: &[],
         attributes: &attrs,
+        ..Default::default()
     };
     let bare = d.join("bare.exr");
     photon::imageio::write_exr_with(&bare, &rgb, &[], photon::imageio::ExrPixel::Float, extra)

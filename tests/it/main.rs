@@ -6,6 +6,7 @@
 mod support;
 
 mod alpha;
+mod aovs;
 mod backends;
 mod bench;
 mod bidirectional;

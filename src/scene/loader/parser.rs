@@ -708,9 +708,7 @@ impl Builder {
                 }
             }
             "Film" => {
-                let (film, note) = film(&ty, &mut params, &at)?;
-                self.film = film;
-                self.notes.extend(note);
+                self.film = film(&ty, &mut params, &at)?;
             }
             "Sampler" => self.sampler = sampler(&ty, &mut params, &at)?,
             "PixelFilter" => self.filter = filter(&ty, &mut params, &at)?,
@@ -1770,14 +1768,9 @@ fn screen_window(params: &mut ParamSet) -> Result<Option<[f32; 4]>, SceneError> 
 
 /// `Film "rgb"` or `"gbuffer"`: `xresolution`, `yresolution`, `filename`, `iso`, `sensor`
 /// (`"cie1931"` only), `whitebalance`, `maxcomponentvalue`, `cropwindow`, `pixelbounds`;
-/// `gbuffer`'s
-/// `coordinatesystem` (it only places the extra channels, which photon does not write: the
-/// returned note says so).
-fn film(
-    ty: &str,
-    params: &mut ParamSet,
-    at: &Loc,
-) -> Result<(FilmDesc, Option<String>), SceneError> {
+/// `gbuffer`'s `coordinatesystem` (`"camera"` or `"world"`: the space of its position and
+/// normal channels, see `crate::integrator::aov`).
+fn film(ty: &str, params: &mut ParamSet, at: &Loc) -> Result<FilmDesc, SceneError> {
     if ty != "rgb" && ty != "gbuffer" {
         return Err(SceneError::at(
             at,
@@ -1811,10 +1804,10 @@ fn film(
         return Err(p.err(format!("must be positive, got {}", film.max_component)));
     }
     film.crop = crop_window(params, res)?;
-    let note = (ty == "gbuffer")
-        .then(|| gbuffer(params, at, &film))
-        .transpose()?;
-    Ok((film, note))
+    if ty == "gbuffer" {
+        film.gbuffer = Some(gbuffer(params, &film)?);
+    }
+    Ok(film)
 }
 
 /// The sensor parameters photon supports: the default `cie1931` sensor, with or without white
@@ -1877,25 +1870,27 @@ fn crop_window(
     Ok(Some(crop))
 }
 
-/// `Film "gbuffer"`'s own parameters, which only shape its extra channels; the note to print.
-fn gbuffer(params: &mut ParamSet, at: &Loc, film: &FilmDesc) -> Result<String, SceneError> {
+/// `Film "gbuffer"`'s own parameters: the space of its position and normal channels.
+fn gbuffer(params: &mut ParamSet, film: &FilmDesc) -> Result<crate::film::Space, SceneError> {
+    use crate::film::Space;
     let system = params.get_string("coordinatesystem", "camera")?;
-    if system != "camera" && system != "world" {
-        let p = params.peek("coordinatesystem").expect("given");
-        return Err(p.err(format!(
-            "unknown coordinate system \"{system}\" (expected \"camera\" or \"world\")"
-        )));
-    }
+    let space = match system.as_str() {
+        "camera" => Space::Camera,
+        "world" => Space::World,
+        _ => {
+            let p = params.peek("coordinatesystem").expect("given");
+            return Err(p.err(format!(
+                "unknown coordinate system \"{system}\" (expected \"camera\" or \"world\")"
+            )));
+        }
+    };
     if let Some(name) = &film.filename {
         if !name.to_ascii_lowercase().ends_with(".exr") {
             let p = params.peek("filename").expect("given");
             return Err(p.err("Film \"gbuffer\" writes EXR only (pbrt-v4)"));
         }
     }
-    Ok(format!(
-        "{at}: Film \"gbuffer\" rendered as an RGB film: its extra channels (albedo, position, \
-         normals, variance) are not written"
-    ))
+    Ok(space)
 }
 
 /// `Sampler`: any pbrt-v4 name; `pixelsamples`, or `xsamples` x `ysamples` (and `jitter`) for

@@ -174,11 +174,14 @@ WorldBegin
         (100.0, f32::INFINITY, None)
     );
     assert!(s.notes.is_empty());
-    // gbuffer: an RGB film, with a note that the extra channels are not written.
+    // gbuffer: an RGB film plus its data channels, in the space it names (camera by default).
     let s = ok("Film \"gbuffer\" \"string coordinatesystem\" \"world\" \"string filename\" \"a.exr\" \"integer xresolution\" 32\nWorldBegin\n");
     assert_eq!(s.film.xres, 32);
-    assert_eq!(s.notes.len(), 1, "{:?}", s.notes);
-    assert!(s.notes[0].contains("scene.pbrt:1:6") && s.notes[0].contains("not written"));
+    assert!(s.notes.is_empty(), "{:?}", s.notes);
+    assert_eq!(s.film.gbuffer, Some(photon::integrator::aov::Space::World));
+    let s = ok("Film \"gbuffer\"\nWorldBegin\n");
+    assert_eq!(s.film.gbuffer, Some(photon::integrator::aov::Space::Camera));
+    assert_eq!(ok("Film \"rgb\"\nWorldBegin\n").film.gbuffer, None);
     for (film, needle) in [
         (
             "\"string sensor\" \"nikon_d850\"",

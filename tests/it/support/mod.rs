@@ -700,6 +700,7 @@ pub fn forge_partial(
     let extra = photon::imageio::ExrExtra {
         uint_layers: &uint,
         attributes: &attributes,
+        ..Default::default()
     };
     write_exr_with(dst, &rgb, &[], photon::imageio::ExrPixel::Float, extra)
 }
@@ -741,3 +742,17 @@ Shape "trianglemesh" "point3 P" [ -2 0 -2  2 0 -2  2 2.5 -2  -2 2.5 -2 ] "intege
 Shape "trianglemesh" "point3 P" [ 2 0 -2  2 0 2  2 2.5 2  2 2.5 -2 ] "integer indices" [ 0 2 1 0 3 2 ]
 Shape "trianglemesh" "point3 P" [ -2 0 -2  -2 0 2  -2 2.5 2  -2 2.5 -2 ] "integer indices" [ 0 1 2 0 2 3 ]
 "#;
+
+/// The image of a render's EXR as bits: R, G, B and the four component layers, pixel by
+/// pixel (the header, with its render time, left out), for "same image" comparisons.
+pub fn exr_image_bits(path: &Path) -> Vec<u32> {
+    let mut bits = Vec::new();
+    let mut add = |img: photon::imageio::RgbImage| {
+        bits.extend(img.pixels.iter().flatten().map(|v| v.to_bits()));
+    };
+    add(photon::imageio::read_exr(path).unwrap_or_else(|e| panic!("{e}")));
+    for layer in photon::film::Component::NAMES {
+        add(photon::imageio::read_exr_layer(path, layer).unwrap_or_else(|e| panic!("{e}")));
+    }
+    bits
+}
