@@ -28,6 +28,7 @@ mod kdtree;
 mod lamp_can;
 mod layers;
 mod media;
+mod orthographic;
 mod parser;
 mod passes;
 mod path_tracer;
