@@ -9,6 +9,7 @@ mod alpha;
 mod backends;
 mod bench;
 mod bidirectional;
+mod bilinear;
 mod camera_film;
 mod check;
 mod cli;

@@ -938,6 +938,11 @@ impl Builder {
                 params.check_unused()?;
                 shapes::to_world(obj, &gs.ctm, gs.reverse, &at)?
             }
+            "bilinearmesh" => {
+                let obj = super::bilinear::bilinear_mesh(&mut params, &at)?;
+                params.check_unused()?;
+                shapes::to_world(obj, &gs.ctm, gs.reverse, &at)?
+            }
             "plymesh" => {
                 // Check the other parameters before reading a possibly large file.
                 params.get_string_opt("filename")?;
