@@ -143,7 +143,9 @@ pub fn cells_for([p00, p10, p01, p11]: [Vec3; 4]) -> u32 {
     let (d1, d2) = (p11 - p00, p01 - p10);
     let m = d1.cross(d2);
     let len = d1.length().max(d2.length());
-    if !(m.length_squared() > 0.0) || !(len > 0.0) {
+    // (NaN compares false: a patch with non-finite points is "degenerate" too.)
+    let usable = m.length_squared() > 0.0 && len > 0.0;
+    if !usable {
         return 1;
     }
     let twist = (p00 - p10 - p01 + p11).dot(m.normalize()).abs();
