@@ -14,6 +14,7 @@ mod camera_film;
 mod check;
 mod cli;
 mod coated;
+mod converge;
 mod crosscheck;
 mod curtains;
 mod direct_light;
