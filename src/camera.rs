@@ -1,10 +1,11 @@
-//! The perspective camera (pbrt-v4 conventions): a pinhole, or a thin lens.
+//! The perspective and orthographic cameras (pbrt-v4 conventions): a pinhole, or a thin lens.
 //!
 //! ```text
 //! LookAt 0 1 6.8  0 1 0  0 1 0     # or Transform / Scale ... before Camera
 //! Camera "perspective" "float fov" [ 19.5 ]
 //!     "float lensradius" [ 0.05 ] "float focaldistance" [ 6.8 ]   # depth of field
 //!     "float screenwindow" [ -1 1 -1 1 ]      # or "float frameaspectratio" [ 1.5 ]
+//! Camera "orthographic" "float screenwindow" [ -2 2 -1 1 ]   # camera-space units
 //! ```
 //! `fov` spans the shorter axis of the screen window, which is `[-a, a] x [-1, 1]` for an
 //! image wider than tall (`a` = width / height, or `frameaspectratio`) unless `screenwindow`
@@ -16,37 +17,67 @@
 //! the pixel sample's lens dimensions, scaled by the radius, at z = 0 in camera space) and
 //! passes through the point where the pinhole ray meets the plane in focus, z =
 //! `focaldistance`: points on that plane are sharp, others blur into the image of the lens.
+//!
+//! An orthographic camera's rays start at the screen-window point `s` of the raster position
+//! on the plane z = 0 (the window is in camera-space units, moved and scaled by the camera
+//! transform like everything else) and run along +z. With a lens, the ray starts at `s` plus
+//! the lens point and passes through `s` moved to z = `focaldistance` (a telecentric thin
+//! lens). pbrt-v4 starts that ray at the lens point alone, around the axis (mmp/pbrt-v3#315,
+//! inherited by v4), so that a lens makes its image a perspective one away from the plane in
+//! focus; photon does not copy that.
+//!
+//! Importance (what light paths splat to the film with, [`Camera::project_through_lens`]): a
+//! perspective camera samples directions, `1 / (A cos^3)` per unit solid angle for `A` a
+//! pixel's area on the plane z = 1; an orthographic one samples ray origins, `1 / A` per unit
+//! area of the plane z = 0 (`A` a pixel's area there, in world units) with one direction per
+//! lens point: a point `p` is seen along the one ray of that direction through it, from its
+//! projection onto the plane z = 0.
 use crate::math::{Mat4, Ray, Vec2, Vec3};
 use crate::sampling::warp::square_to_disk_concentric;
-use crate::scene::CameraDesc;
+use crate::scene::{CameraDesc, Projection};
 
 #[derive(Clone, Debug)]
 pub struct Camera {
     world_from_camera: Mat4,
     camera_from_world: Mat4,
     origin: Vec3,
-    /// Centre and half extents of the screen window at z = 1 in camera space.
+    /// Centre and half extents of the screen window: at z = 1 in camera space for a
+    /// perspective camera (the `fov` scale applied), on the plane z = 0 for an orthographic one.
     centre: Vec2,
     half: Vec2,
     res: Vec2,
     lens_radius: f32,
     focal_distance: f32,
+    /// Orthographic: a pixel's area on the plane z = 0 in world units, and the world direction
+    /// of camera +z (unit).
+    ortho: Option<(f32, Vec3)>,
 }
 
 impl Camera {
     /// A camera for an image of `width x height` pixels.
     pub fn new(desc: &CameraDesc, width: u32, height: u32) -> Camera {
-        let tan_half = (desc.fov_deg.to_radians() * 0.5).tan();
         let (centre, window) = screen_window(desc, width, height);
+        let res = Vec2::new(width as f32, height as f32);
+        let (scale, ortho) = match desc.projection {
+            Projection::Perspective => ((desc.fov_deg.to_radians() * 0.5).tan(), None),
+            Projection::Orthographic => {
+                let w = &desc.world_from_camera;
+                let (ex, ey) = (w.transform_vector3(Vec3::X), w.transform_vector3(Vec3::Y));
+                let pixel = 4.0 * window.x * window.y / (res.x * res.y);
+                let z = w.transform_vector3(Vec3::Z).normalize();
+                (1.0, Some((pixel * ex.cross(ey).length(), z)))
+            }
+        };
         Camera {
             world_from_camera: desc.world_from_camera,
             camera_from_world: desc.world_from_camera.inverse(),
             origin: desc.world_from_camera.transform_point3(Vec3::ZERO),
-            centre: centre * tan_half,
-            half: window * tan_half,
-            res: Vec2::new(width as f32, height as f32),
+            centre: centre * scale,
+            half: window * scale,
+            res,
             lens_radius: desc.lens_radius,
             focal_distance: desc.focal_distance,
+            ortho,
         }
     }
 
@@ -55,23 +86,39 @@ impl Camera {
         self.lens_radius > 0.0
     }
 
-    /// The camera-space direction (z = 1) of the pinhole ray through raster position `p`.
-    fn pinhole_dir(&self, p: Vec2) -> Vec3 {
+    /// Whether the camera is orthographic.
+    pub fn is_orthographic(&self) -> bool {
+        self.ortho.is_some()
+    }
+
+    /// The camera-space screen-window point of raster position `p`: at z = 1 (a perspective
+    /// camera: the pinhole direction) or z = 0 (an orthographic one: the ray's origin).
+    fn window_point(&self, p: Vec2) -> Vec3 {
         let ndc = p / self.res;
         Vec3::new(
             (2.0 * ndc.x - 1.0) * self.half.x + self.centre.x,
             (1.0 - 2.0 * ndc.y) * self.half.y + self.centre.y,
-            1.0,
+            if self.ortho.is_some() { 0.0 } else { 1.0 },
         )
     }
 
-    /// The pinhole ray through continuous raster position `p` (pixel `(x, y)` covers
-    /// `[x, x+1) x [y, y+1)`), with a unit direction.
+    /// The raster position of camera-space screen-window point `q` (its x and y).
+    fn raster_of(&self, q: Vec3) -> Vec2 {
+        let ndc = Vec2::new(
+            ((q.x - self.centre.x) / self.half.x + 1.0) * 0.5,
+            (1.0 - (q.y - self.centre.y) / self.half.y) * 0.5,
+        );
+        ndc * self.res
+    }
+
+    /// The ray through continuous raster position `p` (pixel `(x, y)` covers
+    /// `[x, x+1) x [y, y+1)`) without a lens, with a unit direction.
     pub fn generate_ray(&self, p: Vec2) -> Ray {
-        let d = self
-            .world_from_camera
-            .transform_vector3(self.pinhole_dir(p))
-            .normalize();
+        let q = self.window_point(p);
+        if let Some((_, z)) = self.ortho {
+            return Ray::new(self.world_from_camera.transform_point3(q), z);
+        }
+        let d = self.world_from_camera.transform_vector3(q).normalize();
         Ray::new(self.origin, d)
     }
 
@@ -82,9 +129,16 @@ impl Camera {
             return self.generate_ray(p);
         }
         let lens = square_to_disk_concentric(u_lens) * self.lens_radius;
-        let o = Vec3::new(lens.x, lens.y, 0.0);
-        // The pinhole direction has z = 1: scaled by the focal distance it ends in the plane.
-        let focus = self.pinhole_dir(p) * self.focal_distance;
+        let lens = Vec3::new(lens.x, lens.y, 0.0);
+        let q = self.window_point(p);
+        let (o, focus) = if self.ortho.is_some() {
+            // From the window point moved by the lens point, through the window point on the
+            // plane in focus.
+            (q + lens, q + Vec3::Z * self.focal_distance)
+        } else {
+            // The pinhole direction has z = 1: scaled by the focal distance it ends in the plane.
+            (lens, q * self.focal_distance)
+        };
         let d = self
             .world_from_camera
             .transform_vector3(focus - o)
@@ -96,75 +150,106 @@ impl Camera {
         Ray::new(self.world_from_camera.transform_point3(o), d)
     }
 
+    /// The camera-space origin in world space (a perspective camera's pinhole; the centre of
+    /// an orthographic camera's plane z = 0).
     pub fn position(&self) -> Vec3 {
         self.origin
     }
 
-    /// Where the pinhole camera sees world point `p`: its continuous raster position and
-    /// the factor that turns a density per unit of raster area into one per unit solid angle
-    /// at the camera (`1 / (A cos^3)`, `A` a pixel's area on the plane z = 1 in camera
-    /// space, `cos` the angle to the optical axis). `None` behind the camera or off the
-    /// screen window widened by `margin` pixels on every side (a pixel filter's radius: the
-    /// samples of the edge pixels reach that far). What light paths splat to the film with
-    /// (the camera's importance).
-    pub fn project(&self, p: Vec3, margin: Vec2) -> Option<(Vec2, f32)> {
-        let c = self.camera_from_world.transform_point3(p);
-        if c.z <= 0.0 || !c.is_finite() {
-            return None;
-        }
-        let d = c / c.z;
-        let ndc = Vec2::new(
-            ((d.x - self.centre.x) / self.half.x + 1.0) * 0.5,
-            (1.0 - (d.y - self.centre.y) / self.half.y) * 0.5,
-        );
-        let raster = ndc * self.res;
-        let (lo, hi) = (-margin, self.res + margin);
-        if !(raster.cmpge(lo).all() && raster.cmplt(hi).all()) {
-            return None;
-        }
-        let cos = c.z / c.length();
-        Some((raster, self.raster_to_solid_angle(cos)))
+    /// Where the camera without a lens sees world point `p`: its continuous raster position and
+    /// the camera's importance density there (see [`Self::project_through_lens`]). `None`
+    /// behind the camera or off the screen window widened by `margin` pixels on every side.
+    pub fn project(&self, p: Vec3, margin: Vec2) -> Option<(Vec2, f32, Vec3)> {
+        self.project_through_lens(p, Vec2::splat(0.5), margin)
     }
 
-    /// [`Self::project`] through the point of the lens that `u_lens` (in [0, 1)^2) picks, as
-    /// [`Self::generate_ray_lens`] uses it: the raster position whose lens ray from that point
-    /// passes through `p`, the density factor, and the lens point in world space (what `p`
-    /// must see). The pinhole's projection without a lens.
+    /// Where the camera sees world point `p` through the point of the lens that `u_lens` (in
+    /// [0, 1)^2) picks, as [`Self::generate_ray_lens`] uses it: the raster position whose ray
+    /// from that point passes through `p`; the factor `g` that turns a density per unit of
+    /// raster area into one per unit area at `p` when multiplied by the cosine at `p` between
+    /// its normal and the ray (perspective: `1 / (A cos^3 d^2)`, `A` a pixel's area on the
+    /// plane z = 1, `cos` the ray's angle to the optical axis and `d` the distance;
+    /// orthographic: `1 / (A cos)`, `A` a pixel's area on the plane z = 0 in world units); and
+    /// the ray's origin in world space (what `p` must see). `None` behind the camera (for an
+    /// orthographic camera: behind the plane z = 0) or off the screen window widened by
+    /// `margin` pixels on every side (a pixel filter's radius: the samples of the edge pixels
+    /// reach that far). What light paths splat to the film with (the camera's importance).
     pub fn project_through_lens(
         &self,
         p: Vec3,
         u_lens: Vec2,
         margin: Vec2,
     ) -> Option<(Vec2, f32, Vec3)> {
-        if !self.has_lens() {
-            let (raster, f) = self.project(p, margin)?;
-            return Some((raster, f, self.origin));
-        }
         let c = self.camera_from_world.transform_point3(p);
-        let lens = square_to_disk_concentric(u_lens) * self.lens_radius;
-        let o = Vec3::new(lens.x, lens.y, 0.0);
-        let d = c - o;
-        if d.z <= 0.0 || !d.is_finite() {
+        let lens = if self.has_lens() {
+            square_to_disk_concentric(u_lens) * self.lens_radius
+        } else {
+            Vec2::ZERO
+        };
+        let lens = Vec3::new(lens.x, lens.y, 0.0);
+        let (q, o, d) = if self.ortho.is_some() {
+            // The ray's direction is fixed by the lens point: (-lens, f) (+z without a lens).
+            let d = if self.has_lens() {
+                Vec3::new(-lens.x, -lens.y, self.focal_distance)
+            } else {
+                Vec3::Z
+            };
+            // Back along d from p to the plane z = 0: the ray's origin, minus the lens point:
+            // the window point.
+            let o = c - d * (c.z / d.z);
+            (o - lens, o, d)
+        } else {
+            let d = c - lens;
+            // Where the ray from the lens point through p meets the plane in focus, scaled back
+            // to z = 1: the pinhole direction of the raster position that generates this ray.
+            let q = if self.has_lens() {
+                lens / self.focal_distance + d / d.z
+            } else {
+                d / d.z
+            };
+            (q, lens, d)
+        };
+        if c.z <= 0.0 || d.z <= 0.0 || !c.is_finite() || !d.is_finite() {
             return None;
         }
-        // Where the ray from the lens point through p meets the plane in focus, scaled back
-        // to z = 1: the pinhole direction of the raster position that generates this ray.
-        let q = o / self.focal_distance + d / d.z;
-        let ndc = Vec2::new(
-            ((q.x - self.centre.x) / self.half.x + 1.0) * 0.5,
-            (1.0 - (q.y - self.centre.y) / self.half.y) * 0.5,
-        );
-        let raster = ndc * self.res;
+        let raster = self.raster_of(q);
         let (lo, hi) = (-margin, self.res + margin);
         if !(raster.is_finite() && raster.cmpge(lo).all() && raster.cmplt(hi).all()) {
             return None;
         }
         let cos = d.z / d.length();
         let world = self.world_from_camera.transform_point3(o);
-        Some((raster, self.raster_to_solid_angle(cos), world))
+        let g = match self.ortho {
+            Some((pixel_area, _)) => 1.0 / (pixel_area * cos),
+            None => self.raster_to_solid_angle(cos) / (world - p).length_squared(),
+        };
+        Some((raster, g, world))
     }
 
-    /// `1 / (A cos^3)` of [`Self::project`] for a ray at angle `acos(cos)` to the axis.
+    /// The density of a camera ray with unit world direction `d` per unit of raster area, and
+    /// whether the first segment's length converts it to a density per unit area at the first
+    /// hit (with its cosine): per unit solid angle for a perspective camera (`1 / (A cos^3)`,
+    /// true), per unit area of the plane z = 0 across the ray for an orthographic one
+    /// (`1 / (A cos)`, false; only the cosine at the hit remains). What a camera subpath's
+    /// MIS partial sums start from.
+    pub fn ray_density(&self, d: Vec3) -> (f32, bool) {
+        let cos = self.cos_to_axis(d);
+        match self.ortho {
+            Some((pixel_area, _)) => (1.0 / (pixel_area * cos), false),
+            None => (self.raster_to_solid_angle(cos), true),
+        }
+    }
+
+    /// The width of one pixel at distance `t` along a camera ray with unit world direction `d`
+    /// (across the ray; an orthographic camera's is the same at every distance).
+    pub fn pixel_width(&self, d: Vec3, t: f32) -> f32 {
+        match self.ortho {
+            Some((pixel_area, _)) => pixel_area.sqrt(),
+            None => t / self.raster_to_solid_angle(self.cos_to_axis(d)).sqrt(),
+        }
+    }
+
+    /// `1 / (A cos^3)` of a perspective camera for a ray at angle `acos(cos)` to the axis.
     pub fn raster_to_solid_angle(&self, cos: f32) -> f32 {
         let pixel_area = 4.0 * self.half.x * self.half.y / (self.res.x * self.res.y);
         1.0 / (pixel_area * cos * cos * cos)
@@ -219,7 +304,9 @@ impl Footprint {
 /// the tangent plane, and scaled by `max(1/8, 1/sqrt(spp))` since pixels take several samples.
 /// With a thin lens this is still the pinhole footprint, as in pbrt-v4 (whose minimum
 /// differentials are those of the ray through the lens centre): defocus blur is not filtered.
-/// With a `screenwindow`, each axis uses its own pixel step.
+/// With a `screenwindow`, each axis uses its own pixel step. An orthographic camera's rays are
+/// parallel: the offsets are one pixel's step on its plane z = 0, whatever the distance (the
+/// differentials pbrt-v4 finds for it, without its rotation of the view axis towards `p`).
 pub fn approximate_dp_dxy(
     desc: &CameraDesc,
     res: (u32, u32),
@@ -227,11 +314,19 @@ pub fn approximate_dp_dxy(
     p: Vec3,
     n: Vec3,
 ) -> (Vec3, Vec3) {
-    let origin = desc.world_from_camera.transform_point3(Vec3::ZERO);
-    let to_p = p - origin;
-    let r = to_p.length();
-    let d = to_p / r;
-    let tan_half = (desc.fov_deg.to_radians() * 0.5).tan();
+    let w = &desc.world_from_camera;
+    let origin = w.transform_point3(Vec3::ZERO);
+    let ortho = desc.projection == Projection::Orthographic;
+    // An orthographic camera's neighbouring rays are parallel, one window step apart (in
+    // camera-space units, so the camera transform's scale applies): `r` is that scale.
+    let (d, r, tan_half) = if ortho {
+        let d = w.transform_vector3(Vec3::Z).normalize();
+        (d, w.transform_vector3(Vec3::X).length(), 1.0)
+    } else {
+        let to_p = p - origin;
+        let r = to_p.length();
+        (to_p / r, r, (desc.fov_deg.to_radians() * 0.5).tan())
+    };
     let spread = match desc.screen_window {
         None => Vec2::splat(2.0 * tan_half / res.0.min(res.1).max(1) as f32),
         Some([x0, x1, y0, y1]) => Vec2::new(
@@ -329,6 +424,74 @@ mod tests {
         let a = Camera::new(&d, 100, 50).generate_ray(Vec2::new(3.0, 7.0));
         let b = Camera::new(&desc(90.0), 100, 50).generate_ray(Vec2::new(3.0, 7.0));
         assert!((a.d - b.d).length() < 1e-6);
+    }
+
+    fn ortho(window: [f32; 4], lens: f32) -> CameraDesc {
+        let mut d = desc(45.0);
+        d.projection = Projection::Orthographic;
+        d.world_from_camera = Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0))
+            * Mat4::from_rotation_y(0.3)
+            * Mat4::from_scale(Vec3::new(-2.0, 2.0, 2.0));
+        d.screen_window = Some(window);
+        (d.lens_radius, d.focal_distance) = (lens, 4.0);
+        d
+    }
+
+    /// An orthographic camera's rays are parallel, start on the plane z = 0 at the window
+    /// point (in camera units, scaled by the transform) and [`Camera::project_through_lens`]
+    /// inverts [`Camera::generate_ray_lens`] (with and without a lens); its density is one
+    /// over a pixel's world area.
+    #[test]
+    fn orthographic_rays_and_projection() {
+        for lens in [0.0, 0.3] {
+            let d = ortho([-1.0, 3.0, -1.0, 1.0], lens);
+            let cam = Camera::new(&d, 80, 40);
+            let z = d.world_from_camera.transform_vector3(Vec3::Z).normalize();
+            let c = cam.generate_ray(Vec2::new(20.0, 20.0));
+            // Raster (20, 20) is window (0, 0): the camera-space origin.
+            assert!((c.o - Vec3::new(1.0, 2.0, 3.0)).length() < 1e-5, "{}", c.o);
+            assert!((c.d - z).length() < 1e-6);
+            let e = cam.generate_ray(Vec2::new(60.0, 20.0));
+            // Two window units to the right: 4 world units (scale 2) along the transformed x.
+            assert!(((e.o - c.o).length() - 4.0).abs() < 1e-4);
+            assert!((e.d - z).length() < 1e-6);
+            for (i, p) in [(3.3, 5.5), (70.1, 38.2), (40.0, 1.0)]
+                .into_iter()
+                .enumerate()
+            {
+                let p = Vec2::new(p.0, p.1);
+                let u = Vec2::new(0.1 + 0.3 * i as f32, 0.8 - 0.25 * i as f32);
+                let r = cam.generate_ray_lens(p, u);
+                let world = r.at(7.0);
+                let (raster, g, o) = cam
+                    .project_through_lens(world, u, Vec2::ZERO)
+                    .expect("in view");
+                assert!((raster - p).length() < 2e-3, "{lens}: {raster} {p}");
+                assert!((o - r.o).length() < 1e-3, "{lens}: {o} {}", r.o);
+                let cos = cam.cos_to_axis(r.d);
+                let pixel = 4.0 * 2.0 / (80.0 * 40.0) * 4.0;
+                assert!((g * pixel * cos - 1.0).abs() < 1e-4, "{g}");
+                let (density, finite) = cam.ray_density(r.d);
+                assert!((density / g - 1.0).abs() < 1e-5 && !finite);
+                // Behind the plane z = 0: not seen.
+                assert!(cam.project_through_lens(r.o - r.d, u, Vec2::ZERO).is_none());
+            }
+        }
+    }
+
+    /// A perspective camera's projection factor is `1 / (A cos^3 d^2)`.
+    #[test]
+    fn perspective_projection_factor() {
+        let cam = Camera::new(&desc(60.0), 64, 64);
+        let r = cam.generate_ray(Vec2::new(10.5, 50.5));
+        let p = r.at(3.0);
+        let (raster, g, o) = cam.project(p, Vec2::ZERO).unwrap();
+        assert!((raster - Vec2::new(10.5, 50.5)).length() < 1e-3);
+        assert_eq!(o, Vec3::ZERO);
+        let cos = cam.cos_to_axis(r.d);
+        let want = cam.raster_to_solid_angle(cos) / 9.0;
+        assert!((g / want - 1.0).abs() < 1e-4);
+        assert_eq!(cam.ray_density(r.d), (cam.raster_to_solid_angle(cos), true));
     }
 
     /// Raster top-left looks towards camera (-x, +y).

@@ -378,9 +378,11 @@ fn channels(sums: &[Sums], request: &Request, camera_from_world: Mat4) -> Channe
     out
 }
 
-/// pbrt-v4's metadata matrices of a perspective camera: `cameraFromWorld` and
-/// `NDCFromWorld = Translate(0.5, 0.5, 0.5) Scale(0.5, 0.5, 0.5) Perspective(fov, 0.01, 1000)
-/// cameraFromWorld` (`ProjectiveCamera::InitMetadata`), for column vectors.
+/// pbrt-v4's metadata matrices of a camera: `cameraFromWorld` and `NDCFromWorld =
+/// Translate(0.5, 0.5, 0.5) Scale(0.5, 0.5, 0.5) screenFromCamera cameraFromWorld`
+/// (`ProjectiveCamera::InitMetadata`), for column vectors; `screenFromCamera` is
+/// `Perspective(fov, 0.01, 1000)`, or `Orthographic(0, 1)` (the identity) for an orthographic
+/// camera.
 pub fn camera_matrices(desc: &crate::scene::CameraDesc) -> (Mat4, Mat4) {
     let camera_from_world = desc.world_from_camera.inverse();
     let (n, f) = (1e-2f32, 1000.0f32);
@@ -391,7 +393,12 @@ pub fn camera_matrices(desc: &crate::scene::CameraDesc) -> (Mat4, Mat4) {
         [0.0, 0.0, f / (f - n), 1.0],
         [0.0, 0.0, -f * n / (f - n), 0.0],
     ]);
-    let screen_from_camera = Mat4::from_scale(Vec3::new(inv_tan, inv_tan, 1.0)) * perspective;
+    let screen_from_camera = match desc.projection {
+        crate::scene::Projection::Perspective => {
+            Mat4::from_scale(Vec3::new(inv_tan, inv_tan, 1.0)) * perspective
+        }
+        crate::scene::Projection::Orthographic => Mat4::IDENTITY,
+    };
     let ndc_from_screen =
         Mat4::from_translation(Vec3::splat(0.5)) * Mat4::from_scale(Vec3::splat(0.5));
     (

@@ -649,6 +649,8 @@ pub fn render_for_time(
         return passes::render_for_time(scene, accel, settings, kind, budget_s, observer);
     }
     let start = Instant::now();
+    let (fitted, fit_note) = fit_photons_to_budget(scene, accel, settings, kind, budget_s);
+    let settings = &fitted;
     let photons = prepare(scene, accel, settings, kind);
     let mut s = settings.clone();
     s.spp = 1;
@@ -686,7 +688,72 @@ pub fn render_for_time(
     }
     let mut out = total.expect("at least one pass");
     out.seconds = start.elapsed().as_secs_f64();
+    out.notes.extend(fit_note);
     (out, spp_done)
+}
+
+/// Photon work (pass 1: tracing, kd-trees, irradiance cache) of a fixed-map render for a time
+/// budget is kept to at most this share of the budget.
+pub const BUDGET_PHOTON_SHARE: f64 = 0.5;
+
+/// A pilot pass 1 traces this fraction of the photons (at least [`PILOT_MIN_PHOTONS`]) to
+/// measure their cost before a render for a time budget.
+pub const PILOT_FRACTION: u64 = 16;
+pub const PILOT_MIN_PHOTONS: u64 = 5_000;
+
+/// The photon mapper's settings for a render of `budget_s` seconds: the photon counts of
+/// `settings`, scaled down (global, caustic and volume alike) when a pilot pass 1 of
+/// 1/[`PILOT_FRACTION`] of them predicts (linearly) that pass 1 would take more than
+/// [`BUDGET_PHOTON_SHARE`] of the time left after the pilot; a note says so. Other
+/// integrators and small counts are returned unchanged. Without this a budget scaled photon
+/// count could take longer than the budget by itself (`converge`'s `photonmap-photons4x` ran
+/// ~2x over).
+fn fit_photons_to_budget(
+    scene: &Scene,
+    accel: &Accel,
+    settings: &RenderSettings,
+    kind: IntegratorKind,
+    budget_s: f64,
+) -> (RenderSettings, Option<String>) {
+    let start = Instant::now();
+    let t = &settings.photon.trace;
+    let counts = [
+        t.global_photons,
+        t.caustic_photons,
+        settings.photon.volume_photons,
+    ];
+    let total: u64 = counts.iter().sum();
+    if kind != IntegratorKind::Photonmap || total < PILOT_FRACTION * PILOT_MIN_PHOTONS {
+        return (settings.clone(), None);
+    }
+    let scaled = |f: f64| {
+        let mut s = settings.clone();
+        let c = counts.map(|n| (n as f64 * f).round() as u64);
+        s.photon.trace.global_photons = c[0];
+        s.photon.trace.caustic_photons = c[1];
+        s.photon.volume_photons = c[2];
+        s
+    };
+    let f = 1.0 / PILOT_FRACTION as f64;
+    drop(prepare(scene, accel, &scaled(f), kind));
+    let pilot = start.elapsed().as_secs_f64();
+    let predicted = pilot / f;
+    let allowed = BUDGET_PHOTON_SHARE * (budget_s - pilot).max(0.0);
+    if predicted <= allowed {
+        return (settings.clone(), None);
+    }
+    let keep = (allowed / predicted).max(f);
+    let s = scaled(keep);
+    let note = format!(
+        "time budget: photons scaled to {:.1}% ({} + {} emitted) so that pass 1 (predicted {:.2} s at the full count by a {:.3} s pilot) takes at most {:.0}% of the {budget_s} s",
+        100.0 * keep,
+        s.photon.trace.global_photons,
+        s.photon.trace.caustic_photons,
+        predicted,
+        pilot,
+        100.0 * BUDGET_PHOTON_SHARE
+    );
+    (s, Some(note))
 }
 
 /// Averages two renders by their sample counts.

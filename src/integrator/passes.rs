@@ -483,8 +483,9 @@ pub const PHOTON_SHARE: f64 = 0.25;
 /// Progressive passes until `budget_s` seconds are spent, stopping before a pass that would
 /// not fit. Made for a wall-clock budget, not for merging: each pass traces the configured
 /// photon counts, and the samples per pixel of the next pass grow (at most 4x per pass) until
-/// photon work is at most [`PHOTON_SHARE`] of a pass; pass images are averaged weighted by
-/// their samples. Returns the image and the samples per pixel it holds.
+/// photon work is at most [`PHOTON_SHARE`] of a pass; when such a pass would not fit in the
+/// time left, the pass takes the samples that do fit (at least 1; else the render stops);
+/// pass images are averaged weighted by their samples. Returns the image and the samples per pixel it holds.
 pub fn render_for_time(
     scene: &Scene,
     accel: &Accel,
@@ -534,9 +535,19 @@ pub fn render_for_time(
         let per_spp = ((pass_s - photon_s) / pass_spp as f64).max(1e-9);
         let want = photon_s * (1.0 - PHOTON_SHARE) / PHOTON_SHARE / per_spp;
         pass_spp = (want.ceil() as u32).clamp(pass_spp, pass_spp.saturating_mul(4));
-        let next_s = photon_s + per_spp * pass_spp as f64;
         let elapsed = start.elapsed().as_secs_f64();
-        let stop = elapsed + next_s > budget_s || k >= MAX_PASSES;
+        let left = budget_s - elapsed;
+        if photon_s + per_spp * pass_spp as f64 > left {
+            // The grown pass does not fit: the largest that does (down to 1 spp), so that a
+            // larger budget is used rather than stopping where a smaller one stopped.
+            let fits = ((left - photon_s) * 0.9 / per_spp).floor();
+            pass_spp = if fits >= 1.0 {
+                (fits as u32).min(pass_spp)
+            } else {
+                0
+            };
+        }
+        let stop = pass_spp == 0 || k >= MAX_PASSES;
         if stop || crate::interrupt::requested().is_some() {
             break;
         }

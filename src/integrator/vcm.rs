@@ -45,6 +45,11 @@
 //! nothing (as photons do), while the densities stay the whole map's, which every technique
 //! uses alike. With a thin lens, a light vertex connects to a point of the lens drawn for it
 //! (the camera subpaths' own lens density, so it leaves the weights as for a pinhole).
+//! An orthographic camera samples ray origins on its plane z = 0 instead of directions: a
+//! light vertex connects to the point of that plane whose ray (of the lens point's direction)
+//! passes through it, with the importance `1 / A` per unit area of the plane
+//! ([`crate::camera::Camera::project_through_lens`]), and a camera subpath's first segment
+//! does not count in its partial sums (as a distant light's).
 use super::RenderContext;
 use crate::accel::{Hit, RayKind};
 use crate::bsdf::{Bsdf, TransportMode};
@@ -190,8 +195,8 @@ struct SubPath {
     len: u32,
     /// Every bounce so far was a delta one.
     specular: bool,
-    /// Starts at a camera or a light with a position (not a distant or infinite light): the
-    /// first segment's length counts in the partial sums.
+    /// Starts at a perspective camera or a light with a position (not an orthographic camera,
+    /// a distant or an infinite light): the first segment's length counts in the partial sums.
     finite: bool,
     dvcm: f32,
     dvc: f32,
@@ -492,8 +497,7 @@ fn pixel_footprint(ctx: &RenderContext) -> Option<f32> {
             );
             let ray = ctx.camera.generate_ray(p);
             let hit = ctx.accel.intersect(RayKind::Camera, &ray)?;
-            let cos = ctx.camera.cos_to_axis(ray.d);
-            let width = hit.t * ray.d.length() / ctx.camera.raster_to_solid_angle(cos).sqrt();
+            let width = ctx.camera.pixel_width(ray.d, hit.t * ray.d.length());
             (width.is_finite() && width > 0.0).then_some(width)
         })
         .collect();
@@ -700,8 +704,15 @@ fn trace_light(ctx: &RenderContext, wt: &Weights, k: u64, it: u32, out: &mut Chu
     let delta = point || lights.is_delta_direction(i);
     // The density of the light's first vertex as next-event estimation picks it: by area
     // for an area light, by solid angle for an infinite one, 1 for a delta light.
-    let direct_pdf = pmf * if !finite && !delta { pdf_dir } else { pdf_pos };
-    let direct_pdf = if point { pmf } else { direct_pdf };
+    // (A distant light is a delta light: 1, not its disc's density, which made bdpt and vcm
+    // weigh the light's techniques too high and render too bright, ~30% on an open box.)
+    let direct_pdf = if delta {
+        pmf
+    } else if !finite {
+        pmf * pdf_dir
+    } else {
+        pmf * pdf_pos
+    };
     let cos_light = if !finite || point {
         1.0
     } else {
@@ -790,20 +801,18 @@ fn splat_emitter(
     u_lens: Vec2,
     out: &mut ChunkOut,
 ) {
-    let Some((raster, to_solid, cam)) =
+    let Some((raster, to_area, cam)) =
         ctx.camera
             .project_through_lens(e.p, u_lens, ctx.filter.radius())
     else {
         return;
     };
-    let to_cam = cam - e.p;
-    let d2 = to_cam.length_squared();
-    let dir = to_cam / d2.sqrt();
+    let dir = (cam - e.p).normalize();
     let le = ctx.lights.le(i, e.n, dir);
     if le.max_element() <= 0.0 {
         return;
     }
-    let to_surface = to_solid * e.n.dot(dir).abs() / d2;
+    let to_surface = to_area * e.n.dot(dir).abs();
     let v = le * (to_surface / (pdf_a * wt.n_light));
     if !v.is_finite() {
         return;
@@ -822,19 +831,17 @@ fn connect_to_camera(
     u_lens: Vec2,
     out: &mut ChunkOut,
 ) {
-    let Some((raster, to_solid, cam)) =
+    let Some((raster, to_area, cam)) =
         ctx.camera
             .project_through_lens(lv.p, u_lens, ctx.filter.radius())
     else {
         return;
     };
-    let to_cam = cam - lv.p;
-    let d2 = to_cam.length_squared();
-    let dir = to_cam / d2.sqrt();
+    let dir = (cam - lv.p).normalize();
     let Some(ev) = Vertex::of(lv).eval(dir, TransportMode::Importance) else {
         return;
     };
-    let to_surface = to_solid * ev.cos / d2;
+    let to_surface = to_area * ev.cos;
     let w = if wt.light_only {
         1.0
     } else {
@@ -870,14 +877,16 @@ fn trace_camera(
     if cos <= 0.0 {
         return (out, tally);
     }
-    let to_solid = ctx.camera.raster_to_solid_angle(cos);
+    // Per unit solid angle (perspective) or per unit area across the ray (orthographic: the
+    // first segment's length does not count, as after a distant light).
+    let (density, finite) = ctx.camera.ray_density(ray.d.normalize());
     let mut path = SubPath {
         ray,
         beta: Vec3::ONE,
         len: 1,
         specular: true,
-        finite: true,
-        dvcm: wt.n_light / to_solid,
+        finite,
+        dvcm: wt.n_light / density,
         dvc: 0.0,
         dvm: 0.0,
     };

@@ -17,10 +17,13 @@ pub use crate::params::{
 pub use crate::light::Light;
 pub use crate::mesh::{interpolate_uv, Mesh, MESH_OVERHEAD_BYTES};
 
-/// `Camera "perspective"`: `fov` (degrees) spans the shorter image axis of the screen window
-/// (pbrt-v4); a thin lens when `lens_radius > 0`.
+/// `Camera "perspective"` or `"orthographic"`: for a perspective camera `fov` (degrees) spans
+/// the shorter image axis of the screen window (pbrt-v4); an orthographic one maps the screen
+/// window itself, in camera-space units, onto the image; a thin lens when `lens_radius > 0`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CameraDesc {
+    /// Perspective or orthographic.
+    pub projection: Projection,
     /// Camera-to-world transform (the inverse of the CTM at `Camera`). pbrt's camera space:
     /// looks down +z, +y up, and raster x grows towards camera -x... see `camera.rs`.
     pub world_from_camera: Mat4,
@@ -40,6 +43,7 @@ impl CameraDesc {
     /// A pinhole camera with pbrt-v4's defaults for everything but the transform and `fov`.
     pub fn pinhole(world_from_camera: Mat4, fov_deg: f32) -> CameraDesc {
         CameraDesc {
+            projection: Projection::Perspective,
             world_from_camera,
             fov_deg,
             lens_radius: 0.0,
@@ -48,6 +52,17 @@ impl CameraDesc {
             exposure_time: 1.0,
         }
     }
+}
+
+/// The camera's projection (pbrt-v4's `Camera "perspective"` and `"orthographic"`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Projection {
+    /// Rays leave the camera-space origin (or a lens point) through the screen window at z = 1
+    /// scaled by `tan(fov / 2)`.
+    Perspective,
+    /// Rays start at the screen-window point on the plane z = 0 of camera space and run along
+    /// +z (through a lens: towards that point moved to z = `focaldistance`).
+    Orthographic,
 }
 
 /// `Film "rgb"` or `"gbuffer"` (an RGB film plus the data channels of `crate::integrator::aov`).

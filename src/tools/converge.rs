@@ -1,8 +1,17 @@
 //! `photon converge SCENE --reference REF.exr`: error against time for each integrator and a
 //! few photon-map settings. Every method renders at a series of wall-clock budgets (pass 1
 //! included, see `integrator::render_for_time`); the result is a CSV (integrator, settings,
-//! budget, seconds, spp, rays, photons, relMSE, RMSE) and a log-log PNG plot of relMSE against
-//! seconds, one curve per method.
+//! budget, seconds, spp, rays, photons, relMSE, RMSE, and the smaller budget whose image a
+//! budget repeated, if any) and a log-log PNG plot of relMSE against seconds, one curve per
+//! method, whose axes span the measured points.
+//!
+//! Budgets are kept: the fixed-map photon mapper scales its photon counts down when a pilot
+//! predicts that pass 1 would take more than half the budget
+//! ([`crate::integrator::render_for_time`]), progressive passes shrink the last pass to what
+//! fits, and each line prints the time taken beside the budget (a warning beyond
+//! [`BUDGET_TOLERANCE`]). A budget that renders the very same image as a smaller one of the
+//! same method (hashed pixels) is reported and left out of the plot and the trend, so that it
+//! is not taken for a floor.
 use super::job::{Job, Overrides};
 use super::output::{kind_only, Outputs, Writer};
 use super::{parse_resolution, ToolError};
@@ -11,6 +20,7 @@ use crate::imageio::metrics::{compare, match_sizes, MaskOptions};
 use crate::imageio::{read_exr, write_exr, ExrPixel};
 use crate::integrator::{render_for_time, IntegratorKind, RenderSettings};
 use crate::scene::Scene;
+use plotters::coord::combinators::BindKeyPoints;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -122,7 +132,15 @@ pub struct Row {
     pub photons: u64,
     pub relmse: f64,
     pub rmse: f64,
+    /// The smaller budget of the same method that rendered the very same image (bit for bit):
+    /// such a point is no measurement of the larger budget, so it is left out of the plot and
+    /// the trend (and would otherwise look like a floor).
+    pub repeat_of: Option<f64>,
 }
+
+/// A measured time may exceed its budget by this factor (the last sample pass's estimate,
+/// the mandatory first sample per pixel); beyond it `converge` warns.
+pub const BUDGET_TOLERANCE: f64 = 1.1;
 
 /// Runs every method at every budget; writes the CSV, the plot and the images.
 pub fn run(opts: &ConvergeOptions) -> Result<bool, ToolError> {
@@ -170,19 +188,37 @@ pub fn run(opts: &ConvergeOptions) -> Result<bool, ToolError> {
     };
     let mut rows = Vec::new();
     for m in &chosen {
+        // The image hashes of this method's budgets so far.
+        let mut seen: Vec<(u64, f64)> = Vec::new();
         for &budget in &opts.budgets {
-            let row = measure(
+            let (mut row, hash) = measure(
                 scene, &accel, base, m, budget, &reference, mask, &opts.out, &pool,
             )?;
+            row.repeat_of = seen.iter().find(|(h, _)| *h == hash).map(|&(_, b)| b);
+            seen.push((hash, budget));
+            let ratio = row.seconds / row.budget;
             say!(
-                "{:<22} budget {:>6.2} s: {:>7.2} s, {:>5} spp, relMSE {:.5}, RMSE {:.5}",
+                "{:<22} budget {:>6.2} s: took {:>7.2} s ({:.2}x), {:>5} spp, relMSE {:.5}, RMSE {:.5}{}",
                 row.method,
                 row.budget,
                 row.seconds,
+                ratio,
                 row.spp,
                 row.relmse,
-                row.rmse
+                row.rmse,
+                if ratio > BUDGET_TOLERANCE {
+                    format!(" (over budget by more than {BUDGET_TOLERANCE}x)")
+                } else {
+                    String::new()
+                }
             );
+            if let Some(b) = row.repeat_of {
+                say!(
+                    "{:<22} budget {:>6.2} s rendered the same image as at {b} s: left out of the plot and the trend",
+                    row.method,
+                    row.budget
+                );
+            }
             rows.push(row);
         }
     }
@@ -213,7 +249,7 @@ fn measure(
     mask: MaskOptions,
     out: &Path,
     pool: &rayon::ThreadPool,
-) -> Result<Row, ToolError> {
+) -> Result<(Row, u64), ToolError> {
     let mut s = base.clone();
     (m.adjust)(&mut s, budget);
     let (img, spp) = pool.install(|| {
@@ -236,18 +272,40 @@ fn measure(
         .map_err(ToolError)?
         .commit(vec![writer])?;
     let photons = img.photons_emitted;
+    let hash = image_hash(&img.image);
+    // The counts the render used (a time budget may have scaled them down).
+    let scaled = img
+        .notes
+        .iter()
+        .any(|note| note.starts_with("time budget: photons scaled"));
+    let fitted = |n: u64| {
+        if scaled {
+            format!("{n} scaled to fit the budget")
+        } else {
+            n.to_string()
+        }
+    };
     let settings = match m.kind {
-        IntegratorKind::Photonmap => format!(
-            "global {} caustic {} lookup {}/{} gather {}",
+        IntegratorKind::Photonmap if s.photon.progressive => format!(
+            "progressive global {} caustic {} per pass lookup {}/{} gather {}",
             s.photon.trace.global_photons,
             s.photon.trace.caustic_photons,
             s.photon.global_lookup,
             s.photon.caustic_lookup,
             s.photon.gather_samples
         ),
+        IntegratorKind::Photonmap => format!(
+            "global {} caustic {} (emitted {}) lookup {}/{} gather {}",
+            s.photon.trace.global_photons,
+            s.photon.trace.caustic_photons,
+            fitted(photons),
+            s.photon.global_lookup,
+            s.photon.caustic_lookup,
+            s.photon.gather_samples
+        ),
         _ => format!("maxdepth {}", s.max_depth),
     };
-    Ok(Row {
+    let row = Row {
         method: m.name.to_string(),
         settings,
         budget,
@@ -257,13 +315,23 @@ fn measure(
         photons,
         relmse: metrics.overall.relmse,
         rmse: metrics.overall.rmse,
-    })
+        repeat_of: None,
+    };
+    Ok((row, hash))
 }
 
-/// The rows as CSV with a header line.
+/// A 64-bit hash of an image's pixel bits.
+fn image_hash(img: &crate::imageio::RgbImage) -> u64 {
+    img.pixels.iter().flatten().fold(
+        crate::sampling::mix64(img.width as u64 ^ ((img.height as u64) << 32)),
+        |h, v| crate::sampling::mix64(h ^ v.to_bits() as u64),
+    )
+}
+
 /// Per method: the least-squares slope of log relMSE against log seconds over the upper half
-/// of its budgets, and whether its curve has a floor (the last doubling of time gained less
-/// than 15%).
+/// of its budgets (two points at least), and whether its curve has a floor (the last doubling
+/// of time gained less than 15%). Points that repeat a smaller budget's image
+/// ([`Row::repeat_of`]) are left out: they measure nothing new.
 pub fn trend_lines(rows: &[Row]) -> Vec<String> {
     let mut names: Vec<&str> = rows.iter().map(|r| r.method.as_str()).collect();
     names.dedup();
@@ -272,10 +340,13 @@ pub fn trend_lines(rows: &[Row]) -> Vec<String> {
         .filter_map(|name| {
             let pts: Vec<(f64, f64)> = rows
                 .iter()
-                .filter(|r| r.method == name && r.relmse > 0.0 && r.seconds > 0.0)
+                .filter(|r| {
+                    r.method == name && r.repeat_of.is_none() && r.relmse > 0.0 && r.seconds > 0.0
+                })
                 .map(|r| (r.seconds.ln(), r.relmse.ln()))
                 .collect();
-            let tail = &pts[pts.len() / 2..];
+            // (Two points are a tail of their own.)
+            let tail = &pts[(pts.len() / 2).min(pts.len().saturating_sub(2))..];
             if tail.len() < 2 {
                 return None;
             }
@@ -299,12 +370,24 @@ pub fn trend_lines(rows: &[Row]) -> Vec<String> {
         .collect()
 }
 
+/// The rows as CSV with a header line (`same_image_as_budget_s`: [`Row::repeat_of`]).
 pub fn to_csv(rows: &[Row]) -> String {
-    let mut s = String::from("integrator,settings,budget_s,seconds,spp,rays,photons,relmse,rmse\n");
+    let mut s = String::from(
+        "integrator,settings,budget_s,seconds,spp,rays,photons,relmse,rmse,same_image_as_budget_s\n",
+    );
     for r in rows {
         s += &format!(
-            "{},{},{},{:.3},{},{},{},{:.6e},{:.6e}\n",
-            r.method, r.settings, r.budget, r.seconds, r.spp, r.rays, r.photons, r.relmse, r.rmse
+            "{},{},{},{:.3},{},{},{},{:.6e},{:.6e},{}\n",
+            r.method,
+            r.settings,
+            r.budget,
+            r.seconds,
+            r.spp,
+            r.rays,
+            r.photons,
+            r.relmse,
+            r.rmse,
+            r.repeat_of.map_or(String::new(), |b| b.to_string())
         );
     }
     s
@@ -317,23 +400,76 @@ fn scene_title(path: &Path) -> String {
         .unwrap_or_else(|| path.display().to_string())
 }
 
-/// A log-log plot of relMSE against seconds, one curve per method.
+/// The range of a log axis over positive `values`: their minimum and maximum, widened by 4% of
+/// the span in log space on each side (so the end points' dots are drawn whole), or by a
+/// factor 1.25 each way when all values are equal. `(1, 10)` when there is no positive value.
+pub fn log_axis(values: impl IntoIterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) = values
+        .into_iter()
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
+    if hi <= 0.0 {
+        return (1.0, 10.0);
+    }
+    let span = (hi / lo).ln();
+    if span <= 0.0 {
+        return (lo / 1.25, hi * 1.25);
+    }
+    let pad = (0.04 * span).exp();
+    (lo / pad, hi * pad)
+}
+
+/// Tick positions for a log axis over `[lo, hi]`: the powers of ten inside it; with fewer
+/// than three of them, also 2x and 5x each power (1, 2, 5, 10, 20, ...); with fewer than two
+/// ticks still, every integer multiple 1..9 of each power.
+pub fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    if !(lo > 0.0 && hi > lo && hi.is_finite()) {
+        return Vec::new();
+    }
+    let ticks = |mult: &[f64]| -> Vec<f64> {
+        let (e0, e1) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+        (e0..=e1)
+            .flat_map(|e| mult.iter().map(move |m| m * 10f64.powi(e)))
+            // A little slack: a tick that rounding puts just outside the ends stays.
+            .filter(|&t| t >= lo * (1.0 - 1e-9) && t <= hi * (1.0 + 1e-9))
+            .collect()
+    };
+    let decades = ticks(&[1.0]);
+    if decades.len() >= 3 {
+        return decades;
+    }
+    let some = ticks(&[1.0, 2.0, 5.0]);
+    if some.len() >= 2 {
+        return some;
+    }
+    ticks(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0])
+}
+
+/// A tick's label: plain for 0.01..1000 (`0.5`, `2`, `300`), else `1e-4` style.
+fn tick_label(v: f64) -> String {
+    if (0.01..1000.0).contains(&v) {
+        let s = format!("{v:.2}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        let s = format!("{v:.0e}");
+        s
+    }
+}
+
+/// A log-log plot of relMSE against seconds, one curve per method, its axes spanning the
+/// data ([`log_axis`]) with ticks at decades ([`log_ticks`]).
 pub fn plot(rows: &[Row], path: &Path, title: &str) -> Result<(), ToolError> {
     let err = |e: &dyn std::fmt::Display| ToolError(format!("{}: plot: {e}", path.display()));
     let pos = |v: f64| v.is_finite() && v > 0.0;
     let pts: Vec<&Row> = rows
         .iter()
-        .filter(|r| pos(r.seconds) && pos(r.relmse))
+        .filter(|r| r.repeat_of.is_none() && pos(r.seconds) && pos(r.relmse))
         .collect();
     if pts.is_empty() {
         return Err(ToolError(format!("{}: nothing to plot", path.display())));
     }
-    let (x0, x1) = pts.iter().fold((f64::MAX, f64::MIN), |(a, b), r| {
-        (a.min(r.seconds), b.max(r.seconds))
-    });
-    let (y0, y1) = pts.iter().fold((f64::MAX, f64::MIN), |(a, b), r| {
-        (a.min(r.relmse), b.max(r.relmse))
-    });
+    let (x0, x1) = log_axis(pts.iter().map(|r| r.seconds));
+    let (y0, y1) = log_axis(pts.iter().map(|r| r.relmse));
     let tmp = path.with_extension("tmp.png");
     {
         let root = BitMapBackend::new(&tmp, (900, 600)).into_drawing_area();
@@ -344,15 +480,16 @@ pub fn plot(rows: &[Row], path: &Path, title: &str) -> Result<(), ToolError> {
             .x_label_area_size(45)
             .y_label_area_size(70)
             .build_cartesian_2d(
-                (x0 / 1.5..x1 * 1.5).log_scale(),
-                (y0 / 2.0..y1 * 2.0).log_scale(),
+                (x0..x1).log_scale().with_key_points(log_ticks(x0, x1)),
+                (y0..y1).log_scale().with_key_points(log_ticks(y0, y1)),
             )
             .map_err(|e| err(&e))?;
         chart
             .configure_mesh()
             .x_desc("seconds (wall clock, pass 1 included)")
             .y_desc("relMSE")
-            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .x_label_formatter(&|v| tick_label(*v))
+            .y_label_formatter(&|v| tick_label(*v))
             .draw()
             .map_err(|e| err(&e))?;
         let mut names: Vec<&str> = Vec::new();

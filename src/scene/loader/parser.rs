@@ -46,7 +46,7 @@ use crate::material::{self, MaterialContext};
 use crate::math::{Mat4, Vec2, Vec3};
 use crate::scene::{
     CameraDesc, FilmDesc, FilterDesc, IntegratorDesc, Loc, Material, MaterialKind, Mesh,
-    SamplerDesc, Scene, SceneError,
+    Projection, SamplerDesc, Scene, SceneError,
 };
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -936,6 +936,11 @@ impl Builder {
                 params.check_unused()?;
                 shapes::to_world(obj, &gs.ctm, gs.reverse, &at)?
             }
+            "bilinearmesh" => {
+                let obj = super::bilinear::bilinear_mesh(&mut params, &at)?;
+                params.check_unused()?;
+                shapes::to_world(obj, &gs.ctm, gs.reverse, &at)?
+            }
             "plymesh" => {
                 // Check the other parameters before reading a possibly large file.
                 params.get_string_opt("filename")?;
@@ -1663,22 +1668,31 @@ fn inverse(m: &Mat4) -> Mat4 {
     m.as_dmat4().inverse().as_mat4()
 }
 
-/// `Camera "perspective"`: `fov`, `lensradius`, `focaldistance`, `screenwindow`,
-/// `frameaspectratio`, `shutteropen`/`shutterclose` (their difference is the exposure time of
-/// the film's imaging ratio; photon has no motion blur).
+/// `Camera "perspective"` (`fov`) or `"orthographic"`: `lensradius`, `focaldistance`,
+/// `screenwindow`, `frameaspectratio`, `shutteropen`/`shutterclose` (their difference is the
+/// exposure time of the film's imaging ratio; photon has no motion blur). An orthographic
+/// camera takes no `fov` (as in pbrt-v4, it would be an unused parameter).
 fn camera(
     ty: &str,
     params: &mut ParamSet,
     at: &Loc,
     world_from_camera: Mat4,
 ) -> Result<CameraDesc, SceneError> {
-    if ty != "perspective" {
-        return Err(SceneError::at(
-            at,
-            format!("unsupported camera type \"{ty}\""),
-        ));
-    }
-    let fov_deg = params.get_float("fov", 90.0)?;
+    let projection = match ty {
+        "perspective" => Projection::Perspective,
+        "orthographic" => Projection::Orthographic,
+        _ => {
+            return Err(SceneError::at(
+                at,
+                format!("unsupported camera type \"{ty}\" (photon renders \"perspective\" and \"orthographic\")"),
+            ))
+        }
+    };
+    let fov_deg = if projection == Projection::Perspective {
+        params.get_float("fov", 90.0)?
+    } else {
+        90.0
+    };
     if !(fov_deg > 0.0 && fov_deg < 180.0) {
         let p = params.peek("fov").expect("a bad fov came from the file");
         return Err(p.err("fov must lie in (0, 180) degrees"));
@@ -1723,13 +1737,26 @@ fn camera(
         })
         .into_iter()
         .fold(0.0, f32::max);
-    if eye.abs().max_element() + rim > max {
+    // An orthographic camera's rays start anywhere on its screen window (default: the
+    // shorter side [-1, 1], the longer up to the film's aspect ratio, which the limit of the
+    // resolution bounds).
+    let window = match (projection, screen_window) {
+        (Projection::Perspective, _) => 0.0,
+        (Projection::Orthographic, Some(w)) => w.iter().fold(0.0f32, |m, v| m.max(v.abs())),
+        (Projection::Orthographic, None) => crate::limits::MAX_RESOLUTION as f32,
+    };
+    let reach = [Vec3::X, Vec3::Y]
+        .map(|a| world_from_camera.transform_vector3(a * window).length())
+        .into_iter()
+        .fold(0.0, f32::max);
+    if eye.abs().max_element() + rim + reach > max {
         return Err(SceneError::at(
             at,
             format!("the scene is too large: the camera is at {eye} (photon supports coordinates up to {max:e}; scale the scene down)"),
         ));
     }
     Ok(CameraDesc {
+        projection,
         lens_radius,
         focal_distance,
         screen_window,

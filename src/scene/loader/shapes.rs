@@ -452,14 +452,27 @@ pub fn sphere_rings(
     if spec.radius >= FULL_SPHERE_FRACTION * scene_radius {
         return SPHERE_RINGS;
     }
-    let eye = camera.world_from_camera.transform_point3(Vec3::ZERO);
-    let dist = (spec.centre - eye).length() - spec.radius;
-    if dist.is_nan() || dist <= spec.radius {
+    let pixels = film.xres.min(film.yres).max(REFERENCE_PIXELS) as f32;
+    let w = &camera.world_from_camera;
+    let projected = if camera.projection == crate::scene::Projection::Orthographic {
+        // The radius over the world width of one pixel across the window's shorter side.
+        let side = camera
+            .screen_window
+            .map_or(2.0, |[x0, x1, y0, y1]| (x1 - x0).min(y1 - y0));
+        let scale = w.transform_vector3(Vec3::X).length();
+        spec.radius * pixels / (side * scale)
+    } else {
+        let eye = w.transform_point3(Vec3::ZERO);
+        let dist = (spec.centre - eye).length() - spec.radius;
+        if dist.is_nan() || dist <= spec.radius {
+            return SPHERE_RINGS;
+        }
+        let focal = 0.5 * pixels / (0.5 * camera.fov_deg.to_radians()).tan();
+        spec.radius / dist * focal
+    };
+    if !projected.is_finite() {
         return SPHERE_RINGS;
     }
-    let pixels = film.xres.min(film.yres).max(REFERENCE_PIXELS) as f32;
-    let focal = 0.5 * pixels / (0.5 * camera.fov_deg.to_radians()).tan();
-    let projected = spec.radius / dist * focal;
     (MIN_SPHERE_RINGS..SPHERE_RINGS)
         .find(|&n| projected * tessellation_error(n) <= MAX_SCREEN_ERROR)
         .unwrap_or(SPHERE_RINGS)

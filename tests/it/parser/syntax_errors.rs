@@ -88,9 +88,9 @@ fn error_unknown_and_unsupported_directives() {
     );
     assert_src_err("WorldBegin\nAreaLightSource \"spot\"\n", 2, &["\"spot\""]);
     assert_src_err(
-        "Camera \"orthographic\"\nWorldBegin\n",
+        "Camera \"realistic\"\nWorldBegin\n",
         1,
-        &["\"orthographic\""],
+        &["unsupported camera type \"realistic\""],
     );
     assert_src_err("Film \"spectral\"\nWorldBegin\n", 1, &["\"spectral\""]);
     assert_src_err(
