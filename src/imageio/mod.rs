@@ -28,9 +28,9 @@ pub mod tonemap;
 
 pub use decode::{read_linear, write_pfm};
 pub use exr::{
-    read_exr, read_exr_attributes, read_exr_layer, read_exr_size, read_exr_uint_layer, write_exr,
-    write_exr_channels, write_exr_with, ExrChannel, ExrCompression, ExrExtra, ExrLayout, ExrPixel,
-    ExrSamples, ExrStored,
+    read_exr, read_exr_attributes, read_exr_channel_list, read_exr_layer, read_exr_named,
+    read_exr_size, read_exr_uint_layer, write_exr, write_exr_channels, write_exr_with, ExrChannel,
+    ExrCompression, ExrExtra, ExrLayout, ExrPixel, ExrSamples, ExrStored,
 };
 pub use png::{write_png, write_png_tonemapped};
 pub use tonemap::Tonemap;

@@ -78,6 +78,12 @@ pub struct RenderOptions {
     /// Write half floats instead of 32-bit floats.
     #[arg(long)]
     pub half: bool,
+    /// Denoise the image with Intel Open Image Denoise before writing it (feature `denoise`),
+    /// guided by the render's `albedo` and `normal` layers when it has them; an EXR keeps the
+    /// noisy beauty as layer `noisy`. Not with renders in passes: denoise the merged image
+    /// with `photon denoise`.
+    #[arg(long)]
+    pub denoise: bool,
     /// Print nothing but errors and warnings (pbrt-v4's flag): no banner, no statistics, no
     /// progress.
     #[arg(long, short)]
@@ -346,6 +352,9 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
         false => Outputs::plan_image(&exr, png.as_deref()),
     }
     .map_err(ToolError)?;
+    if opts.denoise {
+        check_denoise(opts)?;
+    }
     let checkpoint = super::render_passes::plan_checkpoint(&opts.passes, &outputs)?;
     let mut prepared = prepare(&mut job, opts)?;
     let threads = prepared.pool.current_num_threads();
@@ -391,7 +400,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     } else {
         ExrPixel::Float
     };
-    let layers: Vec<(&str, &imageio::RgbImage)> =
+    let mut layers: Vec<(&str, &imageio::RgbImage)> =
         out.components.iter().map(|(n, i)| (*n, i)).collect();
     if let Some(sig) = crate::interrupt::take() {
         let tiles = &watch.tiles;
@@ -439,13 +448,53 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
         say_err!("photon: warning: {bad} non-finite pixel values");
     }
 
+    let denoised = match opts.denoise {
+        true => Some(denoise(&out.image, &layers)?),
+        false => None,
+    };
+    if denoised.is_some() {
+        layers.push((super::denoise::NOISY, &out.image));
+    }
+
     // Outputs: written to temporary files and renamed together (see `output`).
-    outputs.write(&out.image, &layers, pixel, opts.exposure)?;
+    let image = denoised.as_ref().unwrap_or(&out.image);
+    outputs.write(image, &layers, pixel, opts.exposure)?;
     for f in &outputs.files {
         say!("wrote {}", f.shown.display());
     }
     say!("{}", crate::memory::report(&estimate));
     Ok(())
+}
+
+/// `--denoise` before any work: not with a render in passes (its EXR is a partial image,
+/// whose mean `merge` sums), and only where the denoiser can run.
+fn check_denoise(opts: &RenderOptions) -> Result<(), ToolError> {
+    if opts.passes.active(opts.time.is_some()) {
+        return Err(ToolError(
+            "--denoise: a render in passes writes a partial image; denoise the merged image \
+             with `photon denoise`"
+                .to_string(),
+        ));
+    }
+    imageio::denoise::available().map_err(|e| ToolError(format!("--denoise: {e}")))
+}
+
+/// `--denoise`: the image denoised, with the guides among the render's layers (one line
+/// says which).
+fn denoise(
+    image: &imageio::RgbImage,
+    layers: &[(&str, &imageio::RgbImage)],
+) -> Result<imageio::RgbImage, ToolError> {
+    let channels = super::denoise::layer_channels(layers);
+    let done = super::denoise::denoise_image(image, &super::denoise::views(&channels), true)
+        .map_err(|e| ToolError(format!("--denoise: {e}")))?;
+    say!(
+        "denoised with {} in {:.2} s (Open Image Denoise; an EXR keeps the noisy beauty as layer {})",
+        done.guides,
+        done.seconds,
+        super::denoise::NOISY
+    );
+    Ok(done.image)
 }
 
 /// Prints what is rendered: the scene, its notes, the accelerator, the film and the settings.
