@@ -2,13 +2,15 @@
 //! few photon-map settings. Every method renders at a series of wall-clock budgets (pass 1
 //! included, see `integrator::render_for_time`); the result is a CSV (integrator, settings,
 //! budget, seconds, spp, rays, photons, relMSE, RMSE) and a log-log PNG plot of relMSE against
-//! seconds, one curve per method.
+//! seconds, one curve per method. With `--denoise` each image is also denoised (Open Image
+//! Denoise, feature `denoise`; guides from the render's `albedo`/`normal` layers when it has
+//! them) and measured as the method `NAME+oidn`, whose seconds include the denoiser's.
 use super::job::{Job, Overrides};
 use super::output::{kind_only, Outputs, Writer};
 use super::{parse_resolution, ToolError};
 use crate::accel::{Accel, BackendKind};
 use crate::imageio::metrics::{compare, match_sizes, MaskOptions};
-use crate::imageio::{read_exr, write_exr, ExrPixel};
+use crate::imageio::{read_exr, write_exr, ExrPixel, RgbImage};
 use crate::integrator::{render_for_time, IntegratorKind, RenderSettings};
 use crate::scene::Scene;
 use plotters::prelude::*;
@@ -44,7 +46,14 @@ pub struct ConvergeOptions {
     pub threads: usize,
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Also denoise each image (Open Image Denoise, feature `denoise`) and measure it as the
+    /// curve `NAME+oidn` (seconds include the denoising).
+    #[arg(long)]
+    pub denoise: bool,
 }
+
+/// The suffix of a denoised method's name.
+pub const DENOISED: &str = "+oidn";
 
 /// One curve: an integrator with some settings.
 pub struct Method {
@@ -133,6 +142,9 @@ pub fn run(opts: &ConvergeOptions) -> Result<bool, ToolError> {
     };
     let mut job = Job::load(&opts.scene, None)?.with(&overrides);
     (job.backend, job.threads) = (opts.backend, opts.threads);
+    if opts.denoise {
+        crate::imageio::denoise::available().map_err(|e| ToolError(format!("--denoise: {e}")))?;
+    }
     let reference = read_exr(&opts.reference)?;
     std::fs::create_dir_all(&opts.out)
         .map_err(|e| ToolError(format!("{}: {e}", opts.out.display())))?;
@@ -158,9 +170,14 @@ pub fn run(opts: &ConvergeOptions) -> Result<bool, ToolError> {
     // folder...) before any render; devices and FIFOs are written into, never replaced.
     let csv = opts.out.join("converge.csv");
     let png = opts.out.join("converge.png");
+    let suffixes: &[&str] = if opts.denoise { &["", DENOISED] } else { &[""] };
     let exrs: Vec<PathBuf> = chosen
         .iter()
-        .map(|m| opts.out.join(format!("{}.exr", m.name)))
+        .flat_map(|m| {
+            suffixes
+                .iter()
+                .map(|x| opts.out.join(format!("{}{x}.exr", m.name)))
+        })
         .collect();
     let mut files: Vec<(&str, &Path)> = vec![("--out", &csv), ("--out", &png)];
     files.extend(exrs.iter().map(|p| ("--out", p.as_path())));
@@ -171,19 +188,24 @@ pub fn run(opts: &ConvergeOptions) -> Result<bool, ToolError> {
     let mut rows = Vec::new();
     for m in &chosen {
         for &budget in &opts.budgets {
-            let row = measure(
-                scene, &accel, base, m, budget, &reference, mask, &opts.out, &pool,
-            )?;
-            say!(
-                "{:<22} budget {:>6.2} s: {:>7.2} s, {:>5} spp, relMSE {:.5}, RMSE {:.5}",
-                row.method,
-                row.budget,
-                row.seconds,
-                row.spp,
-                row.relmse,
-                row.rmse
-            );
-            rows.push(row);
+            let target = Target {
+                reference: &reference,
+                mask,
+                out: &opts.out,
+                denoise: opts.denoise,
+            };
+            for row in measure(scene, &accel, base, m, budget, &target, &pool)? {
+                say!(
+                    "{:<22} budget {:>6.2} s: {:>7.2} s, {:>5} spp, relMSE {:.5}, RMSE {:.5}",
+                    row.method,
+                    row.budget,
+                    row.seconds,
+                    row.spp,
+                    row.relmse,
+                    row.rmse
+                );
+                rows.push(row);
+            }
         }
     }
     for line in trend_lines(&rows) {
@@ -201,19 +223,26 @@ pub fn run(opts: &ConvergeOptions) -> Result<bool, ToolError> {
     Ok(true)
 }
 
-/// Renders one method at one budget and measures its error.
-#[allow(clippy::too_many_arguments)]
+/// What a measured image is compared with and where it goes.
+struct Target<'a> {
+    reference: &'a crate::imageio::RgbImage,
+    mask: MaskOptions,
+    out: &'a Path,
+    /// Also denoise the image and measure that too (`--denoise`).
+    denoise: bool,
+}
+
+/// Renders one method at one budget and measures its error, and with `--denoise` the
+/// denoised image's too (a second row, `NAME+oidn`).
 fn measure(
     scene: &Scene,
     accel: &Accel,
     base: &RenderSettings,
     m: &Method,
     budget: f64,
-    reference: &crate::imageio::RgbImage,
-    mask: MaskOptions,
-    out: &Path,
+    target: &Target,
     pool: &rayon::ThreadPool,
-) -> Result<Row, ToolError> {
+) -> Result<Vec<Row>, ToolError> {
     let mut s = base.clone();
     (m.adjust)(&mut s, budget);
     let (img, spp) = pool.install(|| {
@@ -226,16 +255,6 @@ fn measure(
             crate::integrator::UNOBSERVED,
         )
     });
-    let (a, r) = match_sizes(img.image.clone(), reference.clone()).map_err(ToolError)?;
-    let metrics = compare(&a, &r, mask).map_err(ToolError)?;
-    let exr = out.join(format!("{}.exr", m.name));
-    let writer: Writer = Box::new(|tmp: &Path| {
-        write_exr(tmp, &img.image, &[], ExrPixel::Half).map_err(|e| kind_only(&e))
-    });
-    Outputs::plan_files(&[("--out", &exr)])
-        .map_err(ToolError)?
-        .commit(vec![writer])?;
-    let photons = img.photons_emitted;
     let settings = match m.kind {
         IntegratorKind::Photonmap => format!(
             "global {} caustic {} lookup {}/{} gather {}",
@@ -247,17 +266,39 @@ fn measure(
         ),
         _ => format!("maxdepth {}", s.max_depth),
     };
-    Ok(Row {
-        method: m.name.to_string(),
-        settings,
-        budget,
-        seconds: img.seconds,
-        spp,
-        rays: img.counters.total(),
-        photons,
-        relmse: metrics.overall.relmse,
-        rmse: metrics.overall.rmse,
-    })
+    let row = |method: String, image: &RgbImage, seconds: f64| -> Result<Row, ToolError> {
+        let (a, r) = match_sizes(image.clone(), target.reference.clone()).map_err(ToolError)?;
+        let metrics = compare(&a, &r, target.mask).map_err(ToolError)?;
+        let exr = target.out.join(format!("{method}.exr"));
+        let writer: Writer = Box::new(|tmp: &Path| {
+            write_exr(tmp, image, &[], ExrPixel::Half).map_err(|e| kind_only(&e))
+        });
+        Outputs::plan_files(&[("--out", &exr)])
+            .map_err(ToolError)?
+            .commit(vec![writer])?;
+        Ok(Row {
+            method,
+            settings: settings.clone(),
+            budget,
+            seconds,
+            spp,
+            rays: img.counters.total(),
+            photons: img.photons_emitted,
+            relmse: metrics.overall.relmse,
+            rmse: metrics.overall.rmse,
+        })
+    };
+    let mut rows = vec![row(m.name.to_string(), &img.image, img.seconds)?];
+    if target.denoise {
+        let layers: Vec<(&str, &RgbImage)> = img.components.iter().map(|(n, i)| (*n, i)).collect();
+        let channels = super::denoise::layer_channels(&layers);
+        let done =
+            super::denoise::denoise_image(&img.image, &super::denoise::views(&channels), true)
+                .map_err(|e| ToolError(format!("--denoise: {e}")))?;
+        let name = format!("{}{DENOISED}", m.name);
+        rows.push(row(name, &done.image, img.seconds + done.seconds)?);
+    }
+    Ok(rows)
 }
 
 /// The rows as CSV with a header line.
