@@ -15,6 +15,7 @@ mod cli;
 mod coated;
 mod crosscheck;
 mod curtains;
+mod denoise;
 mod direct_light;
 mod display;
 mod envlight;
