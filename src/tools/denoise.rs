@@ -111,7 +111,7 @@ pub fn layer_channels(layers: &[(&str, &RgbImage)]) -> Vec<(String, Vec<f32>)> {
 }
 
 /// `(name, samples)` views of owned channels.
-pub fn views<'a, T: AsRef<str>>(owned: &'a [(T, Vec<f32>)]) -> Vec<(&'a str, &'a [f32])> {
+pub fn views<T: AsRef<str>>(owned: &[(T, Vec<f32>)]) -> Vec<(&str, &[f32])> {
     owned
         .iter()
         .map(|(n, s)| (n.as_ref(), s.as_slice()))
