@@ -2,6 +2,7 @@
 # Denoising (issue 20): relMSE of the noisy beauty and of the Open Image Denoise result against
 # the shared references, per scene, integrator and time budget, and the denoiser's own time.
 # Needs a photon built with the feature: cargo build --release --features denoise.
+# RENDER_ARGS adds render flags (e.g. RENDER_ARGS="--aov albedo,normal" for the guides).
 # Usage: benches/denoise.sh [BUDGETS...]   (default 1 4 16; prints a Markdown table). The
 # masked columns leave out pixels next to reference pixels brighter than 1 (compare --mask-above 1:
 # the visible light's edge, where pixel filters disagree; see ../shared/README.md).
@@ -22,7 +23,7 @@ for pair in cornell-spheres:reference.exr cornell-box:reference-tungsten.exr; do
     for t in "${budgets[@]}"; do
       img=$out/$scene-$integrator-$t.exr
       log=$("$photon" render "$file" --res 128x128 --time "$t" --integrator "$integrator" \
-        --denoise --no-png -o "$img")
+        --denoise --no-png -o "$img" ${RENDER_ARGS:-})
       "$photon" convert "$img" --layer noisy -o "$out/noisy.exr" >/dev/null
       spp=$(grep '^time budget' <<<"$log" | grep -o '[0-9]* spp' | cut -d' ' -f1)
       secs=$(grep -o 'denoised with .* in [0-9.]* s' <<<"$log" | grep -o '[0-9.]* s$' | cut -d' ' -f1)
