@@ -9,6 +9,11 @@
 //! `$OUT_DIR/openexr.rs` (only `exr_*` / `EXR_*` items), and link `libOpenEXRCore` alone.
 //! `pkg-config --libs OpenEXR` is deliberately not used: it lists the whole C++ stack
 //! (OpenEXR, Iex, IlmThread, Imath), none of which the C API needs.
+//!
+//! With `--features denoise`, the `oidn` crate links `libOpenImageDenoise` (found through
+//! `OIDN_DIR` or pkg-config, as `.ci/install` sets it up from PyPI's `pyoidn` wheel); this
+//! script adds that library's folder as the binaries' and tests' rpath, so they run without
+//! `LD_LIBRARY_PATH` (OIDN loads its CPU device module from the same folder at run time).
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -21,6 +26,10 @@ fn main() {
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo:rerun-if-env-changed=OPENEXR_INCLUDE_DIR");
     println!("cargo:rerun-if-env-changed=PKG_CONFIG_PATH");
+    println!("cargo:rerun-if-env-changed=OIDN_DIR");
+    if std::env::var_os("CARGO_FEATURE_DENOISE").is_some() {
+        oidn_rpath();
+    }
 
     let include_dirs = include_dirs();
     let Some(header_dir) = include_dirs.iter().find(|d| d.join(HEADER).is_file()) else {
@@ -92,5 +101,27 @@ fn watch_headers(dir: &Path) {
         if name.starts_with("openexr") && name.ends_with(".h") {
             println!("cargo:rerun-if-changed={}", entry.path().display());
         }
+    }
+}
+
+/// `--features denoise`: the folder of `libOpenImageDenoise` (`$OIDN_DIR/lib`, else
+/// `pkg-config --variable=libdir OpenImageDenoise`) as rpath of every linked target.
+fn oidn_rpath() {
+    let dir = match std::env::var_os("OIDN_DIR").filter(|d| !d.is_empty()) {
+        Some(d) => Some(PathBuf::from(d).join("lib")),
+        None => Command::new("pkg-config")
+            .args(["--variable=libdir", "OpenImageDenoise"])
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| PathBuf::from(String::from_utf8_lossy(&o.stdout).trim())),
+    };
+    match dir.filter(|d| d.join("libOpenImageDenoise.so").exists()) {
+        Some(dir) => println!("cargo:rustc-link-arg=-Wl,-rpath,{}", dir.display()),
+        None => panic!(
+            "feature `denoise`: libOpenImageDenoise.so not found through OIDN_DIR or \
+             pkg-config (OpenImageDenoise.pc): run `bash .ci/install` (it installs Open Image \
+             Denoise 2.5.1 from PyPI's pyoidn wheel), or build without --features denoise"
+        ),
     }
 }

@@ -7,6 +7,7 @@ use photon::tools::compare::{self, CompareOptions};
 use photon::tools::converge::{self, ConvergeOptions};
 use photon::tools::convert::{self, ConvertOptions};
 use photon::tools::crosscheck::{self, CrosscheckOptions};
+use photon::tools::denoise::{self, DenoiseOptions};
 use photon::tools::merge::{self, MergeOptions};
 use photon::tools::render::{self, RenderOptions};
 use photon::tools::upgrade::{self, UpgradeOptions};
@@ -36,6 +37,9 @@ enum Command {
     /// Convert an EXR, PNG or PFM image to PNG (exposure, tone curve), EXR or PFM (linear),
     /// optionally cropped or from one EXR layer.
     Convert(ConvertOptions),
+    /// Denoise a render with Intel Open Image Denoise (feature `denoise`), guided by its
+    /// `albedo` and `normal` layers when it has them; the noisy beauty is kept as layer `noisy`.
+    Denoise(DenoiseOptions),
     /// Error against time: each integrator and a few photon-map settings at a series of time
     /// budgets; writes a CSV and a log-log plot.
     Converge(ConvergeOptions),
@@ -158,6 +162,7 @@ fn main() -> ExitCode {
         Command::Render(opts) => render::run(&opts).map(|()| true),
         Command::Compare(opts) => compare::run(&opts),
         Command::Convert(opts) => convert::run(&opts).map(|()| true),
+        Command::Denoise(opts) => denoise::run(&opts).map(|()| true),
         Command::Converge(opts) => converge::run(&opts),
         Command::Crosscheck(opts) => crosscheck::run(&opts),
         Command::Bench(opts) => bench::run(&opts).map(|()| true),

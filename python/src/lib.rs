@@ -62,6 +62,7 @@ const REFUSED: &[&str] = &[
     "exposure",
     "half",
     "stats",
+    "denoise",
 ];
 
 /// One option given as a keyword: its long flag name and the arguments it becomes.

@@ -850,6 +850,25 @@ pub fn read_exr_uint_layer(
     Ok((img.width, img.height, words))
 }
 
+/// The channels of part 0: each name with how its samples are stored, in the file's order
+/// (alphabetical, as OpenEXR keeps them); subsampled channels are left out.
+pub fn read_exr_channel_list(path: &Path) -> Result<Vec<(String, ExrStored)>, ImageError> {
+    let ctx = Context::open_read(path)?;
+    let list = channel_list(&ctx)?;
+    ctx.finish()?;
+    Ok(list
+        .into_iter()
+        .filter(|(_, sub, _)| !sub)
+        .map(|(n, _, t)| (n, t))
+        .collect())
+}
+
+/// Reads up to three named channels of part 0 (half, float or uint, into f32 values) as one
+/// image whose R, G, B are `names` in order; a name given twice fills both slots.
+pub fn read_exr_named(path: &Path, names: [&str; 3]) -> Result<RgbImage, ImageError> {
+    read_rgb_channels(path, names.map(String::from), false, false)
+}
+
 /// The string attributes of part 0's header, as `(name, value)` in the file's order.
 pub fn read_exr_attributes(path: &Path) -> Result<Vec<(String, String)>, ImageError> {
     let ctx = Context::open_read(path)?;
@@ -1003,8 +1022,8 @@ fn v2i(v: ffi::exr_attr_v2i_t) -> [i32; 2] {
     unsafe { v.__bindgen_anon_1.arr }
 }
 
-/// Part 0's channels: name and whether it is subsampled.
-fn channel_list(ctx: &Context) -> Result<Vec<(String, bool)>, ImageError> {
+/// Part 0's channels: name, whether it is subsampled, and how its samples are stored.
+fn channel_list(ctx: &Context) -> Result<Vec<(String, bool, ExrStored)>, ImageError> {
     let mut list: *const ffi::exr_attr_chlist_t = std::ptr::null();
     // SAFETY: live context, valid out-pointer.
     ctx.check("exr_get_channels", || unsafe {
@@ -1028,7 +1047,12 @@ fn channel_list(ctx: &Context) -> Result<Vec<(String, bool)>, ImageError> {
                     .to_string_lossy()
                     .into_owned()
             };
-            (name, e.x_sampling != 1 || e.y_sampling != 1)
+            let stored = match e.pixel_type {
+                ffi::EXR_PIXEL_HALF => ExrStored::Half,
+                ffi::EXR_PIXEL_FLOAT => ExrStored::Float,
+                _ => ExrStored::Uint,
+            };
+            (name, e.x_sampling != 1 || e.y_sampling != 1, stored)
         })
         .collect())
 }
@@ -1042,13 +1066,13 @@ fn choose_channels(
     grey: bool,
 ) -> Result<[String; 3], ImageError> {
     let found = channel_list(ctx)?;
-    let has = |n: &str| found.iter().any(|(f, _)| f == n);
+    let has = |n: &str| found.iter().any(|(f, ..)| f == n);
     let names = if grey && has("Y") && !names.iter().any(|n| has(n)) {
         ["Y", "Y", "Y"].map(String::from)
     } else {
         names
     };
-    if let Some((name, _)) = found.iter().find(|(f, sub)| *sub && names.contains(f)) {
+    if let Some((name, ..)) = found.iter().find(|(f, sub, _)| *sub && names.contains(f)) {
         return Err(ImageError::invalid(
             &ctx.path,
             format!("channel {name} is subsampled"),
@@ -1062,7 +1086,7 @@ fn choose_channels(
                 "no channel {missing} (channels: {})",
                 found
                     .iter()
-                    .map(|(f, _)| f.as_str())
+                    .map(|(f, ..)| f.as_str())
                     .collect::<Vec<_>>()
                     .join(", ")
             ),

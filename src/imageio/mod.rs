@@ -1,7 +1,8 @@
 //! Image I/O: linear float images in memory, OpenEXR through OpenEXRCore ([`exr`]), 8-bit sRGB
 //! PNG through the `image` crate ([`png`]) after a tone curve ([`tonemap`]), the decoding of
 //! texture and environment-map files into linear texels and PFM reading and writing
-//! ([`decode`]), and error metrics against a reference ([`metrics`]).
+//! ([`decode`]), error metrics against a reference ([`metrics`]) and the Open Image Denoise
+//! denoiser ([`denoise`], feature `denoise`).
 //!
 //! Every writer goes through [`write_atomically`]: the image is written to a temporary file in
 //! the destination's directory and renamed over the destination only once it is complete, so a
@@ -19,6 +20,7 @@
 //! # Ok::<(), photon::imageio::ImageError>(())
 //! ```
 pub mod decode;
+pub mod denoise;
 pub mod exr;
 pub mod metrics;
 pub mod png;
@@ -26,9 +28,10 @@ pub mod tonemap;
 
 pub use decode::{read_linear, write_pfm};
 pub use exr::{
-    read_exr, read_exr_attributes, read_exr_channel, read_exr_layer, read_exr_size,
-    read_exr_uint_layer, write_exr, write_exr_channels, write_exr_with, ExrAttr, ExrChannel,
-    ExrCompression, ExrExtra, ExrLayout, ExrPixel, ExrSamples, ExrStored,
+    read_exr, read_exr_attributes, read_exr_channel, read_exr_channel_list, read_exr_layer,
+    read_exr_named, read_exr_size, read_exr_uint_layer, write_exr, write_exr_channels,
+    write_exr_with, ExrAttr, ExrChannel, ExrCompression, ExrExtra, ExrLayout, ExrPixel, ExrSamples,
+    ExrStored,
 };
 pub use png::{write_png, write_png_tonemapped};
 pub use tonemap::Tonemap;

@@ -3,7 +3,10 @@
 //! included, see `integrator::render_for_time`); the result is a CSV (integrator, settings,
 //! budget, seconds, spp, rays, photons, relMSE, RMSE, and the smaller budget whose image a
 //! budget repeated, if any) and a log-log PNG plot of relMSE against seconds, one curve per
-//! method, whose axes span the measured points.
+//! method, whose axes span the measured points. With `--denoise` each image is also denoised
+//! (Open Image Denoise, feature `denoise`; guides from the render's `albedo`/`normal` layers
+//! when it has them) and measured as the method `NAME+oidn`, whose seconds include the
+//! denoiser's.
 //!
 //! Budgets are kept: the fixed-map photon mapper scales its photon counts down when a pilot
 //! predicts that pass 1 would take more than half the budget
@@ -17,7 +20,7 @@ use super::output::{kind_only, Outputs, Writer};
 use super::{parse_resolution, ToolError};
 use crate::accel::{Accel, BackendKind};
 use crate::imageio::metrics::{compare, match_sizes, MaskOptions};
-use crate::imageio::{read_exr, write_exr, ExrPixel};
+use crate::imageio::{read_exr, write_exr, ExrPixel, RgbImage};
 use crate::integrator::{render_for_time, IntegratorKind, RenderSettings};
 use crate::scene::Scene;
 use plotters::coord::combinators::BindKeyPoints;
@@ -54,7 +57,14 @@ pub struct ConvergeOptions {
     pub threads: usize,
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Also denoise each image (Open Image Denoise, feature `denoise`) and measure it as the
+    /// curve `NAME+oidn` (seconds include the denoising).
+    #[arg(long)]
+    pub denoise: bool,
 }
+
+/// The suffix of a denoised method's name.
+pub const DENOISED: &str = "+oidn";
 
 /// One curve: an integrator with some settings.
 pub struct Method {
@@ -151,6 +161,9 @@ pub fn run(opts: &ConvergeOptions) -> Result<bool, ToolError> {
     };
     let mut job = Job::load(&opts.scene, None)?.with(&overrides);
     (job.backend, job.threads) = (opts.backend, opts.threads);
+    if opts.denoise {
+        crate::imageio::denoise::available().map_err(|e| ToolError(format!("--denoise: {e}")))?;
+    }
     let reference = read_exr(&opts.reference)?;
     std::fs::create_dir_all(&opts.out)
         .map_err(|e| ToolError(format!("{}: {e}", opts.out.display())))?;
@@ -176,9 +189,14 @@ pub fn run(opts: &ConvergeOptions) -> Result<bool, ToolError> {
     // folder...) before any render; devices and FIFOs are written into, never replaced.
     let csv = opts.out.join("converge.csv");
     let png = opts.out.join("converge.png");
+    let suffixes: &[&str] = if opts.denoise { &["", DENOISED] } else { &[""] };
     let exrs: Vec<PathBuf> = chosen
         .iter()
-        .map(|m| opts.out.join(format!("{}.exr", m.name)))
+        .flat_map(|m| {
+            suffixes
+                .iter()
+                .map(|x| opts.out.join(format!("{}{x}.exr", m.name)))
+        })
         .collect();
     let mut files: Vec<(&str, &Path)> = vec![("--out", &csv), ("--out", &png)];
     files.extend(exrs.iter().map(|p| ("--out", p.as_path())));
@@ -191,35 +209,42 @@ pub fn run(opts: &ConvergeOptions) -> Result<bool, ToolError> {
         // The image hashes of this method's budgets so far.
         let mut seen: Vec<(u64, f64)> = Vec::new();
         for &budget in &opts.budgets {
-            let (mut row, hash) = measure(
-                scene, &accel, base, m, budget, &reference, mask, &opts.out, &pool,
-            )?;
-            row.repeat_of = seen.iter().find(|(h, _)| *h == hash).map(|&(_, b)| b);
+            let target = Target {
+                reference: &reference,
+                mask,
+                out: &opts.out,
+                denoise: opts.denoise,
+            };
+            let (measured, hash) = measure(scene, &accel, base, m, budget, &target, &pool)?;
+            let repeat_of = seen.iter().find(|(h, _)| *h == hash).map(|&(_, b)| b);
             seen.push((hash, budget));
-            let ratio = row.seconds / row.budget;
-            say!(
-                "{:<22} budget {:>6.2} s: took {:>7.2} s ({:.2}x), {:>5} spp, relMSE {:.5}, RMSE {:.5}{}",
-                row.method,
-                row.budget,
-                row.seconds,
-                ratio,
-                row.spp,
-                row.relmse,
-                row.rmse,
-                if ratio > BUDGET_TOLERANCE {
-                    format!(" (over budget by more than {BUDGET_TOLERANCE}x)")
-                } else {
-                    String::new()
-                }
-            );
-            if let Some(b) = row.repeat_of {
+            for mut row in measured {
+                row.repeat_of = repeat_of;
+                let ratio = row.seconds / row.budget;
                 say!(
-                    "{:<22} budget {:>6.2} s rendered the same image as at {b} s: left out of the plot and the trend",
+                    "{:<22} budget {:>6.2} s: took {:>7.2} s ({:.2}x), {:>5} spp, relMSE {:.5}, RMSE {:.5}{}",
                     row.method,
-                    row.budget
+                    row.budget,
+                    row.seconds,
+                    ratio,
+                    row.spp,
+                    row.relmse,
+                    row.rmse,
+                    if ratio > BUDGET_TOLERANCE {
+                        format!(" (over budget by more than {BUDGET_TOLERANCE}x)")
+                    } else {
+                        String::new()
+                    }
                 );
+                if let Some(b) = row.repeat_of {
+                    say!(
+                        "{:<22} budget {:>6.2} s rendered the same image as at {b} s: left out of the plot and the trend",
+                        row.method,
+                        row.budget
+                    );
+                }
+                rows.push(row);
             }
-            rows.push(row);
         }
     }
     for line in trend_lines(&rows) {
@@ -237,19 +262,26 @@ pub fn run(opts: &ConvergeOptions) -> Result<bool, ToolError> {
     Ok(true)
 }
 
-/// Renders one method at one budget and measures its error.
-#[allow(clippy::too_many_arguments)]
+/// What a measured image is compared with and where it goes.
+struct Target<'a> {
+    reference: &'a crate::imageio::RgbImage,
+    mask: MaskOptions,
+    out: &'a Path,
+    /// Also denoise the image and measure that too (`--denoise`).
+    denoise: bool,
+}
+
+/// Renders one method at one budget and measures its error, and with `--denoise` the
+/// denoised image's too (a second row, `NAME+oidn`).
 fn measure(
     scene: &Scene,
     accel: &Accel,
     base: &RenderSettings,
     m: &Method,
     budget: f64,
-    reference: &crate::imageio::RgbImage,
-    mask: MaskOptions,
-    out: &Path,
+    target: &Target,
     pool: &rayon::ThreadPool,
-) -> Result<(Row, u64), ToolError> {
+) -> Result<(Vec<Row>, u64), ToolError> {
     let mut s = base.clone();
     (m.adjust)(&mut s, budget);
     let (img, spp) = pool.install(|| {
@@ -262,15 +294,6 @@ fn measure(
             crate::integrator::UNOBSERVED,
         )
     });
-    let (a, r) = match_sizes(img.image.clone(), reference.clone()).map_err(ToolError)?;
-    let metrics = compare(&a, &r, mask).map_err(ToolError)?;
-    let exr = out.join(format!("{}.exr", m.name));
-    let writer: Writer = Box::new(|tmp: &Path| {
-        write_exr(tmp, &img.image, &[], ExrPixel::Half).map_err(|e| kind_only(&e))
-    });
-    Outputs::plan_files(&[("--out", &exr)])
-        .map_err(ToolError)?
-        .commit(vec![writer])?;
     let photons = img.photons_emitted;
     let hash = image_hash(&img.image);
     // The counts the render used (a time budget may have scaled them down).
@@ -305,19 +328,40 @@ fn measure(
         ),
         _ => format!("maxdepth {}", s.max_depth),
     };
-    let row = Row {
-        method: m.name.to_string(),
-        settings,
-        budget,
-        seconds: img.seconds,
-        spp,
-        rays: img.counters.total(),
-        photons,
-        relmse: metrics.overall.relmse,
-        rmse: metrics.overall.rmse,
-        repeat_of: None,
+    let row = |method: String, image: &RgbImage, seconds: f64| -> Result<Row, ToolError> {
+        let (a, r) = match_sizes(image.clone(), target.reference.clone()).map_err(ToolError)?;
+        let metrics = compare(&a, &r, target.mask).map_err(ToolError)?;
+        let exr = target.out.join(format!("{method}.exr"));
+        let writer: Writer = Box::new(|tmp: &Path| {
+            write_exr(tmp, image, &[], ExrPixel::Half).map_err(|e| kind_only(&e))
+        });
+        Outputs::plan_files(&[("--out", &exr)])
+            .map_err(ToolError)?
+            .commit(vec![writer])?;
+        Ok(Row {
+            method,
+            settings: settings.clone(),
+            budget,
+            seconds,
+            spp,
+            rays: img.counters.total(),
+            photons,
+            relmse: metrics.overall.relmse,
+            rmse: metrics.overall.rmse,
+            repeat_of: None,
+        })
     };
-    Ok((row, hash))
+    let mut rows = vec![row(m.name.to_string(), &img.image, img.seconds)?];
+    if target.denoise {
+        let layers: Vec<(&str, &RgbImage)> = img.components.iter().map(|(n, i)| (*n, i)).collect();
+        let channels = super::denoise::layer_channels(&layers);
+        let done =
+            super::denoise::denoise_image(&img.image, &super::denoise::views(&channels), true)
+                .map_err(|e| ToolError(format!("--denoise: {e}")))?;
+        let name = format!("{}{DENOISED}", m.name);
+        rows.push(row(name, &done.image, img.seconds + done.seconds)?);
+    }
+    Ok((rows, hash))
 }
 
 /// A 64-bit hash of an image's pixel bits.

@@ -51,6 +51,7 @@ pub mod compare;
 pub mod converge;
 pub mod convert;
 pub mod crosscheck;
+pub mod denoise;
 pub mod display;
 pub mod job;
 pub mod merge;

@@ -4,6 +4,7 @@ use super::output::Outputs;
 use super::{float_in, parse_resolution, usize_in, ToolError};
 use crate::accel::{Accel, BackendKind, RayKind};
 use crate::imageio::{self, ExrPixel};
+use crate::integrator::aov::Aov;
 use crate::integrator::{self, IntegratorKind, RenderSettings};
 use crate::limits::{MAX_DEPTH, MAX_EXPOSURE, MAX_LIGHT_SAMPLES, MAX_PASSES, MAX_SPP, MAX_THREADS};
 use crate::sampling::Pattern;
@@ -78,6 +79,12 @@ pub struct RenderOptions {
     /// Write half floats instead of 32-bit floats.
     #[arg(long)]
     pub half: bool,
+    /// Denoise the image with Intel Open Image Denoise before writing it (feature `denoise`),
+    /// guided by the render's `albedo` and `normal` layers when it has them; an EXR keeps the
+    /// noisy beauty as layer `noisy`. Not with renders in passes: denoise the merged image
+    /// with `photon denoise`.
+    #[arg(long)]
+    pub denoise: bool,
     /// Print nothing but errors and warnings (pbrt-v4's flag): no banner, no statistics, no
     /// progress.
     #[arg(long, short)]
@@ -111,7 +118,7 @@ pub struct RenderOptions {
     /// not a mirror or smooth glass), `depth` (Z, camera space), `position` (P, world space).
     /// `Film "gbuffer"` adds pbrt-v4's channels.
     #[arg(long, value_enum, value_delimiter = ',', value_name = "NAME,...")]
-    pub aov: Vec<crate::integrator::aov::Aov>,
+    pub aov: Vec<Aov>,
     #[command(flatten)]
     pub photon: crate::integrator::settings::PhotonOverrides,
     #[command(flatten)]
@@ -212,7 +219,11 @@ impl RenderOptions {
             pass_spp: self.passes.pass_spp,
             crop: self.pixelbounds.or(self.cropwindow),
             quick: self.quick,
-            aovs: self.aov.clone(),
+            aovs: match self.denoise {
+                // The denoiser's guides.
+                true => [&self.aov[..], &[Aov::Albedo, Aov::Normal]].concat(),
+                false => self.aov.clone(),
+            },
         }
     }
 }
@@ -366,6 +377,9 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
         false => Outputs::plan_image(&exr, png.as_deref()),
     }
     .map_err(ToolError)?;
+    if opts.denoise {
+        check_denoise(opts)?;
+    }
     let checkpoint = super::render_passes::plan_checkpoint(&opts.passes, &outputs)?;
     let mut prepared = prepare(&mut job, opts)?;
     let threads = prepared.pool.current_num_threads();
@@ -411,7 +425,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
     } else {
         ExrPixel::Float
     };
-    let layers: Vec<(&str, &imageio::RgbImage)> =
+    let mut layers: Vec<(&str, &imageio::RgbImage)> =
         out.components.iter().map(|(n, i)| (*n, i)).collect();
     if let Some(sig) = crate::interrupt::take() {
         let tiles = &watch.tiles;
@@ -474,6 +488,14 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
         say_err!("photon: warning: {bad} non-finite pixel values");
     }
 
+    let denoised = match opts.denoise {
+        true => Some(denoise(&out.image, &data)?),
+        false => None,
+    };
+    if denoised.is_some() {
+        layers.push((super::denoise::NOISY, &out.image));
+    }
+    let image = denoised.as_ref().unwrap_or(&out.image);
     let (strings, typed) = metadata(opts, &job, &out);
     let strings: Vec<(&str, &str)> = strings.iter().map(|(k, v)| (*k, v.as_str())).collect();
     let channels: Vec<(&str, &[f32])> = data.iter().map(|(k, v)| (k.as_str(), &v[..])).collect();
@@ -484,7 +506,7 @@ pub fn run(opts: &RenderOptions) -> Result<(), ToolError> {
         ..Default::default()
     };
     // Outputs: written to temporary files and renamed together (see `output`).
-    outputs.write(&out.image, &layers, pixel, opts.exposure, extra)?;
+    outputs.write(image, &layers, pixel, opts.exposure, extra)?;
     for f in &outputs.files {
         say!("wrote {}", f.shown.display());
     }
@@ -530,6 +552,36 @@ fn metadata(opts: &RenderOptions, job: &Job, out: &integrator::RenderOutput) -> 
         ),
     ];
     (strings, typed)
+}
+
+/// `--denoise` before any work: not with a render in passes (its EXR is a partial image,
+/// whose mean `merge` sums), and only where the denoiser can run.
+fn check_denoise(opts: &RenderOptions) -> Result<(), ToolError> {
+    if opts.passes.active(opts.time.is_some()) {
+        return Err(ToolError(
+            "--denoise: a render in passes writes a partial image; denoise the merged image \
+             with `photon denoise`"
+                .to_string(),
+        ));
+    }
+    imageio::denoise::available().map_err(|e| ToolError(format!("--denoise: {e}")))
+}
+
+/// `--denoise`: the image denoised, with the guides among the render's data channels
+/// (`--denoise` asks for `albedo` and `normal`; one line says which were used).
+fn denoise(
+    image: &imageio::RgbImage,
+    data: &[(String, Vec<f32>)],
+) -> Result<imageio::RgbImage, ToolError> {
+    let done = super::denoise::denoise_image(image, &super::denoise::views(data), true)
+        .map_err(|e| ToolError(format!("--denoise: {e}")))?;
+    say!(
+        "denoised with {} in {:.2} s (Open Image Denoise; an EXR keeps the noisy beauty as layer {})",
+        done.guides,
+        done.seconds,
+        super::denoise::NOISY
+    );
+    Ok(done.image)
 }
 
 /// Prints what is rendered: the scene, its notes, the accelerator, the film and the settings.

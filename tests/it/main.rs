@@ -18,6 +18,7 @@ mod coated;
 mod converge;
 mod crosscheck;
 mod curtains;
+mod denoise;
 mod direct_light;
 mod display;
 mod envlight;
