@@ -830,7 +830,7 @@ pub fn read_exr_layer(path: &Path, layer: &str) -> Result<RgbImage, ImageError> 
 
 /// Reads one float channel `name` of part 0 of `path` (e.g. `A`, `Z`, `dzdx`), row-major.
 pub fn read_exr_channel(path: &Path, name: &str) -> Result<Vec<f32>, ImageError> {
-    let img = read_rgb_channels(path, [name, name, name].map(String::from), false, false)?;
+    let img = read_exr_named(path, [name; 3])?;
     Ok(img.pixels.iter().map(|p| p[0]).collect())
 }
 
