@@ -202,7 +202,7 @@ fn shade(
             f_d,
             path.beta,
             path.pixel,
-            primary,
+            path.depth,
             &mut path.sampler,
             &mut wave.extra.buf,
             &mut wave.extra.pending,

@@ -9,7 +9,9 @@
 //! - **indirect diffuse** by final gathering: stratified cosine-weighted gather rays whose
 //!   first diffuse hits read the global map (through a precomputed irradiance cache at a
 //!   subset of the photons, Christensen 1999, unless disabled); or, with `finalgather false`,
-//!   a direct look at the global map's indirect photons (for inspection).
+//!   a direct look at the global map's indirect photons (for inspection);
+//!   where the global map is too sparse to read (`sparsemap`: a sky-lit scene whose photons
+//!   leave it after one bounce), gather rays go on as paths instead ([`traced`]).
 //!
 //! ```text
 //! Integrator "photonmap"
@@ -19,6 +21,7 @@
 //!     "string kernel" [ "epanechnikov" ]   # box | cone | biweight | epanechnikov
 //!     "integer gathersamples" [ 2 ]       "bool finalgather" [ true ]
 //!     "bool irradiancecache" [ true ]      "bool projectionmaps" [ true ]
+//!     "float sparsemap" [ 0.02 ]           # below: gather rays go on as paths
 //!     "integer maxdepth" [ 5 ]             "integer maxphotonbounces" [ 4 ]  # maxdepth - 1
 //!     "float glossyalpha" [ 0.1 ]          # rough glossy surfaces receive caustic photons
 //! ```
@@ -69,6 +72,12 @@ pub struct PhotonSettings {
     /// area instead ([`crate::photon::estimate::Weigh`]).
     pub thin_fill: f32,
     pub irradiance_cache: bool,
+    /// A global map that stored fewer than this share of the photons it emitted is not read
+    /// ([`PhotonPass::traced_gather`]): the scene is lit mostly straight from lights without a
+    /// surface (a sky, the sun) whose photons leave it after their first bounce, so the map is
+    /// too sparse for its estimates (teapot: 573 of 200 000 photons stored, the floor beside
+    /// the teapot 7% dark). Gather rays then go on as paths. 0: always read the map.
+    pub sparse_map: f32,
     /// Progressive photon mapping (Knaus and Zwicker 2011): every pass traces fresh maps and
     /// its estimates use only the photons within a shrinking fraction of the k-nearest radius
     /// (see [`super::passes`]).
@@ -113,6 +122,7 @@ impl Default for PhotonSettings {
             guided_gather: false,
             thin_fill: 0.7,
             irradiance_cache: true,
+            sparse_map: 0.02,
             progressive: false,
             alpha: 2.0 / 3.0,
             radius_scale2: 1.0,
@@ -188,6 +198,10 @@ pub struct PhotonPass {
     pub volume_stats: crate::photon::volume::VolumeStats,
     /// Precomputed irradiance at a subset of the global photons.
     pub cache: Option<IrradianceCache>,
+    /// Gather rays go on as paths instead of reading the global map, which stored fewer than
+    /// [`PhotonSettings::sparse_map`] of its photons ([`traced`]); then no cache, guide or
+    /// glossy map is built from it.
+    pub traced_gather: bool,
     /// The global photons that took a diffuse bounce, for guiding the final gather.
     pub guide_map: Option<PhotonMap>,
     /// The global photons flagged `GLOSSY` (glossy caustics), looked up at visible diffuse
@@ -302,6 +316,14 @@ pub fn prepare(
         typical_radius_params(m, &uncut_global_params)
     });
     let caustic_params = params(s.caustic_lookup, r2(s.caustic_radius));
+    let st = &maps.stats;
+    let traced_gather = s.final_gather
+        && maps.global.is_some()
+        && (st.global_stored as f64) < s.sparse_map as f64 * st.global_emitted as f64;
+    let mut skipped = skipped;
+    if traced_gather {
+        skipped.push("global map reads (too sparse: gather rays go on as paths)");
+    }
     let t = Instant::now();
     // Progressive passes estimate at the gather hits themselves: the cache's nearest-point
     // lookup blurs over the cache's spacing, a bias that does not shrink with the radii (on
@@ -316,19 +338,20 @@ pub fn prepare(
         min_photons: 1,
         ..uncut_global_params
     };
-    let cache = if s.irradiance_cache && s.final_gather && !s.progressive {
+    let cache = if s.irradiance_cache && s.final_gather && !s.progressive && !traced_gather {
         let global = maps.global.as_ref();
         let limits = std::array::from_fn(|c| bounce_limit(&s.trace, c as u32).unwrap_or(0));
         global.and_then(|g| IrradianceCache::build(g, &gather_params, limits).ok())
     } else {
         None
     };
-    let guide_map = if s.final_gather && s.guided_gather {
+    let guide_map = if s.final_gather && s.guided_gather && !traced_gather {
         crate::photon::guide::indirect_map(maps.global.as_ref())
     } else {
         None
     };
-    let glossy_map = if s.final_gather {
+    // Traced gathers find the light of glossy chains themselves.
+    let glossy_map = if s.final_gather && !traced_gather {
         maps.global
             .as_ref()
             .and_then(|g| g.subset(|ph| ph.flags() & Photon::GLOSSY != 0))
@@ -356,6 +379,7 @@ pub fn prepare(
         volume,
         volume_stats,
         cache,
+        traced_gather,
         guide_map,
         glossy_map,
         settings: s,
@@ -434,6 +458,8 @@ pub struct Gather {
     pub light_samples: u32,
     /// Counts towards the `indirect` component (else `specular`: seen through a bounce).
     pub primary: bool,
+    /// Bounces behind the ray's origin (0 at the camera's first hit).
+    pub depth: u32,
     pub sampler: Sampler,
 }
 
@@ -551,7 +577,7 @@ pub fn at_diffuse(
     f_d: Vec3,
     beta: Vec3,
     pixel: usize,
-    primary: bool,
+    depth: u32,
     sampler: &mut Sampler,
     buf: &mut KnnResult,
     gathers: &mut Vec<Gather>,
@@ -646,7 +672,8 @@ pub fn at_diffuse(
             weight: w,
             pdf,
             light_samples,
-            primary,
+            primary: depth == 0,
+            depth,
             sampler: gs,
         });
     }
@@ -733,6 +760,9 @@ fn reflected(
     hit: Option<Hit>,
     buf: &mut KnnResult,
 ) -> Vec3 {
+    if pass.traced_gather {
+        return traced(ctx, pass, g, hit, buf);
+    }
     let scene = ctx.scene;
     let mut hit = hit;
     let mut ray = g.ray;
@@ -859,6 +889,154 @@ fn reflected(
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     }
     out
+}
+
+/// How a traced gather path counts an emitter it reaches (see [`traced`]).
+#[derive(Clone, Copy)]
+enum EmitterWeight {
+    /// Right after a vertex that took a shadow ray: the power heuristic of the sampled
+    /// direction's density against the light's.
+    Mis(f32),
+    /// After a bounce that no shadow ray stands for (a glossy or coat reflection).
+    Full,
+    /// Counted elsewhere: the gather's own origin weighs it against its shadow rays
+    /// ([`emitted`] in [`gather_radiance`]), or the caustic map holds it (sharp bounces only
+    /// since the last point that read it).
+    Zero,
+}
+
+/// What the gather ray `g` (first hit `hit`) brings back when the global map is too sparse to
+/// read ([`PhotonPass::traced_gather`]): the reflected light is path-traced. At each point
+/// with a diffuse lobe (a coated surface's body, chosen as in [`reflected`]) a shadow ray to
+/// any light (power heuristic against the cosine-sampled continuation), the caustic map's
+/// estimate, and a cosine-sampled bounce on; specular and glossy surfaces are followed by
+/// their BSDF. An emitter reached after sharp bounces only from such a point is the caustic
+/// map's; one reached after a glossy bounce counts in full (the glossy map is not built in
+/// this mode). Paths keep to the render's `maxdepth`; Russian roulette on the throughput
+/// after [`super::path::RR_MIN_BOUNCES`] bounces.
+fn traced(
+    ctx: &RenderContext,
+    pass: &PhotonPass,
+    g: &mut Gather,
+    hit: Option<Hit>,
+    buf: &mut KnnResult,
+) -> Vec3 {
+    let scene = ctx.scene;
+    let sharp_alpha = caustic_alpha(pass);
+    let caustic = pass.maps.caustic.as_ref();
+    let (mut hit, mut ray) = (hit, g.ray);
+    let (mut throughput, mut out) = (Vec3::ONE, Vec3::ZERO);
+    let mut weight = EmitterWeight::Zero;
+    // Sharp bounces only since the last point that read the caustic map (the gather's origin
+    // read it).
+    let mut sharp_chain = true;
+    let mut depth = g.depth + 1;
+    loop {
+        let w = match weight {
+            EmitterWeight::Zero => None,
+            EmitterWeight::Full => Some(None),
+            EmitterWeight::Mis(pdf) => Some(Some(pdf)),
+        };
+        if let Some(pdf) = w {
+            let mis = |light_pdf: f32| {
+                pdf.map_or(1.0, |p| crate::sampling::power_heuristic(p, light_pdf))
+            };
+            out += throughput * emitted(ctx, &ray, hit.as_ref(), mis);
+        }
+        let Some(h) = hit else { return out };
+        if depth >= ctx.settings.max_depth {
+            return out;
+        }
+        let mut si = SurfaceInteraction::new(scene, &h, &ray);
+        let bsdf = si.bsdf(scene, ctx.settings.footprint());
+        let wo = si.wo;
+        let coated = bsdf.has_coat();
+        let p_coat = coat_choice(&bsdf, wo);
+        let body = coated && g.sampler.next_1d() >= p_coat;
+        let wi;
+        if body
+            || (!coated && bsdf.flags().has_diffuse() && far_side_value(&bsdf, wo) == Vec3::ZERO)
+        {
+            // A diffuse point: shadow ray, caustic estimate, cosine-sampled bounce.
+            let choice = if coated { 1.0 - p_coat } else { 1.0 };
+            let f = |wi: Vec3| {
+                if coated {
+                    bsdf.f_body(wo, wi, TransportMode::Radiance)
+                } else {
+                    bsdf.f(wo, wi, TransportMode::Radiance)
+                }
+            };
+            out += throughput * direct_mis(ctx, &si, &mut g.sampler, f) / choice;
+            if let Some(map) = caustic {
+                let n = si.facing_normal();
+                let l = if coated {
+                    let u = g.sampler.next_1d();
+                    let fw = |w: Vec3| f(si.frame.to_local(w));
+                    radiance_sampled(
+                        map,
+                        si.p,
+                        n,
+                        &pass.caustic_params,
+                        buf,
+                        (BODY_SAMPLES, u),
+                        fw,
+                    )
+                    .0
+                } else {
+                    let f_d = f(Vec3::new(0.0, 0.0, wo.z.signum()));
+                    f_d * irradiance_with(map, si.p, n, &pass.caustic_params, buf).0
+                };
+                out += throughput * l / choice;
+            }
+            let local = crate::sampling::warp::square_to_cosine_hemisphere(g.sampler.next_2d());
+            let pdf = local.z / std::f32::consts::PI;
+            if pdf <= 0.0 {
+                return out;
+            }
+            wi = if wo.z < 0.0 { -local } else { local };
+            throughput *= f(wi) * (wi.z.abs() / (pdf * choice));
+            weight = EmitterWeight::Mis(pdf);
+            sharp_chain = true;
+        } else {
+            // Specular, glossy, a coat's reflection or a diffuse transmitter: one sampled
+            // direction.
+            let (uc, u) = (g.sampler.next_1d(), g.sampler.next_2d());
+            let bs = if coated {
+                bsdf.sample_coat(wo, uc, u, TransportMode::Radiance)
+            } else {
+                bsdf.sample(wo, uc, u, TransportMode::Radiance)
+            };
+            let Some(bs) = bs else { return out };
+            let choice = if coated { p_coat } else { 1.0 };
+            throughput *= bs.f * (bs.wi.z.abs() / (bs.pdf * choice));
+            wi = bs.wi;
+            let sharp =
+                sharp_alpha.is_some_and(|a| trace::is_sharp_bounce(&bsdf, bs.lobe_alpha, a));
+            sharp_chain &= sharp;
+            weight = if sharp_chain && caustic.is_some() {
+                EmitterWeight::Zero
+            } else {
+                EmitterWeight::Full
+            };
+        }
+        depth += 1;
+        if depth > super::path::RR_MIN_BOUNCES {
+            let survive = throughput.max_element().min(1.0);
+            if g.sampler.next_1d() >= survive {
+                return out;
+            }
+            throughput /= survive;
+        }
+        if !throughput.is_finite() || throughput.max_element() <= 0.0 {
+            return out;
+        }
+        ray = si.spawn_ray(si.frame.to_world(wi));
+        hit = ctx.accel.intersect(RayKind::Gather, &ray);
+        throughput *= crate::accel::transmittance(scene, hit.as_ref(), &ray);
+        ctx.counters
+            .secondary_rays
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    }
 }
 
 /// Most thin points a gather ray passes on.

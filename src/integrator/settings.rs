@@ -350,6 +350,10 @@ settings! {
     thin_fill: f32 = thin_fill, "thinfill", "thin-fill", Some(Range::closed(0.0, 1.0));
     /// Christensen's precomputed irradiance for the gather lookups.
     irradiance_cache: bool = irradiance_cache, "irradiancecache", "irradiance-cache", None;
+    /// A global map that stored fewer than this share of its emitted photons (a scene lit
+    /// mostly by a sky or the sun, whose photons leave after one bounce) is not read: gather
+    /// rays go on as paths (0: always read it).
+    sparse_map: f32 = sparse_map, "sparsemap", "sparse-map", Some(Range::closed(0.0, f64::INFINITY));
     /// Caustic projection maps on or off.
     projection_maps: bool = trace.projection_maps, "projectionmaps", "projection-maps", None;
     /// Distant and infinite lights aim most global photons at what the camera sees.

@@ -39,6 +39,7 @@ mod path_tracer;
 mod photonmap;
 mod regression;
 mod render_scenes;
+mod sky_lit;
 mod textures;
 mod thin_tubes;
 mod upgrade;
