@@ -202,6 +202,9 @@ pub struct PhotonPass {
     /// [`PhotonSettings::sparse_map`] of its photons ([`traced`]); then no cache, guide or
     /// glossy map is built from it.
     pub traced_gather: bool,
+    /// With traced gathers: precomputed caustic-map irradiance for their diffuse points (as
+    /// the irradiance cache serves dense maps' gather hits).
+    pub caustic_cache: Option<IrradianceCache>,
     /// The global photons that took a diffuse bounce, for guiding the final gather.
     pub guide_map: Option<PhotonMap>,
     /// The global photons flagged `GLOSSY` (glossy caustics), looked up at visible diffuse
@@ -345,6 +348,16 @@ pub fn prepare(
     } else {
         None
     };
+    let caustic_cache = if traced_gather && s.irradiance_cache && !s.progressive {
+        let params = EstimateParams {
+            min_photons: 1,
+            ..caustic_params
+        };
+        let limits = [u8::MAX; LEVELS];
+        (maps.caustic.as_ref()).and_then(|m| IrradianceCache::build(m, &params, limits).ok())
+    } else {
+        None
+    };
     let guide_map = if s.final_gather && s.guided_gather && !traced_gather {
         crate::photon::guide::indirect_map(maps.global.as_ref())
     } else {
@@ -380,6 +393,7 @@ pub fn prepare(
         volume_stats,
         cache,
         traced_gather,
+        caustic_cache,
         guide_map,
         glossy_map,
         settings: s,
@@ -909,7 +923,7 @@ enum EmitterWeight {
 /// read ([`PhotonPass::traced_gather`]): the reflected light is path-traced. At each point
 /// with a diffuse lobe (a coated surface's body, chosen as in [`reflected`]) a shadow ray to
 /// any light (power heuristic against the cosine-sampled continuation), the caustic map's
-/// estimate, and a cosine-sampled bounce on; specular and glossy surfaces are followed by
+/// irradiance (from its cache, [`PhotonPass::caustic_cache`]), and a cosine-sampled bounce on; specular and glossy surfaces are followed by
 /// their BSDF. An emitter reached after sharp bounces only from such a point is the caustic
 /// map's; one reached after a glossy bounce counts in full (the glossy map is not built in
 /// this mode). Paths keep to the render's `maxdepth`; Russian roulette on the throughput
@@ -969,7 +983,22 @@ fn traced(
             out += throughput * direct_mis(ctx, &si, &mut g.sampler, f) / choice;
             if let Some(map) = caustic {
                 let n = si.facing_normal();
-                let l = if coated {
+                let cached = (pass.caustic_cache.as_ref())
+                    .and_then(|c| c.lookup(si.p, n, pass.caustic_params.max_r2, 0, buf));
+                let l = if let Some(c) = cached {
+                    // The body at a cosine-drawn direction for light from all around, as the
+                    // dense maps' gather hits read it.
+                    let local =
+                        crate::sampling::warp::square_to_cosine_hemisphere(g.sampler.next_2d());
+                    let wi = if wo.z < 0.0 { -local } else { local };
+                    f(wi) * c.irradiance
+                } else if pass.caustic_cache.is_some() {
+                    // No cache point's estimate covers this point: at most a few caustic
+                    // photons lie near it. Zero, not a full search (which there walks every
+                    // photon of the other side of a thin panel: car 2.6 s -> 1.7 s at 16 spp;
+                    // the image's mean moved 0.03%, its 4x4 blocks at most 0.1%).
+                    Vec3::ZERO
+                } else if coated {
                     let u = g.sampler.next_1d();
                     let fw = |w: Vec3| f(si.frame.to_local(w));
                     radiance_sampled(

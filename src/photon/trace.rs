@@ -305,7 +305,7 @@ pub fn trace(scene: &Scene, accel: &Accel, lights: &Lights, s: &TraceSettings) -
     let global_map = build_map(&global, true);
     drop(global);
     let glossy_map = build_map(&caustic[..split], false);
-    let caustic_map = build_map(&caustic[split..], false);
+    let caustic_map = build_map(&caustic[split..], true);
     stats.build_seconds = t.elapsed().as_secs_f64();
     PhotonMaps {
         global: global_map,
@@ -381,7 +381,7 @@ pub fn pilot(scene: &Scene, accel: &Accel, lights: &Lights, s: &TraceSettings) -
 }
 
 /// Builds a map from landed photons, with their surface normals when `normals` (the global
-/// map's, for the irradiance cache); `None` when empty.
+/// and caustic maps', for their irradiance caches); `None` when empty.
 fn build_map(landings: &[Landing], normals: bool) -> Option<PhotonMap> {
     if landings.is_empty() {
         return None;
