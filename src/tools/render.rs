@@ -737,9 +737,17 @@ fn print_stats(out: &crate::integrator::RenderOutput, threads: usize) {
     let rays = (c.camera_rays.load(Relaxed)
         + c.secondary_rays.load(Relaxed)
         + c.shadow_rays.load(Relaxed)) as f64;
+    // The bidirectional integrators query the backend one ray at a time, untimed.
+    let querying = if ray_s > 0.0 {
+        format!(
+            "{:.2} Mrays/s per thread while querying",
+            rays / ray_s / 1e6
+        )
+    } else {
+        "query time not measured by this integrator".to_string()
+    };
     say!(
-        "ray rate inside the render: {:.2} Mrays/s per thread while querying, {:.2} Mrays/s of render-loop wall time",
-        rays / ray_s.max(1e-9) / 1e6,
+        "ray rate inside the render: {querying}, {:.2} Mrays/s of render-loop wall time",
         rays / loop_s / 1e6
     );
 }
@@ -854,7 +862,14 @@ fn print_raw_rate(
         replayed += set.len();
     }
     let raw = rays / seconds.max(1e-12) / 1e6;
-    let inside = c.total() as f64 / (c.ray_ns.load(Relaxed) as f64 * 1e-9).max(1e-9) / 1e6;
+    let ray_s = c.ray_ns.load(Relaxed) as f64 * 1e-9;
+    if ray_s <= 0.0 {
+        say!(
+            "raw rate on {replayed} recorded camera/shadow/gather/bounce rays, 1 thread, batches of <= 256, weighted by the render's counts: {raw:.2} Mrays/s (this integrator does not time its queries: no share of raw)"
+        );
+        return;
+    }
+    let inside = c.total() as f64 / ray_s / 1e6;
     say!(
         "raw rate on {replayed} recorded camera/shadow/gather/bounce rays, 1 thread, batches of <= 256, weighted by the render's counts: {raw:.2} Mrays/s; inside the render {inside:.2} Mrays/s per thread ({:.0}% of raw)",
         100.0 * inside / raw.max(1e-9)

@@ -60,3 +60,35 @@ fn reading_the_sparse_map_darkens_the_contact() {
         "lowest block {lo}: the scene no longer tells the two apart"
     );
 }
+
+/// Traced gathers draw from each gather's own sample stream: the same image on 1 and 2
+/// threads, bit for bit (and another seed gives another image).
+#[test]
+fn traced_gathers_do_not_depend_on_threads() {
+    use photon::accel::BackendKind;
+    use photon::integrator::IntegratorKind;
+    let dir = TempDir::new("sky-lit-threads");
+    let file = dir.write("pm.pbrt", scene(None)("photonmap", 4));
+    let scene = photon::scene::loader::load(&file).expect("scene loads");
+    let render = |threads, seed| {
+        let out = common::render_with(
+            &scene,
+            IntegratorKind::Photonmap,
+            BackendKind::Embree,
+            (32, 24, 4),
+            threads,
+            seed,
+        );
+        assert!(
+            out.notes
+                .iter()
+                .any(|l| l.contains("gather rays go on as paths")),
+            "the map is read: {:?}",
+            out.notes
+        );
+        out.image.pixels
+    };
+    let one = render(1, 5);
+    assert!(one == render(2, 5), "traced gathers depend on threads");
+    assert!(one != render(2, 6), "traced gathers ignore the seed");
+}
