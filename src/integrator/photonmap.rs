@@ -822,11 +822,8 @@ fn reflected(
             };
             throughput *= bs.f * (bs.wi.z.abs() / (bs.pdf * p_coat));
             ray = si.spawn_ray(si.frame.to_world(bs.wi));
-            hit = ctx.accel.intersect(RayKind::Gather, &ray);
-            throughput *= crate::accel::transmittance(scene, hit.as_ref(), &ray);
-            ctx.counters
-                .secondary_rays
-                .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            let (h, tr) = gather_segment(ctx, &ray);
+            (hit, throughput) = (h, throughput * tr);
             continue;
         }
         if bsdf.flags().has_diffuse() {
@@ -869,11 +866,8 @@ fn reflected(
                 throughput *= f(wi) * (wi.z.abs() / pdf);
                 from_thin = Some(pdf);
                 ray = si.spawn_ray(si.frame.to_world(wi));
-                hit = ctx.accel.intersect(RayKind::Gather, &ray);
-                throughput *= crate::accel::transmittance(scene, hit.as_ref(), &ray);
-                ctx.counters
-                    .secondary_rays
-                    .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let (h, tr) = gather_segment(ctx, &ray);
+                (hit, throughput) = (h, throughput * tr);
                 continue;
             }
             let mut e = f_d * cached.irradiance;
@@ -896,11 +890,8 @@ fn reflected(
         };
         throughput *= bs.f * (bs.wi.z.abs() / bs.pdf);
         ray = si.spawn_ray(si.frame.to_world(bs.wi));
-        hit = ctx.accel.intersect(RayKind::Gather, &ray);
-        throughput *= crate::accel::transmittance(scene, hit.as_ref(), &ray);
-        ctx.counters
-            .secondary_rays
-            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let (h, tr) = gather_segment(ctx, &ray);
+        (hit, throughput) = (h, throughput * tr);
     }
     out
 }
@@ -1060,12 +1051,20 @@ fn traced(
             return out;
         }
         ray = si.spawn_ray(si.frame.to_world(wi));
-        hit = ctx.accel.intersect(RayKind::Gather, &ray);
-        throughput *= crate::accel::transmittance(scene, hit.as_ref(), &ray);
-        ctx.counters
-            .secondary_rays
-            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let (h, tr) = gather_segment(ctx, &ray);
+        (hit, throughput) = (h, throughput * tr);
     }
+}
+
+/// The next hit of a gather path along `ray` (counted as a secondary ray) and the
+/// transmittance of the media the segment crosses.
+fn gather_segment(ctx: &RenderContext, ray: &Ray) -> (Option<Hit>, Vec3) {
+    let hit = ctx.accel.intersect(RayKind::Gather, ray);
+    ctx.counters
+        .secondary_rays
+        .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let tr = crate::accel::transmittance(ctx.scene, hit.as_ref(), ray);
+    (hit, tr)
 }
 
 /// Most thin points a gather ray passes on.
