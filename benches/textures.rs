@@ -46,6 +46,7 @@ fn coords() -> Vec<TexCoord> {
             uv: Vec2::new(next(), next()),
             duvdx: Vec2::new(1.0 / 1024.0, 0.0),
             duvdy: Vec2::new(0.0, 1.0 / 1024.0),
+            ..Default::default()
         })
         .collect()
 }

@@ -32,6 +32,7 @@ use crate::camera::Footprint;
 use crate::light::LightSample;
 use crate::math::{spawn_origin, Frame, Ray, Vec2, Vec3};
 use crate::scene::{Material, MaterialKind, Mesh, Scene};
+use crate::spectrum::Lambda;
 use crate::texture::{Tex, TexCoord};
 
 /// A ray hit, ready to shade.
@@ -84,15 +85,17 @@ impl<'s> SurfaceInteraction<'s> {
         }
     }
 
-    /// The BSDF at this point, its textures looked up here. A bump-mapped material first
-    /// moves the shading normal (and `frame`, `wo` with it).
-    pub fn bsdf(&mut self, scene: &Scene, fp: Footprint) -> Bsdf {
+    /// The BSDF at this point, its textures looked up here and its colours at the wavelengths
+    /// `lambda` ([`Lambda::Rgb`]: RGB). A bump-mapped material first moves the shading normal
+    /// (and `frame`, `wo` with it).
+    pub fn bsdf(&mut self, scene: &Scene, fp: Footprint, lambda: Lambda) -> Bsdf {
         let m = self.material(scene);
-        let tc = if material_needs_differentials(m) {
+        let mut tc = if material_needs_differentials(m) {
             self.tex_coord(scene, fp)
         } else {
             TexCoord::point(self.uv)
         };
+        tc.lambda = lambda;
         if let Some(d) = &m.displacement {
             self.bump(d, &tc);
         }
@@ -148,6 +151,7 @@ impl<'s> SurfaceInteraction<'s> {
             uv: self.uv,
             duvdx: uv_step(dpdu, dpdv, dpdx),
             duvdy: uv_step(dpdu, dpdv, dpdy),
+            lambda: Lambda::Rgb,
         }
     }
 

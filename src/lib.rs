@@ -34,5 +34,6 @@ pub mod photon;
 pub mod progress;
 pub mod sampling;
 pub mod scene;
+pub mod spectrum;
 pub mod texture;
 pub mod tools;

@@ -195,7 +195,11 @@ fn tile(ctx: &RenderContext, x0: u32, y0: u32, x1: u32, y1: u32) -> Vec<Sums> {
                 continue;
             };
             let mut si = SurfaceInteraction::new(ctx.scene, hit, ray);
-            let bsdf = si.bsdf(ctx.scene, ctx.settings.footprint());
+            let bsdf = si.bsdf(
+                ctx.scene,
+                ctx.settings.footprint(),
+                crate::spectrum::Lambda::Rgb,
+            );
             let first = first_hit(ctx, &si, &bsdf, *pixel, sampler);
             s.hits += 1.0;
             s.albedo += first.rho;
@@ -283,7 +287,11 @@ fn guide_through(
             return (beta * environment_albedo(ctx, &ray), Vec3::ZERO);
         };
         let mut next = SurfaceInteraction::new(ctx.scene, &hit, &ray);
-        bsdf = next.bsdf(ctx.scene, ctx.settings.footprint());
+        bsdf = next.bsdf(
+            ctx.scene,
+            ctx.settings.footprint(),
+            crate::spectrum::Lambda::Rgb,
+        );
         if !bsdf.flags().is_specular_only() {
             let uc = sampler.next_1d();
             let u = sampler.next_2d();

@@ -113,7 +113,11 @@ impl<'a> Vertex<'a> {
         path: &mut PathState<T>,
         mut si: SurfaceInteraction<'a>,
     ) -> Self {
-        let bsdf = si.bsdf(ctx.scene, ctx.settings.footprint());
+        let bsdf = si.bsdf(
+            ctx.scene,
+            ctx.settings.footprint(),
+            crate::spectrum::Lambda::Rgb,
+        );
         let ls = ctx.settings.light_samples.max(1);
         path.sampler
             .set_dimension(CAMERA_DIMS + path.depth * dims_per_vertex(ls));

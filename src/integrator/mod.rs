@@ -113,6 +113,9 @@ pub struct RenderSettings {
     /// gbuffer also keeps each pixel's sample variance ([`RenderOutput::variance`]): the
     /// per-pixel integrators then sum each sample apart before adding it in.
     pub aovs: aov::Request,
+    /// Render spectrally (`--spectral`, [`crate::spectrum`]): each camera sample at three
+    /// wavelengths, as pbrt-v4 renders; only integrators that [`check_spectral`] accepts.
+    pub spectral: bool,
 }
 
 impl RenderSettings {
@@ -176,6 +179,7 @@ impl RenderSettings {
                 aovs: Vec::new(),
                 gbuffer: scene.film.gbuffer,
             },
+            spectral: false,
         })
     }
 
@@ -336,6 +340,29 @@ pub fn check_scene(kind: IntegratorKind, scene: &Scene) -> Result<(), String> {
     }
 }
 
+/// Whether `kind` renders spectrally: with `settings.spectral`, the path tracer does (in
+/// scenes without media: their coefficients are still RGB); the others are refused.
+pub fn check_spectral(
+    kind: IntegratorKind,
+    settings: &RenderSettings,
+    scene: &Scene,
+) -> Result<(), String> {
+    if !settings.spectral {
+        return Ok(());
+    }
+    if kind != IntegratorKind::Path {
+        return Err(format!(
+            "--spectral: only --integrator path renders spectrally yet, not {}",
+            clap::ValueEnum::to_possible_value(&kind)
+                .map_or("?".into(), |v| v.get_name().to_string())
+        ));
+    }
+    if !scene.media.is_empty() {
+        return Err("--spectral: scenes with media render in RGB only yet".into());
+    }
+    Ok(())
+}
+
 /// Pass 1 for `kind` (photon maps for the photon mapper, nothing otherwise).
 pub fn prepare(
     scene: &Scene,
@@ -445,6 +472,10 @@ pub fn render_prepared(
             st.build_seconds + p.cache_seconds + vs.build_seconds,
         )
     });
+    if settings.spectral {
+        // Fitted here, once, with the whole pool (not inside the first tile that needs it).
+        crate::spectrum::tables();
+    }
     let ctx = RenderContext {
         scene,
         accel,

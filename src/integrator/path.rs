@@ -120,7 +120,7 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<()
     if path.depth >= ctx.settings.max_depth {
         return;
     }
-    let bsdf = si.bsdf(ctx.scene, ctx.settings.footprint());
+    let bsdf = si.bsdf(ctx.scene, ctx.settings.footprint(), path.lambda);
     let base = CAMERA_DIMS.wrapping_add(path.depth.wrapping_mul(DIMS_PER_VERTEX));
     path.sampler.set_dimension(base);
     if bsdf.flags().has_non_specular() {
@@ -137,7 +137,9 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<()
 /// Radiance emitted by area light `li` at `p` (geometric normal `ng`) towards the path's
 /// previous vertex, times the throughput and the MIS weight.
 fn emitted(ctx: &RenderContext, path: &PathState, li: usize, p: Vec3, ng: Vec3) -> Vec3 {
-    let le = ctx.lights.le(li, ng, -path.ray.d.normalize());
+    let le = path
+        .lambda
+        .illuminant(ctx.lights.le(li, ng, -path.ray.d.normalize()));
     if le.max_element() <= 0.0 {
         return Vec3::ZERO;
     }
@@ -173,7 +175,7 @@ fn light_sample(
     } else {
         power_heuristic(s.pdf, bsdf.pdf(v.wo, wi))
     };
-    let contrib = path.beta * f * s.li * (w / s.pdf);
+    let contrib = path.beta * f * path.lambda.illuminant(s.li) * (w / s.pdf);
     if !contrib.is_finite() || contrib.max_element() <= 0.0 {
         return None;
     }
@@ -255,7 +257,7 @@ fn shade_medium(ctx: &RenderContext, mut path: PathState, p: Vec3, wave: &mut Wa
         } else {
             power_heuristic(s.pdf, f)
         };
-        let contrib = path.beta * s.li * (f * w / s.pdf);
+        let contrib = path.beta * path.lambda.illuminant(s.li) * (f * w / s.pdf);
         if contrib.is_finite() && contrib.max_element() > 0.0 {
             wave.shadows.push(Shadow {
                 pixel: path.pixel,

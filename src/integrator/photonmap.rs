@@ -793,7 +793,11 @@ fn reflected(
         }
         let Some(h) = hit else { return out };
         let mut si = SurfaceInteraction::new(scene, &h, &ray);
-        let bsdf = si.bsdf(scene, ctx.settings.footprint());
+        let bsdf = si.bsdf(
+            scene,
+            ctx.settings.footprint(),
+            crate::spectrum::Lambda::Rgb,
+        );
         let wo = si.wo;
         if bsdf.has_coat() {
             // A coated surface: its coat's reflection (followed, like a specular bounce) or its
@@ -953,7 +957,11 @@ fn traced(
             return out;
         }
         let mut si = SurfaceInteraction::new(scene, &h, &ray);
-        let bsdf = si.bsdf(scene, ctx.settings.footprint());
+        let bsdf = si.bsdf(
+            scene,
+            ctx.settings.footprint(),
+            crate::spectrum::Lambda::Rgb,
+        );
         let wo = si.wo;
         let coated = bsdf.has_coat();
         let p_coat = coat_choice(&bsdf, wo);

@@ -124,13 +124,17 @@ pub fn diffuse_points(scene: &Scene, accel: &Accel, rays: &[Ray]) -> Vec<Diffuse
         .zip(&hits)
         .filter_map(|(ray, hit)| {
             let mut si = crate::interaction::SurfaceInteraction::new(scene, hit.as_ref()?, ray);
-            si.bsdf(scene, crate::camera::Footprint::of_file(scene))
-                .flags()
-                .has_diffuse()
-                .then(|| DiffusePoint {
-                    p: si.p,
-                    n: si.facing_normal(),
-                })
+            si.bsdf(
+                scene,
+                crate::camera::Footprint::of_file(scene),
+                crate::spectrum::Lambda::Rgb,
+            )
+            .flags()
+            .has_diffuse()
+            .then(|| DiffusePoint {
+                p: si.p,
+                n: si.facing_normal(),
+            })
         })
         .collect()
 }

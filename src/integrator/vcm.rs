@@ -593,7 +593,11 @@ fn next_vertex<'s>(
 ) -> Option<(Hit, SurfaceInteraction<'s>, Bsdf)> {
     let hit = ctx.accel.intersect(kind, ray)?;
     let mut si = SurfaceInteraction::new(ctx.scene, &hit, ray);
-    let bsdf = si.bsdf(ctx.scene, ctx.settings.footprint());
+    let bsdf = si.bsdf(
+        ctx.scene,
+        ctx.settings.footprint(),
+        crate::spectrum::Lambda::Rgb,
+    );
     Some((hit, si, bsdf))
 }
 

@@ -14,11 +14,16 @@ use crate::film::Radiance;
 use crate::limits::BATCH;
 use crate::math::{Ray, Vec3};
 use crate::sampling::Sampler;
+use crate::spectrum::Lambda;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 /// Dimensions the camera sample uses (pixel filter offset).
 pub const CAMERA_DIMS: u32 = 2;
+
+/// The sampler dimension a spectral render's wavelengths are drawn from (one per camera
+/// sample, far from every other dimension).
+pub const LAMBDA_DIM: u32 = (1 << 31) - 1;
 
 /// First sampler dimension of the distance sampling in media: ray segment `k` of a path reads
 /// dimensions `MEDIUM_DIMS + 2k` and `+ 2k + 1` (channel, distance), far above any vertex's.
@@ -48,6 +53,9 @@ pub struct PathState<T = ()> {
     pub medium: Option<u32>,
     /// Ray segments traced so far (each reads its own medium dimensions, [`MEDIUM_DIMS`]).
     pub segment: u32,
+    /// What `beta` and the path's contributions mean: RGB, or the camera sample's wavelengths
+    /// (`--spectral`: the integrator uplifts the scene's colours to them).
+    pub lambda: Lambda,
     pub sampler: Sampler,
     /// The integrator's own state.
     pub data: T,
@@ -67,6 +75,7 @@ impl<T: Default> PathState<T> {
             eta_scale: 1.0,
             medium: None,
             segment: 0,
+            lambda: Lambda::Rgb,
             sampler,
             data: T::default(),
         }
@@ -225,7 +234,11 @@ pub fn render_tile<S: Shade>(
         Some(_) => vec![Welford::default(); n],
         None => Vec::new(),
     };
-    let mut one = if clamp.is_finite() || !stats.is_empty() {
+    // A spectral render turns each sample's values into RGB at the sample's wavelengths once
+    // all its waves are done, so it gathers each sample apart too.
+    let spectral = ctx.settings.spectral;
+    let mut lambdas = Vec::new();
+    let mut one = if clamp.is_finite() || !stats.is_empty() || spectral {
         vec![Radiance::default(); n]
     } else {
         Vec::new()
@@ -234,10 +247,17 @@ pub fn render_tile<S: Shade>(
     let mut extra = S::Extra::default();
     for sample in 0..spp {
         b.paths.clear();
+        lambdas.clear();
         for (i, (x, y)) in tile_pixels(x0, y0, x1, y1).enumerate() {
             let (ray, sampler) = super::camera_sample(ctx, x, y, sample);
             let mut path = PathState::camera(i, ray, sampler);
             path.medium = ctx.scene.camera_medium;
+            if spectral {
+                let mut s = path.sampler.clone();
+                s.set_dimension(LAMBDA_DIM);
+                path.lambda = Lambda::sample(s.next_1d());
+                lambdas.push(path.lambda);
+            }
             b.paths.push(path);
         }
         ctx.counters
@@ -251,7 +271,11 @@ pub fn render_tile<S: Shade>(
             kind = RayKind::Bounce;
         }
         for (i, (a, r)) in acc.iter_mut().zip(one.iter_mut()).enumerate() {
-            let r = crate::film::clamp_sample(std::mem::take(r), clamp);
+            let mut r = std::mem::take(r);
+            if let Some(l) = lambdas.get(i) {
+                r = r.map(|v| l.to_rgb(v));
+            }
+            let r = crate::film::clamp_sample(r, clamp);
             if let Some(w) = stats.get_mut(i) {
                 w.add(ctx.settings.film_rgb(r.total()));
             }
@@ -521,7 +545,7 @@ pub fn escaped<T>(ctx: &RenderContext, path: &PathState<T>) -> Vec3 {
             1.0
         }
     });
-    path.beta * le
+    path.beta * path.lambda.illuminant(le)
 }
 
 /// Traces a batch of shadow rays and adds the unoccluded contributions (for an integrator that

@@ -45,8 +45,8 @@ impl MaterialModel for DiffuseTransmissionMaterial {
 
     fn bsdf(&self, tc: &TexCoord) -> Bsdf {
         Bsdf::DiffuseTransmission(DiffuseTransmission::new(
-            self.reflectance.eval(tc) * self.scale,
-            self.transmittance.eval(tc) * self.scale,
+            tc.lambda.albedo(self.reflectance.eval(tc)) * self.scale,
+            tc.lambda.albedo(self.transmittance.eval(tc)) * self.scale,
         ))
     }
 

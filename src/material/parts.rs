@@ -24,9 +24,9 @@ use crate::math::Vec3;
 use crate::params::{ParamSet, ParamType, SceneError};
 use crate::texture::{texture_param, Tex, TexCoord, Textures};
 
-/// A reflectance texture at `tc`, clamped to [0, 1] as pbrt-v4 does.
+/// A reflectance texture at `tc`, clamped to [0, 1] as pbrt-v4 does, at the lookup's wavelengths.
 pub fn unit(t: &Tex, tc: &TexCoord) -> Vec3 {
-    t.eval(tc).clamp(Vec3::ZERO, Vec3::ONE)
+    tc.lambda.albedo(t.eval(tc).clamp(Vec3::ZERO, Vec3::ONE))
 }
 
 /// The coat and slab of `coateddiffuse` and `coatedconductor` (pbrt-v4's defaults: `eta` 1.5,
@@ -146,11 +146,11 @@ pub fn conductor_bxdf(
     tc: &TexCoord,
 ) -> Conductor {
     let (eta, k) = match metal {
-        Metal::EtaK { eta, k } => (eta.eval(tc), k.eval(tc)),
-        Metal::Reflectance(r) => (
-            Vec3::ONE,
-            k_from_reflectance(r.eval(tc).clamp(Vec3::ZERO, Vec3::ONE)),
+        Metal::EtaK { eta, k } => (
+            tc.lambda.unbounded(eta.eval(tc)),
+            tc.lambda.unbounded(k.eval(tc)),
         ),
+        Metal::Reflectance(r) => (Vec3::ONE, k_from_reflectance(unit(r, tc))),
     };
     let e = if outside > 0.0 { outside } else { 1.0 };
     let (au, av) = roughness.eval(tc);
@@ -167,7 +167,7 @@ pub fn coated_bxdf<B: Bxdf + Copy>(
     let (au, av) = roughness.eval(tc);
     let top = Dielectric::rough(c.eta, au, av);
     let (thickness, g) = (c.thickness.eval_float(tc), c.g.eval_float(tc));
-    let albedo = c.albedo.eval(tc);
+    let albedo = unit(&c.albedo, tc);
     layered::Layered::new(top, base, thickness, albedo, g, c.max_depth, c.n_samples)
 }
 

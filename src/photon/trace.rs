@@ -528,7 +528,7 @@ fn trace_one(
         };
         power *= crate::accel::transmittance(scene, Some(&hit), &ray);
         let mut si = SurfaceInteraction::new(scene, &hit, &ray);
-        let bsdf = si.bsdf(scene, footprint);
+        let bsdf = si.bsdf(scene, footprint, crate::spectrum::Lambda::Rgb);
         let flags = bsdf.flags();
         let caustic_surface = is_caustic_surface(flags);
         if bounce == 0 {

@@ -261,7 +261,7 @@ fn trace_one(
             return rays;
         }
         let footprint = crate::camera::Footprint::of_file(scene);
-        let bsdf = si.bsdf(scene, footprint);
+        let bsdf = si.bsdf(scene, footprint, crate::spectrum::Lambda::Rgb);
         let mut sampler = crate::sampling::Sampler::new(
             crate::sampling::Pattern::Independent,
             seed,

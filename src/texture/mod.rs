@@ -151,6 +151,10 @@ pub struct TexCoord {
     pub uv: Vec2,
     pub duvdx: Vec2,
     pub duvdy: Vec2,
+    /// The wavelengths the colours looked up here are wanted at (materials uplift their RGB
+    /// values to them, [`crate::spectrum`]); [`Lambda::Rgb`](crate::spectrum::Lambda::Rgb)
+    /// leaves them RGB.
+    pub lambda: crate::spectrum::Lambda,
 }
 
 impl TexCoord {
@@ -753,6 +757,7 @@ mod tests {
                 uv: Vec2::new(0.125, 0.875),
                 duvdx: Vec2::new(w / 2.0, 0.0),
                 duvdy: Vec2::new(0.0, w / 8.0),
+                ..Default::default()
             })
             .x
         };
@@ -775,6 +780,7 @@ mod tests {
             uv: Vec2::new(0.125, 0.875),
             duvdx: Vec2::splat(4.0),
             duvdy: Vec2::ZERO,
+            ..Default::default()
         };
         near(bilinear.eval_at(&far), Vec3::ZERO);
         assert!(tex.needs_differentials() && !bilinear.needs_differentials());
@@ -795,6 +801,7 @@ mod tests {
                     uv: Vec2::new(u, v),
                     duvdx: Vec2::new(dx, 0.0),
                     duvdy: Vec2::new(0.0, dy),
+                    ..Default::default()
                 })
                 .x
         };

@@ -51,6 +51,8 @@ pub struct Overrides {
     pub quick: bool,
     /// `--aov`: data channels beside the image (added to the film's gbuffer, if any).
     pub aovs: Vec<crate::integrator::aov::Aov>,
+    /// `--spectral`: render at sampled wavelengths.
+    pub spectral: bool,
 }
 
 impl Overrides {
@@ -154,6 +156,7 @@ impl<'a> Job<'a> {
             (s.width, s.height) = ((s.width / 4).max(1), (s.height / 4).max(1));
             s.spp = 1;
         }
+        s.spectral |= o.spectral;
         for a in &o.aovs {
             if !s.aovs.aovs.contains(a) {
                 s.aovs.aovs.push(*a);

@@ -103,7 +103,11 @@ fn step(scene: &Scene, accel: &Accel, ray: &Ray, uc: f32) -> Option<Step> {
     let hit = accel.backend().intersect(ray)?;
     let mut si = SurfaceInteraction::new(scene, &hit, ray);
     let sample = si
-        .bsdf(scene, photon::camera::Footprint::of_file(scene))
+        .bsdf(
+            scene,
+            photon::camera::Footprint::of_file(scene),
+            photon::spectrum::Lambda::Rgb,
+        )
         .sample(si.wo, uc, Vec2::splat(0.5), TransportMode::Radiance)?;
     Some(Step {
         hit,

@@ -40,6 +40,7 @@ mod photonmap;
 mod regression;
 mod render_scenes;
 mod sky_lit;
+mod spectral;
 mod textures;
 mod thin_tubes;
 mod upgrade;

@@ -265,7 +265,11 @@ fn linear_height_field_tilts_the_shading_normal() {
             (si.ns - Vec3::Y).length() < 1e-6,
             "unbumped before the BSDF"
         );
-        let _ = si.bsdf(&scene, photon::camera::Footprint::of_file(&scene));
+        let _ = si.bsdf(
+            &scene,
+            photon::camera::Footprint::of_file(&scene),
+            photon::spectrum::Lambda::Rgb,
+        );
         assert!((si.ns - want).length() < 1e-4, "x {x}: {} != {want}", si.ns);
         assert!((si.frame.n - want).length() < 1e-4);
         assert!((si.wo - si.frame.to_local(Vec3::Y)).length() < 1e-6);
@@ -274,7 +278,11 @@ fn linear_height_field_tilts_the_shading_normal() {
     let ray = Ray::new(Vec3::new(4.0, 3.0, 0.0), Vec3::new(0.0, -1.0, 0.0));
     let hit = accel.backend().intersect(&ray).unwrap();
     let mut si = SurfaceInteraction::new(&scene, &hit, &ray);
-    let _ = si.bsdf(&scene, photon::camera::Footprint::of_file(&scene));
+    let _ = si.bsdf(
+        &scene,
+        photon::camera::Footprint::of_file(&scene),
+        photon::spectrum::Lambda::Rgb,
+    );
     assert!((si.ns - Vec3::Y).length() < 1e-6, "{}", si.ns);
 }
 
