@@ -83,7 +83,9 @@ pub(super) fn emission<T>(
     let Some(li) = si.area_light() else {
         return;
     };
-    let le = ctx.lights.le(li, si.ng, si.wo_world);
+    let le = path
+        .lambda
+        .illuminant(ctx.lights.le(li, si.ng, si.wo_world));
     if le.max_element() > 0.0 {
         let w = if path.prev_pdf > 0.0 {
             let light_pdf = ctx.lights.pdf_area(li, path.ray.o, si.p, si.ng);
@@ -113,11 +115,7 @@ impl<'a> Vertex<'a> {
         path: &mut PathState<T>,
         mut si: SurfaceInteraction<'a>,
     ) -> Self {
-        let bsdf = si.bsdf(
-            ctx.scene,
-            ctx.settings.footprint(),
-            crate::spectrum::Lambda::Rgb,
-        );
+        let bsdf = si.bsdf(ctx.scene, ctx.settings.footprint(), path.lambda);
         let ls = ctx.settings.light_samples.max(1);
         path.sampler
             .set_dimension(CAMERA_DIMS + path.depth * dims_per_vertex(ls));
@@ -189,7 +187,8 @@ pub(super) fn shadow_rays<T>(
         } else {
             power_heuristic(s.pdf, bsdf.pdf_coat(wo, wi))
         };
-        let contrib = path.beta * (f * w + f_coat * w_coat) * s.li / (s.pdf * ls as f32);
+        let li = path.lambda.illuminant(s.li);
+        let contrib = path.beta * (f * w + f_coat * w_coat) * li / (s.pdf * ls as f32);
         shadows.push(Shadow {
             pixel: path.pixel,
             ray: si.shadow_ray(&s),

@@ -340,8 +340,9 @@ pub fn check_scene(kind: IntegratorKind, scene: &Scene) -> Result<(), String> {
     }
 }
 
-/// Whether `kind` renders spectrally: with `settings.spectral`, the path tracer does (in
-/// scenes without media: their coefficients are still RGB); the others are refused.
+/// Whether `kind` renders spectrally: with `settings.spectral`, the path tracer, the direct
+/// integrator and the photon mapper's camera side do (in scenes without media: their
+/// coefficients are still RGB); the others are refused.
 pub fn check_spectral(
     kind: IntegratorKind,
     settings: &RenderSettings,
@@ -350,9 +351,12 @@ pub fn check_spectral(
     if !settings.spectral {
         return Ok(());
     }
-    if kind != IntegratorKind::Path {
+    if !matches!(
+        kind,
+        IntegratorKind::Path | IntegratorKind::Photonmap | IntegratorKind::Direct
+    ) {
         return Err(format!(
-            "--spectral: only --integrator path renders spectrally yet, not {}",
+            "--spectral: only --integrator path, photonmap and direct render spectrally yet, not {}",
             clap::ValueEnum::to_possible_value(&kind)
                 .map_or("?".into(), |v| v.get_name().to_string())
         ));

@@ -203,6 +203,7 @@ fn shade(
             path.beta,
             path.pixel,
             path.depth,
+            path.lambda,
             &mut path.sampler,
             &mut wave.extra.buf,
             &mut wave.extra.pending,
@@ -225,7 +226,9 @@ fn shade(
     let mut receiver = false;
     if !v.flags.has_diffuse() {
         let buf = &mut wave.extra.buf;
-        if let Some(l) = photonmap::at_glossy(pass, &ctx.counters.lookup_ns, si, &v.bsdf, buf) {
+        if let Some(l) =
+            photonmap::at_glossy(pass, &ctx.counters.lookup_ns, si, &v.bsdf, path.lambda, buf)
+        {
             receiver = true;
             let c = if path.depth == 0 {
                 Component::Caustic

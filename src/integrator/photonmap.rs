@@ -42,6 +42,7 @@ use crate::photon::trace::{self, PhotonMaps, TraceSettings};
 use crate::photon::{Kernel, KnnResult, Photon, PhotonMap};
 use crate::sampling::{strata, Pattern, Sampler};
 use crate::scene::{ParamSet, Scene, SceneError};
+use crate::spectrum::Lambda;
 use std::sync::atomic::AtomicU64;
 use std::time::Instant;
 
@@ -475,6 +476,10 @@ pub struct Gather {
     /// Bounces behind the ray's origin (0 at the camera's first hit).
     pub depth: u32,
     pub sampler: Sampler,
+    /// The camera sample's wavelengths: `weight` and the radiance the ray brings back are
+    /// at them (the surfaces it reaches are evaluated there, the photon maps' and lights' RGB
+    /// uplifted).
+    pub lambda: Lambda,
 }
 
 /// What a visible diffuse point gets from the photon maps now (caustic, and indirect when not
@@ -592,6 +597,7 @@ pub fn at_diffuse(
     beta: Vec3,
     pixel: usize,
     depth: u32,
+    lambda: Lambda,
     sampler: &mut Sampler,
     buf: &mut KnnResult,
     gathers: &mut Vec<Gather>,
@@ -610,12 +616,17 @@ pub fn at_diffuse(
     let estimate = |map: &PhotonMap, params: &EstimateParams, buf: &mut KnnResult| {
         let t = Instant::now();
         let l = if coated {
-            let f = |wi: Vec3| bsdf.f_body(si.wo, si.frame.to_local(wi), TransportMode::Radiance);
+            let f = |wi: Vec3, power: Vec3| {
+                let f = bsdf.f_body(si.wo, si.frame.to_local(wi), TransportMode::Radiance);
+                f * lambda.illuminant(power)
+            };
             radiance_sampled(map, p, n, params, buf, (BODY_SAMPLES, u_photon), f).0
         } else {
-            let mut l = f_d * irradiance_with(map, p, n, params, buf).0;
+            let e = irradiance_with(map, p, n, params, buf).0;
+            let mut l = f_d * lambda.illuminant(e);
             if f_t != Vec3::ZERO {
-                l += f_t * irradiance_with(map, p, -n, params, buf).0;
+                let e = irradiance_with(map, p, -n, params, buf).0;
+                l += f_t * lambda.illuminant(e);
             }
             l
         };
@@ -689,6 +700,7 @@ pub fn at_diffuse(
             primary: depth == 0,
             depth,
             sampler: gs,
+            lambda,
         });
     }
     out
@@ -724,7 +736,7 @@ pub fn gather_radiance(
     };
     // The gather ray's own segment (a medium it crosses) weighs both.
     let tr = crate::accel::transmittance(ctx.scene, hit.as_ref(), &g.ray);
-    let direct = emitted(ctx, &g.ray, hit.as_ref(), mis);
+    let direct = emitted(ctx, &g.ray, hit.as_ref(), g.lambda, mis);
     (tr * direct, tr * reflected(ctx, pass, global, g, hit, buf))
 }
 
@@ -746,6 +758,7 @@ pub fn at_glossy(
     counters: &AtomicU64,
     si: &SurfaceInteraction,
     bsdf: &Bsdf,
+    lambda: Lambda,
     buf: &mut KnnResult,
 ) -> Option<Vec3> {
     if !trace::is_receiver(bsdf, caustic_alpha(pass)?) {
@@ -758,7 +771,7 @@ pub fn at_glossy(
     let wo = si.wo;
     let (l, _, _) = radiance_with(map, si.p, si.ng, &pass.receiver_params, buf, |ph| {
         let wi = si.frame.to_local(-ph.dir());
-        bsdf.f(wo, wi, TransportMode::Radiance) * ph.power()
+        bsdf.f(wo, wi, TransportMode::Radiance) * lambda.illuminant(ph.power())
     });
     charge(counters, t);
     Some(l)
@@ -789,15 +802,11 @@ fn reflected(
     for _ in 0..=GATHER_SPECULAR_BOUNCES + THIN_CONTINUATIONS {
         if let Some(pdf) = from_thin.take() {
             let mis = |light_pdf: f32| crate::sampling::power_heuristic(pdf, light_pdf);
-            out += throughput * emitted(ctx, &ray, hit.as_ref(), mis);
+            out += throughput * emitted(ctx, &ray, hit.as_ref(), g.lambda, mis);
         }
         let Some(h) = hit else { return out };
         let mut si = SurfaceInteraction::new(scene, &h, &ray);
-        let bsdf = si.bsdf(
-            scene,
-            ctx.settings.footprint(),
-            crate::spectrum::Lambda::Rgb,
-        );
+        let bsdf = si.bsdf(scene, ctx.settings.footprint(), g.lambda);
         let wo = si.wo;
         if bsdf.has_coat() {
             // A coated surface: its coat's reflection (followed, like a specular bounce) or its
@@ -811,10 +820,11 @@ fn reflected(
                 let f_b = bsdf.f_body(wo, wi, TransportMode::Radiance);
                 let n = si.facing_normal();
                 let e = cached_irradiance(pass, global, si.p, n, continued, buf);
-                let direct = direct_at_gather(ctx, &si, &mut g.sampler, |wi| {
+                let direct = direct_at_gather(ctx, &si, &mut g.sampler, g.lambda, |wi| {
                     bsdf.f_body(wo, wi, TransportMode::Radiance)
                 });
-                return out + throughput * (f_b * e.irradiance + direct) / (1.0 - p_coat);
+                let e = g.lambda.illuminant(e.irradiance);
+                return out + throughput * (f_b * e + direct) / (1.0 - p_coat);
             }
             let Some(bs) = bsdf.sample_coat(
                 wo,
@@ -851,15 +861,14 @@ fn reflected(
                 // count zero (the shadow ray has them).
                 continued += 1;
                 let f = |wi: Vec3| bsdf.f(wo, wi, TransportMode::Radiance);
-                out += throughput * direct_mis(ctx, &si, &mut g.sampler, f);
+                out += throughput * direct_mis(ctx, &si, &mut g.sampler, g.lambda, f);
                 // The light that reaches it through specular bounces (sun through a window
                 // onto a chair's tube), which its estimate held and no shadow ray finds: the
                 // caustic map's. (Tracing on to the lights through the glass made fireflies:
                 // cornell-spheres at 16 spp, relMSE 0.0081 -> 0.0091.)
                 if let Some(caustic) = &pass.maps.caustic {
-                    out += throughput
-                        * f_d
-                        * irradiance_with(caustic, si.p, n, &pass.caustic_params, buf).0;
+                    let e = irradiance_with(caustic, si.p, n, &pass.caustic_params, buf).0;
+                    out += throughput * f_d * g.lambda.illuminant(e);
                 }
                 let local = crate::sampling::warp::square_to_cosine_hemisphere(g.sampler.next_2d());
                 let wi = if wo.z < 0.0 { -local } else { local };
@@ -874,11 +883,12 @@ fn reflected(
                 (hit, throughput) = (h, throughput * tr);
                 continue;
             }
-            let mut e = f_d * cached.irradiance;
+            let mut e = f_d * g.lambda.illuminant(cached.irradiance);
             if f_t != Vec3::ZERO {
-                e += f_t * cached_irradiance(pass, global, si.p, -n, continued, buf).irradiance;
+                let far = cached_irradiance(pass, global, si.p, -n, continued, buf).irradiance;
+                e += f_t * g.lambda.illuminant(far);
             }
-            let direct = direct_at_gather(ctx, &si, &mut g.sampler, |wi| {
+            let direct = direct_at_gather(ctx, &si, &mut g.sampler, g.lambda, |wi| {
                 bsdf.f(wo, wi, TransportMode::Radiance)
             });
             return out + throughput * (e + direct);
@@ -950,18 +960,14 @@ fn traced(
             let mis = |light_pdf: f32| {
                 pdf.map_or(1.0, |p| crate::sampling::power_heuristic(p, light_pdf))
             };
-            out += throughput * emitted(ctx, &ray, hit.as_ref(), mis);
+            out += throughput * emitted(ctx, &ray, hit.as_ref(), g.lambda, mis);
         }
         let Some(h) = hit else { return out };
         if depth >= ctx.settings.max_depth {
             return out;
         }
         let mut si = SurfaceInteraction::new(scene, &h, &ray);
-        let bsdf = si.bsdf(
-            scene,
-            ctx.settings.footprint(),
-            crate::spectrum::Lambda::Rgb,
-        );
+        let bsdf = si.bsdf(scene, ctx.settings.footprint(), g.lambda);
         let wo = si.wo;
         let coated = bsdf.has_coat();
         let p_coat = coat_choice(&bsdf, wo);
@@ -979,7 +985,7 @@ fn traced(
                     bsdf.f(wo, wi, TransportMode::Radiance)
                 }
             };
-            out += throughput * direct_mis(ctx, &si, &mut g.sampler, f) / choice;
+            out += throughput * direct_mis(ctx, &si, &mut g.sampler, g.lambda, f) / choice;
             if let Some(map) = caustic {
                 let n = si.facing_normal();
                 let cached = (pass.caustic_cache.as_ref())
@@ -990,7 +996,7 @@ fn traced(
                     let local =
                         crate::sampling::warp::square_to_cosine_hemisphere(g.sampler.next_2d());
                     let wi = if wo.z < 0.0 { -local } else { local };
-                    f(wi) * c.irradiance
+                    f(wi) * g.lambda.illuminant(c.irradiance)
                 } else if pass.caustic_cache.is_some() {
                     // No cache point's estimate covers this point: at most a few caustic
                     // photons lie near it. Zero, not a full search (which there walks every
@@ -999,7 +1005,8 @@ fn traced(
                     Vec3::ZERO
                 } else if coated {
                     let u = g.sampler.next_1d();
-                    let fw = |w: Vec3| f(si.frame.to_local(w));
+                    let fw =
+                        |w: Vec3, power: Vec3| f(si.frame.to_local(w)) * g.lambda.illuminant(power);
                     radiance_sampled(
                         map,
                         si.p,
@@ -1012,7 +1019,8 @@ fn traced(
                     .0
                 } else {
                     let f_d = f(Vec3::new(0.0, 0.0, wo.z.signum()));
-                    f_d * irradiance_with(map, si.p, n, &pass.caustic_params, buf).0
+                    let e = irradiance_with(map, si.p, n, &pass.caustic_params, buf).0;
+                    f_d * g.lambda.illuminant(e)
                 };
                 out += throughput * l / choice;
             }
@@ -1091,12 +1099,13 @@ fn direct_mis(
     ctx: &RenderContext,
     si: &SurfaceInteraction,
     sampler: &mut Sampler,
+    lambda: Lambda,
     f: impl Fn(Vec3) -> Vec3,
 ) -> Vec3 {
     let u_sel = sampler.next_1d();
     let u = sampler.next_2d();
     let s = ctx.lights.sample(&ctx.scene.meshes, si.p, u_sel, u);
-    shadow_ray_value(ctx, si, s, f, true)
+    shadow_ray_value(ctx, si, s, lambda, f, true)
 }
 
 /// The light a ray finds straight away: the emitter it hit, or the infinite lights when it
@@ -1104,9 +1113,15 @@ fn direct_mis(
 /// which a shadow ray would have picked that point ([`Lights::pdf_area`],
 /// [`Lights::escaped`]): the BSDF-sampling half of MIS at gather origins and at thin points
 /// ([`direct_mis`]).
-fn emitted(ctx: &RenderContext, ray: &Ray, hit: Option<&Hit>, weight: impl Fn(f32) -> f32) -> Vec3 {
+fn emitted(
+    ctx: &RenderContext,
+    ray: &Ray,
+    hit: Option<&Hit>,
+    lambda: Lambda,
+    weight: impl Fn(f32) -> f32,
+) -> Vec3 {
     let Some(h) = hit else {
-        return ctx.lights.escaped(ray.o, ray.d, weight);
+        return lambda.illuminant(ctx.lights.escaped(ray.o, ray.d, weight));
     };
     let mesh = &ctx.scene.meshes[h.mesh as usize];
     let Some(li) = mesh.area_light else {
@@ -1114,7 +1129,7 @@ fn emitted(ctx: &RenderContext, ray: &Ray, hit: Option<&Hit>, weight: impl Fn(f3
     };
     let p = mesh.point(h.prim, h.u, h.v);
     let ng = mesh.geometric_normal(h.prim, h.u, h.v);
-    let le = ctx.lights.le(li as usize, ng, -ray.d);
+    let le = lambda.illuminant(ctx.lights.le(li as usize, ng, -ray.d));
     le * weight(ctx.lights.pdf_area(li as usize, ray.o, p, ng))
 }
 
@@ -1129,6 +1144,7 @@ fn direct_at_gather(
     ctx: &RenderContext,
     si: &SurfaceInteraction,
     sampler: &mut Sampler,
+    lambda: Lambda,
     f: impl Fn(Vec3) -> Vec3,
 ) -> Vec3 {
     if !ctx.lights.has_surfaceless() {
@@ -1137,7 +1153,7 @@ fn direct_at_gather(
     let u_sel = sampler.next_1d();
     let u = sampler.next_2d();
     let s = (ctx.lights).sample_surfaceless(&ctx.scene.meshes, si.p, u_sel, u);
-    shadow_ray_value(ctx, si, s, f, false)
+    shadow_ray_value(ctx, si, s, lambda, f, false)
 }
 
 /// What the light sample `s` brings to `si` through one shadow ray: `f(wi)` (local `wi`)
@@ -1147,6 +1163,7 @@ fn shadow_ray_value(
     ctx: &RenderContext,
     si: &SurfaceInteraction,
     s: Option<LightSample>,
+    lambda: Lambda,
     f: impl Fn(Vec3) -> Vec3,
     cosine_mis: bool,
 ) -> Vec3 {
@@ -1168,7 +1185,7 @@ fn shadow_ray_value(
     if ctx.accel.occluded(RayKind::Shadow, &si.shadow_ray(&s)) {
         return Vec3::ZERO;
     }
-    value * s.li
+    value * lambda.illuminant(s.li)
 }
 
 /// The probability with which a gather ray that reaches a coated surface follows its coat:

@@ -185,7 +185,8 @@ pub fn radiance_with(
 /// probability `w_i c_i / S` (`c_i` the mean of `Phi_i`'s channels, `S = sum w_i c_i`) by
 /// `m` strata offset by `u` in [0, 1) (`draws = (m, u)`), and `L ~ S / m sum_j f(wo, wi_j) Phi_j / c_j`, unbiased
 /// over the draw. For a BSDF whose value is a costly random walk and varies slowly with `wi`
-/// (the body of a coated surface): `f_dir(wi)` gets the photon's incoming direction `-dir`.
+/// (the body of a coated surface): `f_dir(wi, Phi)` gets the photon's incoming direction
+/// `-dir` and power and returns `f(wo, wi) Phi` (a spectral caller uplifts `Phi`).
 /// Returns (radiance, photons used, squared radius).
 pub fn radiance_sampled(
     map: &PhotonMap,
@@ -194,7 +195,7 @@ pub fn radiance_sampled(
     params: &EstimateParams,
     buf: &mut KnnResult,
     draws: (usize, f32),
-    mut f_dir: impl FnMut(Vec3) -> Vec3,
+    mut f_dir: impl FnMut(Vec3, Vec3) -> Vec3,
 ) -> (Vec3, usize, f32) {
     let (m, u) = draws;
     let (e, used, r2) = estimate_by(map, p, n, params, buf, true, |ph| ph.power());
@@ -230,7 +231,7 @@ pub fn radiance_sampled(
         last = Some(nb.idx);
         while j < m && (j as f32 + u) / m as f32 * total < acc {
             let ph = map.photon(nb.idx);
-            out += f_dir(-ph.dir()) * ph.power() / (ph.power().element_sum() / 3.0);
+            out += f_dir(-ph.dir(), ph.power()) / (ph.power().element_sum() / 3.0);
             j += 1;
         }
     }
@@ -238,7 +239,7 @@ pub fn radiance_sampled(
     if let Some(idx) = last {
         while j < m {
             let ph = map.photon(idx);
-            out += f_dir(-ph.dir()) * ph.power() / (ph.power().element_sum() / 3.0);
+            out += f_dir(-ph.dir(), ph.power()) / (ph.power().element_sum() / 3.0);
             j += 1;
         }
     }

@@ -81,7 +81,7 @@ impl Lambda {
         match self {
             Lambda::Rgb => rgb,
             Lambda::Sampled { nm, .. } => {
-                let c = tables().fit.coeffs(rgb.to_array());
+                let c = coeffs(rgb.to_array());
                 Vec3::from_array(nm.map(|l| fit::eval(c, l)))
             }
         }
@@ -97,7 +97,7 @@ impl Lambda {
                 if m <= 0.0 || !m.is_finite() {
                     return Vec3::ZERO;
                 }
-                let c = tables().fit.coeffs((rgb / (2.0 * m)).to_array());
+                let c = coeffs((rgb / (2.0 * m)).to_array());
                 Vec3::from_array(nm.map(|l| 2.0 * m * fit::eval(c, l)))
             }
         }
@@ -130,6 +130,35 @@ impl Lambda {
             }
         }
     }
+}
+
+/// [`fit::Table::coeffs`] of `rgb`, remembered per thread: a render asks for the same few
+/// colours (its constant materials and lights) at almost every vertex. A pure function's
+/// memo, so images do not depend on it.
+fn coeffs(rgb: [f32; 3]) -> [f32; 3] {
+    use std::cell::RefCell;
+    const SLOTS: usize = 64;
+    type Slot = Option<([u32; 3], [f32; 3])>;
+    thread_local! {
+        static MEMO: RefCell<[Slot; SLOTS]> = const { RefCell::new([None; SLOTS]) };
+    }
+    let key = rgb.map(f32::to_bits);
+    let h = key[0]
+        .wrapping_mul(0x9e37_79b1)
+        .wrapping_add(key[1].wrapping_mul(0x85eb_ca77))
+        .wrapping_add(key[2].wrapping_mul(0xc2b2_ae3d));
+    let slot = (h >> 26) as usize % SLOTS;
+    MEMO.with(|m| {
+        let mut m = m.borrow_mut();
+        match m[slot] {
+            Some((k, c)) if k == key => c,
+            _ => {
+                let c = tables().fit.coeffs(rgb);
+                m[slot] = Some((key, c));
+                c
+            }
+        }
+    })
 }
 
 /// The colour matching functions at `nm` (linear between the 1-nm table's entries).
@@ -168,7 +197,7 @@ impl Tables {
 /// sRGB's primaries (x, y).
 const PRIMARIES: [[f64; 2]; 3] = [[0.64, 0.33], [0.30, 0.60], [0.15, 0.06]];
 
-/// The process's tables (built on first use: the coefficient fit takes about a second).
+/// The process's tables (built on first use: the coefficient fit takes 0.3-0.5 s).
 pub fn tables() -> &'static Tables {
     static T: OnceLock<Tables> = OnceLock::new();
     T.get_or_init(|| {
