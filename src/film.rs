@@ -303,21 +303,15 @@ impl std::ops::Mul<f32> for Radiance {
     }
 }
 
-/// CIE XYZ from linear sRGB (D65 white; the matrix of IEC 61966-2-1), by rows.
-const XYZ_FROM_SRGB: [[f32; 3]; 3] = [
-    [0.412_456_4, 0.357_576_1, 0.180_437_5],
-    [0.212_672_9, 0.715_152_2, 0.072_175],
-    [0.019_333_9, 0.119_192, 0.950_304_1],
-];
-
 /// A matrix from its rows.
 fn rows(r: [[f32; 3]; 3]) -> Mat3 {
     Mat3::from_cols_array_2d(&r).transpose()
 }
 
-/// CIE XYZ of a linear sRGB colour.
+/// CIE XYZ of a linear sRGB colour ([`crate::spectrum`]'s matrix: sRGB's primaries, the
+/// white of the D65 table).
 pub fn xyz_from_srgb(c: Vec3) -> Vec3 {
-    rows(XYZ_FROM_SRGB) * c
+    crate::spectrum::tables().rgb_to_xyz * c
 }
 
 /// The lowest colour temperature `whitebalance` takes: pbrt-v4 uses a blackbody spectrum
@@ -347,8 +341,8 @@ pub fn white_balance(temperature: f32) -> Mat3 {
     ]);
     let (src, dst) = (lms_from_xyz * xyz(x, y), lms_from_xyz * xyz(0.3127, 0.3290));
     let adapt = lms_from_xyz.inverse() * Mat3::from_diagonal(dst / src) * lms_from_xyz;
-    let xyz_from_srgb = rows(XYZ_FROM_SRGB);
-    xyz_from_srgb.inverse() * adapt * xyz_from_srgb
+    let t = crate::spectrum::tables();
+    t.xyz_to_rgb * adapt * t.rgb_to_xyz
 }
 
 /// pbrt-v4's `maxcomponentvalue`: one camera sample's radiance, scaled (all components alike)

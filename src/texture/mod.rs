@@ -397,6 +397,30 @@ pub enum Tex {
     Map(Arc<Texture>),
 }
 
+impl Tex {
+    /// The mean of its values over an 8x8 grid of texture coordinates (a constant's value).
+    pub fn mean(&self) -> Vec3 {
+        match self {
+            Tex::Const(v) => *v,
+            Tex::Map(t) => {
+                let at = |i: u32| (i as f32 + 0.5) / 8.0;
+                let sum: Vec3 = (0..64)
+                    .map(|k| t.eval(Vec2::new(at(k % 8), at(k / 8))))
+                    .sum();
+                sum / 64.0
+            }
+        }
+    }
+
+    /// Whether every value it takes is a grey ([`Texture::is_grey`]).
+    pub fn is_grey(&self) -> bool {
+        match self {
+            Tex::Const(v) => v.x == v.y && v.y == v.z,
+            Tex::Map(t) => t.is_grey(),
+        }
+    }
+}
+
 impl From<Vec3> for Tex {
     fn from(v: Vec3) -> Tex {
         Tex::Const(v)
@@ -464,6 +488,18 @@ pub enum Texture {
 }
 
 impl Texture {
+    /// Whether every value the texture takes has equal channels (a grey; spectrally flat).
+    pub fn is_grey(&self) -> bool {
+        let grey = |v: &Vec3| v.x == v.y && v.y == v.z;
+        match self {
+            Texture::Constant(v) => grey(v),
+            Texture::Image(m) => m.float || m.image.texels.iter().all(grey),
+            Texture::Checkerboard { tex1, tex2, .. } => tex1.is_grey() && tex2.is_grey(),
+            Texture::Scale { tex, scale } => tex.is_grey() && scale.is_grey(),
+            Texture::Mix { tex1, tex2, .. } => tex1.is_grey() && tex2.is_grey(),
+        }
+    }
+
     /// The texture's value at surface coordinates `uv`, unfiltered (no footprint).
     pub fn eval(&self, uv: Vec2) -> Vec3 {
         self.eval_at(&TexCoord::point(uv))

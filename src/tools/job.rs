@@ -51,8 +51,8 @@ pub struct Overrides {
     pub quick: bool,
     /// `--aov`: data channels beside the image (added to the film's gbuffer, if any).
     pub aovs: Vec<crate::integrator::aov::Aov>,
-    /// `--spectral`: render at sampled wavelengths.
-    pub spectral: bool,
+    /// `--spectral`: render at sampled wavelengths (`None`: RGB).
+    pub spectral: Option<crate::integrator::Spectral>,
 }
 
 impl Overrides {
@@ -82,6 +82,8 @@ pub struct Job<'a> {
     /// A live preview will watch the render (`--display-server`): its frame is in the memory
     /// check.
     pub preview: bool,
+    /// RGB or spectral, as asked; [`Job::resolve_spectral`] settles `Auto` into the settings.
+    pub spectral: crate::integrator::Spectral,
 }
 
 impl<'a> Job<'a> {
@@ -118,6 +120,7 @@ impl<'a> Job<'a> {
             load_seconds: 0.0,
             landings: None,
             preview: false,
+            spectral: crate::integrator::Spectral::Off,
         })
     }
 
@@ -156,13 +159,27 @@ impl<'a> Job<'a> {
             (s.width, s.height) = ((s.width / 4).max(1), (s.height / 4).max(1));
             s.spp = 1;
         }
-        s.spectral |= o.spectral;
+        self.spectral = o.spectral.unwrap_or_default();
+        s.spectral = self.spectral == crate::integrator::Spectral::On;
         for a in &o.aovs {
             if !s.aovs.aovs.contains(a) {
                 s.aovs.aovs.push(*a);
             }
         }
         self
+    }
+
+    /// Settles `--spectral=auto` for the job's integrator and scene
+    /// ([`crate::integrator::spectral_auto`]); returns why it renders spectrally, if it does.
+    pub fn resolve_spectral(&mut self) -> Option<String> {
+        use crate::integrator::Spectral;
+        let why = match self.spectral {
+            Spectral::Auto => crate::integrator::spectral_auto(self.integrator, &self.scene),
+            Spectral::On => Some("--spectral".into()),
+            Spectral::Off => None,
+        };
+        self.settings.spectral = why.is_some();
+        why
     }
 
     /// The memory estimate of rendering `settings` (the job's, or a variant of them), an

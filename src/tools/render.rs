@@ -122,9 +122,14 @@ pub struct RenderOptions {
     /// Render spectrally as pbrt-v4 does: each camera sample at three wavelengths, the
     /// scene's RGB colours uplifted to spectra (Jakob-Hanika), the film through the CIE 1931
     /// observer. Saturated colours after several bounces then match pbrt-v4 (RGB rendering
-    /// is several percent off there). `--integrator path` only, scenes without media.
-    #[arg(long)]
-    pub spectral: bool,
+    /// is several percent off there), at the price of colour noise (2-3x the error where RGB
+    /// is right). `auto` decides by how much light saturated colours may scatter twice
+    /// (`integrator::coloured_share`); the default is RGB, with a note when `auto` would
+    /// choose spectral. Path, photonmap and direct only, scenes without media. `--spectral`
+    /// alone is `on`.
+    #[arg(long, value_enum, num_args = 0..=1, require_equals = true,
+          default_value_t = integrator::Spectral::Off, default_missing_value = "on")]
+    pub spectral: integrator::Spectral,
     #[command(flatten)]
     pub photon: crate::integrator::settings::PhotonOverrides,
     #[command(flatten)]
@@ -230,7 +235,7 @@ impl RenderOptions {
                 true => [&self.aov[..], &[Aov::Albedo, Aov::Normal]].concat(),
                 false => self.aov.clone(),
             },
-            spectral: self.spectral,
+            spectral: Some(self.spectral),
         }
     }
 }
@@ -260,6 +265,7 @@ pub fn configure(job: &mut Job, opts: &RenderOptions) {
 /// the photon maps. `photon render` and the Python module both start here.
 pub fn prepare(job: &mut Job, opts: &RenderOptions) -> Result<Prepared, ToolError> {
     integrator::check_scene(job.integrator, &job.scene).map_err(ToolError)?;
+    job.resolve_spectral();
     integrator::check_spectral(job.integrator, &job.settings, &job.scene).map_err(ToolError)?;
     let cli = opts.overrides().from_cli();
     let budget = crate::limits::Budget::resolve(opts.max_memory);
@@ -613,6 +619,15 @@ fn banner(opts: &RenderOptions, job: &Job, build_s: f64, threads: usize) {
         build_s,
         if opts.robust { " (robust)" } else { "" }
     );
+    if settings.spectral {
+        let why = match job.spectral {
+            integrator::Spectral::On => "--spectral".to_string(),
+            _ => integrator::spectral_auto(opts.integrator, scene).unwrap_or_default(),
+        };
+        say!("color: spectral, three wavelengths per sample ({why}; --no-spectral renders RGB)");
+    } else if let Some(why) = integrator::spectral_auto(opts.integrator, scene) {
+        say!("note: RGB rendering; {why}: colours may be several percent off pbrt-v4's (spectral) image here: --spectral renders as it does");
+    }
     if settings.crop.is_some() {
         let [x0, x1, y0, y1] = settings.pixel_bounds();
         say!("film: crop window: pixels [{x0}, {x1}) x [{y0}, {y1}) of the image below");

@@ -46,7 +46,7 @@ AttributeEnd
 /// 1931 observer into linear sRGB (1-nm steps).
 fn expected(max_depth: u32) -> Vec3 {
     let t = spectrum::tables();
-    let c = t.fit.coeffs(RHO);
+    let c = spectrum::fit_table().coeffs(RHO);
     let mut xyz = Vec3::ZERO;
     for (i, cmf) in cie::CMF.iter().enumerate() {
         let nm = LAMBDA_MIN + i as f32;
@@ -73,7 +73,10 @@ fn render_scene(
     let overrides = photon::tools::job::Overrides {
         res: Some((res, res)),
         spp: Some(spp),
-        spectral,
+        spectral: Some(match spectral {
+            true => photon::integrator::Spectral::On,
+            false => photon::integrator::Spectral::Off,
+        }),
         ..Default::default()
     };
     let mut job = common::job(scene, kind, BackendKind::Embree).with(&overrides);
@@ -179,6 +182,30 @@ fn spectral_render_is_deterministic_across_threads() {
     let (a, b) = (render(5, true, 4, 1), render(5, true, 4, 2));
     assert!(a == b, "images differ between 1 and 2 threads");
     assert!(a != render(5, false, 4, 1), "--spectral changed nothing");
+}
+
+/// `--spectral=auto` picks spectral rendering for the shared Cornell box (its share of
+/// light coloured twice, 0.0112, is above the threshold), RGB for a grey one and for
+/// integrators that render RGB only.
+#[test]
+fn auto_picks_spectral_for_the_cornell_box_only() {
+    use photon::integrator::{coloured_share, spectral_auto, SPECTRAL_AUTO_SHARE};
+    let cornell = loader::load(std::path::Path::new(common::CORNELL)).expect("Cornell box loads");
+    let share = coloured_share(&cornell);
+    assert!(share > 2.0 * SPECTRAL_AUTO_SHARE, "{share}");
+    assert!(spectral_auto(IntegratorKind::Photonmap, &cornell).is_some());
+    assert!(spectral_auto(IntegratorKind::Bdpt, &cornell).is_none());
+    let grey = loader::load(&furnace_grey()).expect("grey furnace loads");
+    assert_eq!(coloured_share(&grey), 0.0);
+    assert!(spectral_auto(IntegratorKind::Path, &grey).is_none());
+}
+
+fn furnace_grey() -> std::path::PathBuf {
+    let text = std::fs::read_to_string(furnace(5)).unwrap().replace(
+        &format!("[ {} {} {} ]", RHO[0], RHO[1], RHO[2]),
+        "[ 0.5 0.5 0.5 ]",
+    );
+    common::write_scene("spectral", "furnace-grey", &text)
 }
 
 /// Integrators that render in RGB only refuse `--spectral` with a message naming it.

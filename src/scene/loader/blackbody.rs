@@ -19,23 +19,21 @@
 //! how photon reads it. A temperature of 6504 K comes out near white, at low temperatures
 //! the blue (negative in sRGB below ~1900 K) is clamped to 0.
 //!
-//! The matching functions are the CIE's 5 nm table ([`CIE_XYZ_5NM`], made by
-//! `scripts/cie_table.py` from the 1 nm table in pbrt-v4's `spectrum.cpp`); the integral is a
-//! 5 nm sum (against the 1 nm sums pbrt-v4 uses, chromaticity within 1e-5 from 1000 to
-//! 10000 K).
+//! The matching functions are every fifth row of [`crate::spectrum::cie::CMF`] (the CIE's 5 nm
+//! table); the integral is a 5 nm sum (against the 1 nm sums pbrt-v4 uses, chromaticity within
+//! 1e-5 from 1000 to 10000 K). XYZ to sRGB is [`crate::spectrum`]'s matrix (sRGB's primaries,
+//! the white of the D65 table), as the spectral renderer's film uses.
 
 use crate::math::Vec3;
 
-/// First wavelength of [`CIE_XYZ_5NM`] and its step, in nm.
+/// First wavelength of the 5 nm rows and their step, in nm.
 const LAMBDA_MIN: f64 = 360.0;
 const LAMBDA_STEP: f64 = 5.0;
 
-/// IEC 61966-2-1's XYZ to linear sRGB matrix (rows), as in `scripts/named_spectra.py`.
-const XYZ_TO_SRGB: [[f64; 3]; 3] = [
-    [3.2404542, -1.5371385, -0.4985314],
-    [-0.969266, 1.8760108, 0.041556],
-    [0.0556434, -0.2040259, 1.0572252],
-];
+/// The CIE 1931 2-degree matching functions at 360, 365, ..., 830 nm.
+fn cmf_5nm() -> impl Iterator<Item = [f64; 3]> {
+    (crate::spectrum::cie::CMF.iter().step_by(5)).map(|c| c.map(f64::from))
+}
 
 /// The natural log of Planck's spectral radiance at `lambda_nm` for temperature `t` (K), up to
 /// a constant (pbrt-v4's constants). In logs so that no temperature overflows or underflows.
@@ -55,12 +53,12 @@ pub fn xyz(t: f64) -> Option<[f64; 3]> {
     if !(t.is_finite() && t > 0.0) {
         return None;
     }
-    let ln: Vec<f64> = (0..CIE_XYZ_5NM.len())
+    let ln: Vec<f64> = (0..cmf_5nm().count())
         .map(|i| ln_planck(LAMBDA_MIN + LAMBDA_STEP * i as f64, t))
         .collect();
     let top = ln.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
     let mut sum = [0.0; 3];
-    for (cmf, l) in CIE_XYZ_5NM.iter().zip(&ln) {
+    for (cmf, l) in cmf_5nm().zip(&ln) {
         let b = (l - top).exp();
         for c in 0..3 {
             sum[c] += cmf[c] * b;
@@ -77,12 +75,9 @@ pub fn rgb(t: f64) -> Option<Vec3> {
         return None;
     }
     let v = [x / y, 1.0, z / y];
+    let m = crate::spectrum::tables().xyz_to_rgb_rows;
     let row = |r: [f64; 3]| (r[0] * v[0] + r[1] * v[1] + r[2] * v[2]).max(0.0) as f32;
-    Some(Vec3::new(
-        row(XYZ_TO_SRGB[0]),
-        row(XYZ_TO_SRGB[1]),
-        row(XYZ_TO_SRGB[2]),
-    ))
+    Some(Vec3::new(row(m[0]), row(m[1]), row(m[2])))
 }
 
 /// Luminance of pbrt-v4's `BlackbodySpectrum(T)` itself (Planck's law divided by its value at
@@ -96,113 +91,12 @@ pub fn peak_normalized_luminance(t: f64) -> Option<f64> {
     }
     const CIE_Y_INTEGRAL: f64 = 106.856895;
     let peak = ln_planck(2.897_772_1e-3 / t * 1e9, t);
-    let sum: f64 = CIE_XYZ_5NM
-        .iter()
+    let sum: f64 = cmf_5nm()
         .enumerate()
         .map(|(i, cmf)| cmf[1] * (ln_planck(LAMBDA_MIN + LAMBDA_STEP * i as f64, t) - peak).exp())
         .sum();
     Some(sum * LAMBDA_STEP / CIE_Y_INTEGRAL)
 }
-
-/// The CIE 1931 2-degree colour matching functions (x-bar, y-bar, z-bar) at 360, 365, ..., 830 nm.
-#[rustfmt::skip]
-pub const CIE_XYZ_5NM: [[f64; 3]; 95] = [
-    [0.0001299, 3.917e-06, 0.0006061], // 360 nm
-    [0.0002321, 6.965e-06, 0.001086], // 365 nm
-    [0.0004149, 1.239e-05, 0.001946], // 370 nm
-    [0.0007416, 2.202e-05, 0.003486], // 375 nm
-    [0.001368, 3.9e-05, 0.006450001], // 380 nm
-    [0.002236, 6.4e-05, 0.01054999], // 385 nm
-    [0.004243, 0.00012, 0.02005001], // 390 nm
-    [0.00765, 0.000217, 0.03621], // 395 nm
-    [0.01431, 0.000396, 0.06785001], // 400 nm
-    [0.02319, 0.00064, 0.1102], // 405 nm
-    [0.04351, 0.00121, 0.2074], // 410 nm
-    [0.07763, 0.00218, 0.3713], // 415 nm
-    [0.13438, 0.004, 0.6456], // 420 nm
-    [0.21477, 0.0073, 1.0390501], // 425 nm
-    [0.2839, 0.0116, 1.3856], // 430 nm
-    [0.3285, 0.01684, 1.62296], // 435 nm
-    [0.34828, 0.023, 1.74706], // 440 nm
-    [0.34806, 0.0298, 1.7826], // 445 nm
-    [0.3362, 0.038, 1.77211], // 450 nm
-    [0.3187, 0.048, 1.7441], // 455 nm
-    [0.2908, 0.06, 1.6692], // 460 nm
-    [0.2511, 0.0739, 1.5281], // 465 nm
-    [0.19536, 0.09098, 1.28764], // 470 nm
-    [0.1421, 0.1126, 1.0419], // 475 nm
-    [0.09564, 0.13902, 0.8129501], // 480 nm
-    [0.05795001, 0.1693, 0.6162], // 485 nm
-    [0.03201, 0.20802, 0.46518], // 490 nm
-    [0.0147, 0.2586, 0.3533], // 495 nm
-    [0.0049, 0.323, 0.272], // 500 nm
-    [0.0024, 0.4073, 0.2123], // 505 nm
-    [0.0093, 0.503, 0.1582], // 510 nm
-    [0.0291, 0.6082, 0.1117], // 515 nm
-    [0.06327, 0.71, 0.07824999], // 520 nm
-    [0.1096, 0.7932, 0.05725001], // 525 nm
-    [0.1655, 0.862, 0.04216], // 530 nm
-    [0.2257499, 0.9148501, 0.02984], // 535 nm
-    [0.2904, 0.954, 0.0203], // 540 nm
-    [0.3597, 0.9803, 0.0134], // 545 nm
-    [0.4334499, 0.9949501, 0.008749999], // 550 nm
-    [0.5120501, 1.0, 0.005749999], // 555 nm
-    [0.5945, 0.995, 0.0039], // 560 nm
-    [0.6784, 0.9786, 0.002749999], // 565 nm
-    [0.7621, 0.952, 0.0021], // 570 nm
-    [0.8425, 0.9154, 0.0018], // 575 nm
-    [0.9163, 0.87, 0.001650001], // 580 nm
-    [0.9786, 0.8163, 0.0014], // 585 nm
-    [1.0263, 0.757, 0.0011], // 590 nm
-    [1.0567, 0.6949, 0.001], // 595 nm
-    [1.0622, 0.631, 0.0008], // 600 nm
-    [1.0456, 0.5668, 0.0006], // 605 nm
-    [1.0026, 0.503, 0.00034], // 610 nm
-    [0.9384, 0.4412, 0.00024], // 615 nm
-    [0.8544499, 0.381, 0.00019], // 620 nm
-    [0.7514, 0.321, 0.0001], // 625 nm
-    [0.6424, 0.265, 4.999999e-05], // 630 nm
-    [0.5419, 0.217, 3e-05], // 635 nm
-    [0.4479, 0.175, 2e-05], // 640 nm
-    [0.3608, 0.1382, 1e-05], // 645 nm
-    [0.2835, 0.107, 0.0], // 650 nm
-    [0.2187, 0.0816, 0.0], // 655 nm
-    [0.1649, 0.061, 0.0], // 660 nm
-    [0.1212, 0.04458, 0.0], // 665 nm
-    [0.0874, 0.032, 0.0], // 670 nm
-    [0.0636, 0.0232, 0.0], // 675 nm
-    [0.04677, 0.017, 0.0], // 680 nm
-    [0.0329, 0.01192, 0.0], // 685 nm
-    [0.0227, 0.00821, 0.0], // 690 nm
-    [0.01584, 0.005723, 0.0], // 695 nm
-    [0.01135916, 0.004102, 0.0], // 700 nm
-    [0.008110916, 0.002929, 0.0], // 705 nm
-    [0.005790346, 0.002091, 0.0], // 710 nm
-    [0.004109457, 0.001484, 0.0], // 715 nm
-    [0.002899327, 0.001047, 0.0], // 720 nm
-    [0.00204919, 0.00074, 0.0], // 725 nm
-    [0.001439971, 0.00052, 0.0], // 730 nm
-    [0.0009999493, 0.0003611, 0.0], // 735 nm
-    [0.0006900786, 0.0002492, 0.0], // 740 nm
-    [0.0004760213, 0.0001719, 0.0], // 745 nm
-    [0.0003323011, 0.00012, 0.0], // 750 nm
-    [0.0002348261, 8.48e-05, 0.0], // 755 nm
-    [0.0001661505, 6e-05, 0.0], // 760 nm
-    [0.000117413, 4.24e-05, 0.0], // 765 nm
-    [8.307527e-05, 3e-05, 0.0], // 770 nm
-    [5.870652e-05, 2.12e-05, 0.0], // 775 nm
-    [4.150994e-05, 1.499e-05, 0.0], // 780 nm
-    [2.935326e-05, 1.06e-05, 0.0], // 785 nm
-    [2.067383e-05, 7.4657e-06, 0.0], // 790 nm
-    [1.455977e-05, 5.2578e-06, 0.0], // 795 nm
-    [1.025398e-05, 3.7029e-06, 0.0], // 800 nm
-    [7.221456e-06, 2.6078e-06, 0.0], // 805 nm
-    [5.085868e-06, 1.8366e-06, 0.0], // 810 nm
-    [3.581652e-06, 1.2934e-06, 0.0], // 815 nm
-    [2.522525e-06, 9.1093e-07, 0.0], // 820 nm
-    [1.776509e-06, 6.4153e-07, 0.0], // 825 nm
-    [1.251141e-06, 4.5181e-07, 0.0], // 830 nm
-];
 
 #[cfg(test)]
 mod tests {
