@@ -104,7 +104,8 @@ fn arguments(key: &str, value: &Bound<'_, PyAny>) -> PyResult<Option<Given>> {
         return Ok(match (is_switch, b) {
             (true, true) => Some((long, vec![flag])),
             (true, false) => None,
-            (false, _) => Some((long, vec![flag, b.to_string()])),
+            // `--x=v`: some options take their value only after an equals sign.
+            (false, _) => Some((long, vec![format!("{flag}={b}")])),
         });
     }
     if is_switch {
@@ -127,7 +128,7 @@ fn arguments(key: &str, value: &Bound<'_, PyAny>) -> PyResult<Option<Given>> {
     } else {
         value.str()?.to_string()
     };
-    Ok(Some((long, vec![flag, text])))
+    Ok(Some((long, vec![format!("{flag}={text}")])))
 }
 
 /// `given` with `more` replacing the options both have.

@@ -61,8 +61,12 @@ def assert_bit_equal(arrays, exr):
             dict(spp=2, seed=4, integrator="vcm", merge_radius="2px"),
             ["--spp", "2", "--seed", "4", "--integrator", "vcm", "--merge-radius", "2px"],
         ),
+        (
+            dict(spp=2, seed=6, spectral=True, final_gather=False),
+            ["--spp", "2", "--seed", "6", "--spectral", "--no-final-gather"],
+        ),
     ],
-    ids=["photonmap", "path-passes", "progressive-range", "vcm"],
+    ids=["photonmap", "path-passes", "progressive-range", "vcm", "spectral"],
 )
 def test_arrays_equal_the_cli_exr(tmp_path, cli, glass, options, flags):
     scene = photon.load(glass, resolution=(48, 40))
