@@ -170,6 +170,28 @@ pub(super) fn invert(m: &[[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
     Some([0, 1, 2].map(|i| [0, 1, 2].map(|j| cof[j][i] / det)))
 }
 
+/// The coefficients of one colour `rgb` (channels in `[0, 1]`) fitted directly, without the
+/// table: Gauss-Newton from the flat spectrum of its mean towards it in four steps (each
+/// starting from the last one's solution). Microseconds, for one-off questions about a few
+/// colours ([`super::two_bounce_discrepancy`]) that should not pay for the whole table.
+pub fn fit_one(rgb: [f32; 3], rgb_to_xyz: [[f64; 3]; 3], xyz_to_rgb: [[f64; 3]; 3]) -> [f32; 3] {
+    let obs = Observer::new(rgb_to_xyz, xyz_to_rgb);
+    let rgb = rgb.map(|v| {
+        if v.is_nan() {
+            0.0
+        } else {
+            v.clamp(0.0, 1.0) as f64
+        }
+    });
+    let mean = ((rgb[0] + rgb[1] + rgb[2]) / 3.0).clamp(0.01, 0.99);
+    let mut c = [0.0, 0.0, (mean - 0.5) / (mean * (1.0 - mean)).sqrt()];
+    for step in 1..=4 {
+        let t = step as f64 / 4.0;
+        obs.solve(rgb.map(|v| mean + t * (v - mean)), &mut c);
+    }
+    c.map(|v| v as f32)
+}
+
 /// Position of the largest-channel axis's grid point `k` (denser near 0 and 1).
 fn z_node(k: usize) -> f32 {
     let smooth = |x: f32| x * x * (3.0 - 2.0 * x);

@@ -133,6 +133,18 @@ pub fn check_scene(path: &Path) -> SceneReport {
         .ok()
         .and_then(|a| pilot(&scene, &a, &settings, IntegratorKind::Photonmap));
     let memory = estimate(&scene, &settings, kinds, threads, landings);
+    let mut notes = scene.notes.clone();
+    let share = crate::integrator::coloured_share(&scene);
+    if let Some(why) = crate::integrator::spectral_auto(IntegratorKind::Photonmap, &scene) {
+        notes.push(format!(
+            "colour: {why}: RGB may be several percent off pbrt-v4 here (--spectral=auto renders spectrally)"
+        ));
+    } else if share > 0.0 {
+        notes.push(format!(
+            "colour: {share:.4} of the surface's light is coloured twice (below {}: --spectral=auto renders RGB)",
+            crate::integrator::SPECTRAL_AUTO_SHARE
+        ));
+    }
     SceneReport {
         path: path.to_path_buf(),
         triangles: scene.triangle_count(),
@@ -141,7 +153,7 @@ pub fn check_scene(path: &Path) -> SceneReport {
         textures: got.textures,
         memory,
         problems,
-        notes: scene.notes,
+        notes,
     }
 }
 
