@@ -343,10 +343,13 @@ pub fn check_scene(kind: IntegratorKind, scene: &Scene) -> Result<(), String> {
 /// How a render picks RGB or spectral rendering (`--spectral[=on|off|auto]`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum Spectral {
-    /// Spectral when the scene needs it and the integrator can ([`spectral_auto`]).
+    /// Spectral when saturated colours scatter enough light twice and the integrator can
+    /// (see `spectral_auto`).
     Auto,
+    /// Spectral (an error for integrators that render RGB only, and with media).
     #[value(alias = "true")]
     On,
+    /// RGB.
     #[default]
     #[value(alias = "false")]
     Off,
