@@ -31,13 +31,13 @@ WorldBegin
 AttributeBegin
   AreaLightSource "diffuse" "rgb L" [ 1 1 1 ] "bool twosided" true
   Material "diffuse" "rgb reflectance" [ {} {} {} ]
-  Shape "trianglemesh"
-    "point3 P" [ -1 -1 -1  1 -1 -1  1 1 -1  -1 1 -1  -1 -1 1  1 -1 1  1 1 1  -1 1 1 ]
-    "integer indices" [ 0 2 1  0 3 2   4 5 6  4 6 7   0 1 5  0 5 4
-                        3 7 6  3 6 2   0 4 7  0 7 3   1 2 6  1 6 5 ]
+  {}
 AttributeEnd
 "#,
-        RHO[0], RHO[1], RHO[2]
+        RHO[0],
+        RHO[1],
+        RHO[2],
+        common::CUBE
     );
     common::write_scene("spectral", &format!("furnace-{max_depth}"), &text)
 }
