@@ -143,16 +143,11 @@ pub enum MaterialKind {
 }
 
 impl MaterialKind {
-    /// Whether the model scatters light in proportion to a colour that is not grey
-    /// (reflectances, transmittances, a coat's albedo; a conductor's index or reflectance
-    /// colours only its Fresnel term and does not count): where two such factors multiply
-    /// along a path, RGB rendering differs from spectral ([`crate::spectrum`]).
-    pub fn has_coloured_albedo(&self) -> bool {
-        self.coloured_albedo().is_some()
-    }
-
     /// The mean of the first colour that is not grey among the model's reflectance-like
-    /// parameters ([`Self::has_coloured_albedo`]), if any.
+    /// parameters (reflectances, transmittances, a coat's albedo; a conductor's index or
+    /// reflectance colours only its Fresnel term and does not count), if any: where two such
+    /// factors multiply along a path, RGB rendering differs from spectral
+    /// ([`crate::spectrum`]).
     pub fn coloured_albedo(&self) -> Option<crate::math::Vec3> {
         let pick = |ts: &[&Tex]| ts.iter().find(|t| !t.is_grey()).map(|t| t.mean());
         match self {

@@ -71,11 +71,6 @@ impl Lambda {
         }
     }
 
-    /// Whether the values are spectral samples.
-    pub fn is_spectral(&self) -> bool {
-        matches!(self, Lambda::Sampled { .. })
-    }
-
     /// A reflectance in `[0, 1]` per channel at these wavelengths.
     pub fn albedo(&self, rgb: Vec3) -> Vec3 {
         match self {

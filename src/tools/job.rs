@@ -84,6 +84,8 @@ pub struct Job<'a> {
     pub preview: bool,
     /// RGB or spectral, as asked; [`Job::resolve_spectral`] settles `Auto` into the settings.
     pub spectral: crate::integrator::Spectral,
+    /// Why the render is spectral, once [`Job::resolve_spectral`] decided it is.
+    pub spectral_reason: Option<String>,
 }
 
 impl<'a> Job<'a> {
@@ -121,6 +123,7 @@ impl<'a> Job<'a> {
             landings: None,
             preview: false,
             spectral: crate::integrator::Spectral::Off,
+            spectral_reason: None,
         })
     }
 
@@ -170,8 +173,8 @@ impl<'a> Job<'a> {
     }
 
     /// Settles `--spectral=auto` for the job's integrator and scene
-    /// ([`crate::integrator::spectral_auto`]); returns why it renders spectrally, if it does.
-    pub fn resolve_spectral(&mut self) -> Option<String> {
+    /// ([`crate::integrator::spectral_auto`]), keeping why it renders spectrally, if it does.
+    pub fn resolve_spectral(&mut self) {
         use crate::integrator::Spectral;
         let why = match self.spectral {
             Spectral::Auto => crate::integrator::spectral_auto(self.integrator, &self.scene),
@@ -179,7 +182,7 @@ impl<'a> Job<'a> {
             Spectral::Off => None,
         };
         self.settings.spectral = why.is_some();
-        why
+        self.spectral_reason = why;
     }
 
     /// The memory estimate of rendering `settings` (the job's, or a variant of them), an

@@ -619,11 +619,7 @@ fn banner(opts: &RenderOptions, job: &Job, build_s: f64, threads: usize) {
         build_s,
         if opts.robust { " (robust)" } else { "" }
     );
-    if settings.spectral {
-        let why = match job.spectral {
-            integrator::Spectral::On => "--spectral".to_string(),
-            _ => integrator::spectral_auto(opts.integrator, scene).unwrap_or_default(),
-        };
+    if let Some(why) = &job.spectral_reason {
         say!("color: spectral, three wavelengths per sample ({why}; --no-spectral renders RGB)");
     } else if let Some(why) = integrator::spectral_auto(opts.integrator, scene) {
         say!("note: RGB rendering; {why}: colours may be several percent off pbrt-v4's (spectral) image here: --spectral renders as it does");
