@@ -398,11 +398,29 @@ fn shade_one<S: Shade>(
             let medium = &ctx.scene.media[m as usize];
             let len = path.ray.d.length();
             let dist = hit.map_or(f32::INFINITY, |h| h.t * len);
+            if medium.emits() {
+                // The light the medium emits along the whole segment, in closed form or by
+                // ratio tracking; the sampled interaction below estimates the rest.
+                let e = medium.emitted_along(
+                    path.ray.o,
+                    path.ray.d / len,
+                    dist,
+                    &mut segment_rng(&path.ray, 0x656d),
+                );
+                add(
+                    w.acc,
+                    path.pixel,
+                    shader.emitted_component(&path),
+                    path.beta * e,
+                );
+            }
             // Camera segments and those after delta bounces only: later ones sample their
             // scattering as the path tracer does (a beam per segment of every path would
-            // cost far more than it removes in noise there).
+            // cost far more than it removes in noise there). Emitting media are sampled as
+            // the path tracer does: the volume map holds no photons they emit.
             let volume = ctx.photons.and_then(|p| p.volume.as_ref());
-            if let (Some(map), true, true) = (volume, medium.scatters(), path.prev_delta) {
+            let beam = medium.scatters() && !medium.emits() && path.prev_delta;
+            if let (Some(map), true) = (volume, beam) {
                 // The photon mapper: the volume map's beam estimate gives all the light the
                 // medium scatters towards the ray; the ray goes on to its hit dimmed.
                 let t = Instant::now();
@@ -452,7 +470,7 @@ fn medium_segment<T>(
 ) -> Option<f32> {
     let len = path.ray.d.length();
     let (o, d) = (path.ray.o, path.ray.d / len);
-    if medium.density.is_none() && !medium.scatters() {
+    if medium.is_homogeneous() && !medium.scatters() {
         path.beta *= medium.transmittance(dist);
         return None;
     }
@@ -465,7 +483,7 @@ fn medium_segment<T>(
         path.beta *= medium.transmittance_along(o, d, dist, &mut rng);
         return None;
     }
-    match medium.sample_interaction(o, d, dist, uc, u) {
+    match medium.sample_interaction(o, d, dist, uc, u, path.beta) {
         crate::medium::MediumEvent::Scatter { t, weight } => {
             path.beta *= weight;
             Some(t)
@@ -523,11 +541,19 @@ fn shadow_transmittance(ctx: &RenderContext, s: &Shadow) -> Vec3 {
 /// A shadow segment's transmittance through `medium` over `dist` (ratio tracking in a grid,
 /// its numbers keyed by the segment itself, so the image stays independent of scheduling).
 fn along(medium: &crate::medium::Medium, ray: &Ray, dist: f32) -> Vec3 {
-    let d = ray.d.normalize();
+    medium.transmittance_along(ray.o, ray.d.normalize(), dist, &mut segment_rng(ray, 0))
+}
+
+/// A random stream keyed by a ray segment itself (and `salt`), so that what a tracker draws
+/// along it does not depend on scheduling.
+fn segment_rng(ray: &Ray, salt: u64) -> crate::medium::grid::Rng {
     let bits = |v: Vec3| v.to_array().map(|x| x.to_bits() as u64);
-    let (o, dd) = (bits(ray.o), bits(d));
-    let key = crate::sampling::hash(&[o[0], o[1], o[2], dd[0], dd[1], dd[2]]);
-    medium.transmittance_along(ray.o, d, dist, &mut crate::medium::grid::Rng::new(key))
+    let (o, dd) = (bits(ray.o), bits(ray.d.normalize()));
+    let key = match salt {
+        0 => crate::sampling::hash(&[o[0], o[1], o[2], dd[0], dd[1], dd[2]]),
+        _ => crate::sampling::hash(&[o[0], o[1], o[2], dd[0], dd[1], dd[2], salt]),
+    };
+    crate::medium::grid::Rng::new(key)
 }
 
 /// Medium boundaries a shadow ray may pass before it is taken as blocked.

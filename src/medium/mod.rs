@@ -1,6 +1,6 @@
-//! Participating media (issue 18): pbrt-v4's `homogeneous` and `uniformgrid` media, absorbing
-//! and scattering (Henyey-Greenstein phase function), bound to shapes and the camera by
-//! `MediumInterface`.
+//! Participating media (issue 18): pbrt-v4's `homogeneous`, `uniformgrid`, `rgbgrid` and
+//! `cloud` media, absorbing, scattering (Henyey-Greenstein phase function) and emitting, bound
+//! to shapes and the camera by `MediumInterface`.
 //!
 //! ```text
 //! MakeNamedMedium "fog" "string type" "homogeneous" "float g" 0.3
@@ -13,9 +13,18 @@
 //! ```
 //!
 //! Parameters follow pbrt-v4's `HomogeneousMedium::Create`: `sigma_a` and `sigma_s` (rgb,
-//! default 1 each, per unit of scene length), `scale` (multiplies both), `g`, `Le` and
-//! `Lescale`. As in pbrt-v4, a surface's inside is the side its geometric normal points away
-//! from; a surface naming one medium for both sides is no boundary.
+//! default 1 each, per unit of scene length), or a `preset` naming one of pbrt-v4's measured
+//! media ([`presets`], per millimetre), `scale` (multiplies both), `g`, and emission `Le`
+//! (rgb or blackbody, read as a light's `L` is) times `Lescale`: a medium emits
+//! `sigma_a * Le` per unit length, as in pbrt-v4's `volpath`. As in pbrt-v4, a surface's
+//! inside is the side its geometric normal points away from; a surface naming one medium for
+//! both sides is no boundary.
+//!
+//! Heterogeneous media ([`Field`]): `uniformgrid` (a density grid, with `Le` times an
+//! `Lescale` grid or a `temperature` grid's blackbody) and `rgbgrid` (RGB grids of
+//! `sigma_a`, `sigma_s` and `Le`) in [`grid`], and the procedural `cloud` in [`cloud`]. Each
+//! lives in a box placed by the CTM at `MakeNamedMedium`; rays in them are tracked against one
+//! majorant (spectral, ratio and emission tracking).
 //!
 //! **Two ways the integrators see media.**
 //! - `--integrator path` tracks them as pbrt-v4's `volpath` does: every ray carries the medium
@@ -32,8 +41,8 @@
 //!   scatters towards them from the volume photon map by a beam estimate
 //!   ([`crate::photon::volume`]) and go on to their hit dimmed by the transmittance; the
 //!   surface photon maps are not built there.
-//! - The other integrators (direct, the bidirectional ones), and the photon mapper in scenes
-//!   within it, keep the first step's rule: a medium absorbs only and is a region closed by the surfaces that name it,
+//! - The other integrators (direct, the bidirectional ones) keep the first step's rule: a
+//!   medium absorbs only and is a region closed by the surfaces that name it,
 //!   with the camera and every light outside, so a ray segment is inside a medium exactly when
 //!   it ends on a boundary surface from that medium's side, and its transmittance is
 //!   `exp(-sigma_a * length)` ([`crate::accel::transmittance`]); photons, camera paths, gather
@@ -42,35 +51,89 @@
 //!   surfaces) is refused by them with the line of the first reason
 //!   ([`crate::scene::Scene::media_need_tracking`]).
 //!
-//! `uniformgrid` media ([`grid`]) scale the coefficients by a density grid; rays in them are
-//! tracked against a majorant (spectral tracking for interactions, ratio tracking for
-//! transmittance), so only the path tracer and the photon mapper render them.
+//! Emitting media are found by the path segments that cross them (the closed form of
+//! `integral T sigma_a Le` in a homogeneous medium, ratio tracking in a field), not sampled as
+//! lights, as in pbrt-v4; the photon mapper samples scattering in them as the path tracer
+//! does (its volume map holds no light they emit). Like heterogeneous media they need
+//! tracking, so only the path tracer and the photon mapper render them.
 //!
-//! Emitting media, `rgbgrid`, `cloud` and `nanovdb` media and `preset`s are located errors.
+//! `nanovdb` media are located errors.
+pub mod cloud;
 pub mod grid;
+pub mod presets;
 
 use crate::math::{Mat4, Vec3};
 use crate::params::{Loc, ParamSet, SceneError};
-use grid::{DensityGrid, Rng, MAX_COLLISIONS};
+use grid::{Region, Rng, SampledGrid, MAX_COLLISIONS};
 
-/// A homogeneous medium, or one whose coefficients a density grid scales.
+/// What varies over space in a heterogeneous medium.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Field {
+    /// `uniformgrid`: a density scaling `sigma_a` and `sigma_s`; emission `Le` (the medium's
+    /// [`Medium::le`]) times the `Lescale` grid, or a temperature grid's blackbody times it.
+    Density {
+        region: Region,
+        density: SampledGrid<f32>,
+        le_scale: SampledGrid<f32>,
+        temperature: Option<grid::Temperature>,
+    },
+    /// `rgbgrid`: RGB grids of `sigma_a` and `sigma_s` (1 where absent; both times the
+    /// medium's scale, held in [`Medium::sigma_a`] and [`Medium::sigma_s`]), and of `Le` times
+    /// `le_scale`.
+    Rgb {
+        region: Region,
+        sigma_a: Option<SampledGrid<Vec3>>,
+        sigma_s: Option<SampledGrid<Vec3>>,
+        le: Option<SampledGrid<Vec3>>,
+        le_scale: f32,
+    },
+    /// `cloud`: a procedural density in [0, 1] scaling `sigma_a` and `sigma_s`.
+    Cloud { region: Region, cloud: cloud::Cloud },
+}
+
+impl Field {
+    fn region(&self) -> &Region {
+        match self {
+            Field::Density { region, .. }
+            | Field::Rgb { region, .. }
+            | Field::Cloud { region, .. } => region,
+        }
+    }
+}
+
+/// The coefficients at a point of a medium.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coefficients {
+    pub sigma_a: Vec3,
+    pub sigma_s: Vec3,
+    /// Emitted radiance per unit length, `sigma_a * Le`.
+    pub emission: Vec3,
+}
+
+/// A participating medium: homogeneous, or with coefficients that vary over a [`Field`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Medium {
     /// The name `MakeNamedMedium` gave it.
     pub name: String,
-    /// Absorption coefficient per unit length, per RGB channel (`scale` folded in).
+    /// Absorption coefficient per unit length, per RGB channel (`scale` folded in); a field
+    /// scales it at each point.
     pub sigma_a: Vec3,
     /// Scattering coefficient per unit length, per RGB channel (`scale` folded in).
     pub sigma_s: Vec3,
     /// Henyey-Greenstein asymmetry in (-1, 1).
     pub g: f32,
-    /// `uniformgrid`: the density that scales `sigma_a` and `sigma_s` at each point.
-    pub density: Option<DensityGrid>,
+    /// Emitted radiance `Le * Lescale` (homogeneous and `uniformgrid` media); the medium
+    /// emits `sigma_a * le` per unit length.
+    pub le: Vec3,
+    /// Where the coefficients vary; `None` for a homogeneous medium.
+    pub field: Option<Field>,
+    /// A bound of `sigma_t` at every point and channel (the trackers' majorant).
+    majorant: f32,
 }
 
 impl Medium {
     /// `MakeNamedMedium name "string type" ...` with its parameters (`loc`: the directive;
-    /// `medium_from_world`: the inverse of the CTM there, which places a grid).
+    /// `medium_from_world`: the inverse of the CTM there, which places a grid or a cloud).
     pub fn create(
         name: &str,
         params: &mut ParamSet,
@@ -79,23 +142,69 @@ impl Medium {
     ) -> Result<Medium, SceneError> {
         let ty = params.get_string("type", "")?;
         let at = params.loc("type").cloned().unwrap_or_else(|| loc.clone());
-        let mut density = None;
-        match ty.as_str() {
-            "homogeneous" => {}
-            "uniformgrid" => density = Some(read_grid(params, loc, medium_from_world)?),
+        let bad = |params: &ParamSet, name: &str, msg: String| {
+            let at = params.loc(name).cloned().unwrap_or_else(|| loc.clone());
+            Err(SceneError::at(&at, msg))
+        };
+        // pbrt-v4 reads sigma_a and sigma_s (default 1 each) unless a preset gave them.
+        let preset = match ty.as_str() {
+            "homogeneous" => match params.get_string_opt("preset")? {
+                None => None,
+                Some(p) => match presets::lookup(&p) {
+                    Some(v) => Some(v),
+                    None => {
+                        return bad(
+                            params,
+                            "preset",
+                            format!(
+                                "unknown medium preset \"{p}\" (pbrt-v4's measured media: {})",
+                                presets::names().collect::<Vec<_>>().join(", ")
+                            ),
+                        )
+                    }
+                },
+            },
+            _ => None,
+        };
+        let le = match ty.as_str() {
+            "homogeneous" | "uniformgrid" => {
+                crate::scene::loader::lights::emission_rgb(params, "Le")?
+            }
+            _ => None,
+        };
+        let field = match ty.as_str() {
+            "homogeneous" => None,
+            "uniformgrid" => Some(grid::read_uniform(params, loc, medium_from_world, le)?),
+            "rgbgrid" => Some(grid::read_rgb(params, loc, medium_from_world)?),
+            "cloud" => {
+                let cloud = cloud::Cloud {
+                    density: params.get_float("density", 1.0)?,
+                    wispiness: params.get_float("wispiness", 1.0)?,
+                    frequency: params.get_float("frequency", 5.0)?,
+                };
+                for (name, v) in [
+                    ("density", cloud.density),
+                    ("wispiness", cloud.wispiness),
+                    ("frequency", cloud.frequency),
+                ] {
+                    if !v.is_finite() {
+                        return bad(params, name, format!("{name} must be finite, got {v}"));
+                    }
+                }
+                let region = grid::read_region(params, loc, medium_from_world)?;
+                Some(Field::Cloud { region, cloud })
+            }
             "" => {
                 return Err(SceneError::at(
                     loc,
                     "MakeNamedMedium needs a \"string type\"",
                 ))
             }
-            "rgbgrid" | "cloud" | "nanovdb" => {
+            "nanovdb" => {
                 return Err(SceneError::at(
                     &at,
-                    format!(
-                        "medium type \"{ty}\" is not supported yet (\"homogeneous\" and \
-                         \"uniformgrid\" media are)"
-                    ),
+                    "medium type \"nanovdb\" is not supported yet (\"homogeneous\", \
+                     \"uniformgrid\", \"rgbgrid\" and \"cloud\" media are)",
                 ))
             }
             other => {
@@ -104,84 +213,240 @@ impl Medium {
                     format!("unknown medium type \"{other}\""),
                 ))
             }
-        }
-        if let Some(p) = params.loc("preset").cloned() {
-            params.get_string_opt("preset")?;
-            return Err(SceneError::at(
-                &p,
-                "medium presets are not supported yet (give sigma_a and sigma_s)",
-            ));
-        }
-        let scale = params.get_float("scale", 1.0)?;
-        let sigma_a = params.get_rgb("sigma_a", Vec3::ONE)? * scale;
-        let sigma_s = params.get_rgb("sigma_s", Vec3::ONE)? * scale;
-        let g = params.get_float("g", 0.0)?;
-        let le = params.get_rgb("Le", Vec3::ZERO)? * params.get_float("Lescale", 1.0)?;
-        params.check_unused()?;
-        let bad = |name: &str, msg: String| {
-            let at = params.loc(name).cloned().unwrap_or_else(|| loc.clone());
-            Err(SceneError::at(&at, msg))
         };
-        if !(sigma_a.is_finite() && sigma_a.min_element() >= 0.0) {
-            return bad("sigma_a", "sigma_a must be finite and >= 0".into());
-        }
-        if !(sigma_s.is_finite() && sigma_s.min_element() >= 0.0) {
-            return bad("sigma_s", "sigma_s must be finite and >= 0".into());
-        }
-        if !(g > -1.0 && g < 1.0) {
-            return bad("g", format!("g must lie in (-1, 1), got {g}"));
-        }
-        if le != Vec3::ZERO {
+        let scale = params.get_float("scale", 1.0)?;
+        let (sigma_a, sigma_s) = match (&field, preset) {
+            (Some(Field::Rgb { .. }), _) => (Vec3::ONE, Vec3::ONE),
+            (_, Some((s, a))) => (a, s),
+            _ => (
+                params.get_rgb("sigma_a", Vec3::ONE)?,
+                params.get_rgb("sigma_s", Vec3::ONE)?,
+            ),
+        };
+        let (sigma_a, sigma_s) = (sigma_a * scale, sigma_s * scale);
+        let g = params.get_float("g", 0.0)?;
+        let le_scale = match ty.as_str() {
+            "homogeneous" => params.get_float("Lescale", 1.0)?,
+            _ => 1.0,
+        };
+        params.check_unused()?;
+        if !(scale.is_finite() && scale >= 0.0) {
             return bad(
-                "Le",
-                "emitting media are not supported yet (Le must be 0)".into(),
+                params,
+                "scale",
+                format!("scale must be finite and >= 0, got {scale}"),
             );
         }
-        if let Some(grid) = &density {
-            // The trackers step by the majorant: beyond this optical depth per voxel they would
-            // take more steps than a render can afford (and such a voxel is opaque anyway).
-            let voxel = ((grid.p1 - grid.p0)
-                / Vec3::new(grid.n[0] as f32, grid.n[1] as f32, grid.n[2] as f32))
-            .min_element();
-            let depth = (sigma_a + sigma_s).max_element() * grid.max * voxel;
-            if depth.is_nan() || depth > MAX_VOXEL_DEPTH {
-                return bad(
-                    "density",
-                    format!(
-                        "the densest voxel is {depth:e} optical depths thick (sigma_t x density x \
-                         voxel size); at most {MAX_VOXEL_DEPTH:e} are tracked"
-                    ),
-                );
-            }
+        if !(sigma_a.is_finite() && sigma_a.min_element() >= 0.0) {
+            return bad(params, "sigma_a", "sigma_a must be finite and >= 0".into());
         }
-        Ok(Medium {
+        if !(sigma_s.is_finite() && sigma_s.min_element() >= 0.0) {
+            return bad(params, "sigma_s", "sigma_s must be finite and >= 0".into());
+        }
+        if !(g > -1.0 && g < 1.0) {
+            return bad(params, "g", format!("g must lie in (-1, 1), got {g}"));
+        }
+        if !(le_scale.is_finite() && le_scale >= 0.0) {
+            return bad(
+                params,
+                "Lescale",
+                format!("Lescale must be finite and >= 0, got {le_scale}"),
+            );
+        }
+        let mut medium = Medium {
             name: name.to_string(),
             sigma_a,
             sigma_s,
             g,
-            density,
+            le: le.unwrap_or(Vec3::ZERO) * le_scale,
+            field,
+            majorant: 0.0,
+        };
+        medium.majorant = medium.bound();
+        if let Some((steps, size)) = medium.steps_per_cell() {
+            // The trackers step by the majorant: beyond this optical depth per cell they
+            // would take more steps than a render can afford (and such a cell is opaque).
+            if steps.is_nan() || steps > MAX_VOXEL_DEPTH {
+                let name = if matches!(medium.field, Some(Field::Cloud { .. })) {
+                    "density"
+                } else {
+                    "sigma_s"
+                };
+                return bad(
+                    params,
+                    name,
+                    format!(
+                        "the medium is {steps:e} optical depths thick across a {size} (majorant x \
+                         size); at most {MAX_VOXEL_DEPTH:e} are tracked"
+                    ),
+                );
+            }
+        }
+        Ok(medium)
+    }
+
+    /// A homogeneous medium that does not emit.
+    pub fn homogeneous(name: &str, sigma_a: Vec3, sigma_s: Vec3, g: f32) -> Medium {
+        let mut m = Medium {
+            name: name.to_string(),
+            sigma_a,
+            sigma_s,
+            g,
+            le: Vec3::ZERO,
+            field: None,
+            majorant: 0.0,
+        };
+        m.majorant = m.bound();
+        m
+    }
+
+    /// The largest `sigma_t` anywhere (any channel).
+    fn bound(&self) -> f32 {
+        let st = self.sigma_t();
+        let max = |g: &SampledGrid<f32>| g.values.iter().cloned().fold(0.0, f32::max);
+        let max3 = |g: &Option<SampledGrid<Vec3>>| {
+            g.as_ref().map_or(1.0, |g| {
+                g.values.iter().fold(0.0f32, |m, v| m.max(v.max_element()))
+            })
+        };
+        match &self.field {
+            None | Some(Field::Cloud { .. }) => st.max_element(),
+            Some(Field::Density { density, .. }) => st.max_element() * max(density),
+            Some(Field::Rgb {
+                sigma_a, sigma_s, ..
+            }) => self.sigma_a.x * max3(sigma_a) + self.sigma_s.x * max3(sigma_s),
+        }
+    }
+
+    /// For a field: the majorant times the size of a voxel (a grid) or of the box (a cloud),
+    /// the tracker's expected steps across it, and what was measured.
+    fn steps_per_cell(&self) -> Option<(f32, &'static str)> {
+        let region = self.field.as_ref()?.region();
+        let size = (region.p1 - region.p0).min_element();
+        Some(match &self.field {
+            Some(Field::Density { density, .. }) => (
+                self.majorant * size / density.n.iter().max().copied().unwrap_or(1) as f32,
+                "voxel",
+            ),
+            Some(Field::Rgb {
+                sigma_a, sigma_s, ..
+            }) => {
+                let n = sigma_a
+                    .as_ref()
+                    .or(sigma_s.as_ref())
+                    .map_or(1, |g| g.n.iter().max().copied().unwrap_or(1));
+                (self.majorant * size / n as f32, "voxel")
+            }
+            _ => (self.majorant * size, "box"),
         })
     }
 
     /// A scalar bound of `sigma_t` at every point and channel (the trackers' majorant).
     pub fn majorant(&self) -> f32 {
-        let d = self.density.as_ref().map_or(1.0, |g| g.max);
-        self.sigma_t().max_element() * d
+        self.majorant
+    }
+
+    /// Whether the coefficients are the same everywhere.
+    #[inline]
+    pub fn is_homogeneous(&self) -> bool {
+        self.field.is_none()
+    }
+
+    /// Whether the medium emits light anywhere.
+    pub fn emits(&self) -> bool {
+        match &self.field {
+            None => self.le.max_element() > 0.0 && self.sigma_a.max_element() > 0.0,
+            Some(Field::Density { temperature, .. }) => {
+                temperature.is_some() || self.le.max_element() > 0.0
+            }
+            Some(Field::Rgb { le, le_scale, .. }) => le.is_some() && *le_scale > 0.0,
+            Some(Field::Cloud { .. }) => false,
+        }
+    }
+
+    /// The coefficients at world point `p` (for a field, meaningful inside its box only:
+    /// [`Medium::clip`]).
+    pub fn at(&self, p: Vec3) -> Coefficients {
+        match &self.field {
+            None => Coefficients {
+                sigma_a: self.sigma_a,
+                sigma_s: self.sigma_s,
+                emission: self.sigma_a * self.le,
+            },
+            Some(Field::Density {
+                region,
+                density,
+                le_scale,
+                temperature,
+            }) => {
+                let u = region.unit(p);
+                let d = density.lookup(u);
+                let sigma_a = self.sigma_a * d;
+                let le = match temperature {
+                    Some(t) => t.radiance(u),
+                    None => self.le,
+                };
+                let emission = if le == Vec3::ZERO {
+                    Vec3::ZERO
+                } else {
+                    sigma_a * le * le_scale.lookup(u)
+                };
+                Coefficients {
+                    sigma_a,
+                    sigma_s: self.sigma_s * d,
+                    emission,
+                }
+            }
+            Some(Field::Rgb {
+                region,
+                sigma_a,
+                sigma_s,
+                le,
+                le_scale,
+            }) => {
+                let u = region.unit(p);
+                let a = sigma_a.as_ref().map_or(Vec3::ONE, |g| g.lookup(u)) * self.sigma_a;
+                let s = sigma_s.as_ref().map_or(Vec3::ONE, |g| g.lookup(u)) * self.sigma_s;
+                let e = le
+                    .as_ref()
+                    .map_or(Vec3::ZERO, |g| a * g.lookup(u) * *le_scale);
+                Coefficients {
+                    sigma_a: a,
+                    sigma_s: s,
+                    emission: e,
+                }
+            }
+            Some(Field::Cloud { region, cloud }) => {
+                let d = cloud.density(region.local(p));
+                Coefficients {
+                    sigma_a: self.sigma_a * d,
+                    sigma_s: self.sigma_s * d,
+                    emission: Vec3::ZERO,
+                }
+            }
+        }
+    }
+
+    /// The part `[t0, t1]` of the ray `o + t d` (`t >= 0`) where the medium may have
+    /// extinction: all of it for a homogeneous medium, a field's box otherwise.
+    pub fn clip(&self, o: Vec3, d: Vec3) -> (f32, f32) {
+        match &self.field {
+            None => (0.0, f32::INFINITY),
+            Some(f) => f.region().clip(o, d),
+        }
     }
 
     /// The fraction of light that crosses `dist` units from `o` along unit `d`: Beer's law in
-    /// a homogeneous medium, ratio tracking (reading `rng`) in a grid.
+    /// a homogeneous medium, ratio tracking (reading `rng`) in a field.
     pub fn transmittance_along(&self, o: Vec3, d: Vec3, dist: f32, rng: &mut Rng) -> Vec3 {
-        let Some(grid) = &self.density else {
+        if self.field.is_none() {
             return self.transmittance(dist);
-        };
-        let maj = self.majorant();
+        }
+        let maj = self.majorant;
         if maj <= 0.0 {
             return Vec3::ONE;
         }
-        let st = self.sigma_t();
-        // Nothing to cross outside the grid's box.
-        let (t0, t1) = grid.clip(o, d);
+        let (t0, t1) = self.clip(o, d);
         let end = dist.min(t1);
         let (mut t, mut tr) = (t0, Vec3::ONE);
         for _ in 0..MAX_COLLISIONS {
@@ -189,7 +454,8 @@ impl Medium {
             if t >= end {
                 return tr;
             }
-            tr *= Vec3::ONE - st * (grid.density(o + d * t) / maj);
+            let c = self.at(o + d * t);
+            tr *= Vec3::ONE - (c.sigma_a + c.sigma_s) / maj;
             if tr.max_element() <= 0.0 {
                 return Vec3::ZERO;
             }
@@ -197,9 +463,51 @@ impl Medium {
         Vec3::ZERO
     }
 
+    /// The light the medium emits towards `o` from the `dist` units along unit `d` (may be
+    /// infinite), dimmed by the transmittance on the way: `integral T(t) sigma_a Le dt`. In
+    /// closed form for a homogeneous medium; in a field, ratio tracking's tentative
+    /// collisions each add `T_ratio sigma_a Le / majorant` (unbiased, reading `rng`).
+    pub fn emitted_along(&self, o: Vec3, d: Vec3, dist: f32, rng: &mut Rng) -> Vec3 {
+        if self.field.is_none() {
+            let (st, e) = (self.sigma_t(), self.sigma_a * self.le);
+            // A channel with emission has sigma_a > 0, hence sigma_t > 0.
+            return Vec3::select(
+                st.cmpgt(Vec3::ZERO),
+                e * (Vec3::ONE - beer(st, dist)) / st,
+                Vec3::ZERO,
+            );
+        }
+        let maj = self.majorant;
+        if maj <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let (t0, t1) = self.clip(o, d);
+        let end = dist.min(t1);
+        let (mut t, mut tr, mut sum) = (t0, Vec3::ONE, Vec3::ZERO);
+        for _ in 0..MAX_COLLISIONS {
+            t -= (1.0 - rng.uniform()).ln() / maj;
+            if t >= end {
+                break;
+            }
+            let c = self.at(o + d * t);
+            sum += tr * c.emission / maj;
+            tr *= Vec3::ONE - (c.sigma_a + c.sigma_s) / maj;
+            if tr.max_element() <= 0.0 {
+                break;
+            }
+        }
+        sum
+    }
+
     /// Samples where a ray from `o` along unit `d` first interacts within `dist` (may be
     /// infinite): [`Medium::sample_distance`] in a homogeneous medium (`u_channel`, `u`), spectral
-    /// tracking in a grid (a stream keyed by the two numbers).
+    /// tracking in a field (a stream keyed by the two numbers). `history` is the throughput
+    /// of the path so far (any scale): as in Kutz et al.'s history-aware spectral tracking a
+    /// tentative collision scatters with probability `max(sigma_s h) / (max(sigma_s h) +
+    /// max(sigma_n h))`, `h` the throughput there, so that the colours the path still
+    /// carries decide and the per-channel weights stay bounded in chromatic media (with
+    /// probabilities from the mean `sigma_s` alone, a red-scattering cloud's red weights
+    /// grew 1.7x per scattering and its image converged from below, 0.94 at 64 spp).
     pub fn sample_interaction(
         &self,
         o: Vec3,
@@ -207,11 +515,12 @@ impl Medium {
         dist: f32,
         u_channel: f32,
         u: f32,
+        history: Vec3,
     ) -> MediumEvent {
-        let Some(grid) = &self.density else {
+        if self.field.is_none() {
             return self.sample_distance(dist, u_channel, u);
-        };
-        let maj = self.majorant();
+        }
+        let maj = self.majorant;
         if maj <= 0.0 {
             return MediumEvent::Pass { weight: Vec3::ONE };
         }
@@ -219,9 +528,8 @@ impl Medium {
             u_channel.to_bits() as u64,
             u.to_bits() as u64,
         ]));
-        let (st, ss) = (self.sigma_t(), self.sigma_s);
-        // Outside the grid's box every collision would be a null one of weight 1.
-        let (t0, t1) = grid.clip(o, d);
+        // Outside the field's box every collision would be a null one of weight 1.
+        let (t0, t1) = self.clip(o, d);
         let end = dist.min(t1);
         let (mut t, mut w) = (t0, Vec3::ONE);
         for _ in 0..MAX_COLLISIONS {
@@ -229,41 +537,63 @@ impl Medium {
             if t >= end {
                 return MediumEvent::Pass { weight: w };
             }
-            let rho = grid.density(o + d * t);
-            let ps = (ss * rho).element_sum() / 3.0 / maj;
-            if ps > 0.0 && rng.uniform() < ps {
-                w *= ss * rho / (maj * ps);
-                return MediumEvent::Scatter { t, weight: w };
-            }
-            w *= (Vec3::splat(maj) - st * rho) / (maj * (1.0 - ps));
-            if w.max_element() <= 0.0 {
+            let c = self.at(o + d * t);
+            let sigma_n = (Vec3::splat(maj) - c.sigma_a - c.sigma_s).max(Vec3::ZERO);
+            let h = history * w;
+            let (s, n) = ((c.sigma_s * h).max_element(), (sigma_n * h).max_element());
+            if (s + n).is_nan() || s + n <= 0.0 {
                 return MediumEvent::Pass { weight: Vec3::ZERO };
             }
+            let ps = s / (s + n);
+            if ps > 0.0 && rng.uniform() < ps {
+                w *= c.sigma_s / (maj * ps);
+                return MediumEvent::Scatter { t, weight: w };
+            }
+            w *= sigma_n / (maj * (1.0 - ps));
         }
         MediumEvent::Pass { weight: Vec3::ZERO }
     }
 
     /// The transmittance from `o` along unit `d` as a function of the distance, up to
-    /// `t_max`, for the beam estimates: Beer's law, or in a grid the optical depth marched
-    /// half a voxel at a time (midpoint rule) and interpolated.
+    /// `t_max`, for the beam estimates: Beer's law, or in a field the optical depth marched
+    /// (midpoint rule; half a voxel at a time in a grid, 1/256 of the box in a cloud) and
+    /// interpolated.
     pub fn transmittance_table(&self, o: Vec3, d: Vec3, t_max: f32) -> TransmittanceTable {
-        let st = self.sigma_t();
-        let Some(grid) = &self.density else {
-            return TransmittanceTable::Beer(st);
+        let Some(field) = &self.field else {
+            return TransmittanceTable::Beer(self.sigma_t());
         };
-        let step = grid.half_voxel_step(d);
-        // Marched to the end of the grid's box (no density beyond), in at most 4096 steps.
-        let end = t_max.min(grid.clip(o, d).1).max(0.0);
-        if !end.is_finite() || end <= 0.0 {
-            return TransmittanceTable::Beer(Vec3::ZERO); // the segment misses the grid
+        let region = field.region();
+        let step = match field {
+            Field::Density { density, .. } => region.step(d, density.n, 0.5),
+            Field::Rgb {
+                sigma_a, sigma_s, ..
+            } => region.step(
+                d,
+                sigma_a
+                    .as_ref()
+                    .or(sigma_s.as_ref())
+                    .map_or([1, 1, 1], |g| g.n),
+                0.5,
+            ),
+            Field::Cloud { .. } => region.step(d, [256, 256, 256], 1.0),
+        };
+        let (t0, t1) = region.clip(o, d);
+        let end = t_max.min(t1).max(0.0);
+        if !end.is_finite() || end <= t0 {
+            return TransmittanceTable::Beer(Vec3::ZERO); // the segment misses the box
         }
+        // Marched from the origin (no extinction before t0), in at most 4096 steps.
         let steps = ((end / step).ceil() as usize).clamp(1, 4096);
         let h = end / steps as f32;
         let mut depth = Vec::with_capacity(steps + 1);
         let mut acc = Vec3::ZERO;
         depth.push(acc);
         for k in 0..steps {
-            acc += st * grid.density(o + d * ((k as f32 + 0.5) * h)) * h;
+            let t = (k as f32 + 0.5) * h;
+            if t >= t0 {
+                let c = self.at(o + d * t);
+                acc += (c.sigma_a + c.sigma_s) * h;
+            }
             depth.push(acc);
         }
         TransmittanceTable::Marched { h, depth }
@@ -341,84 +671,6 @@ impl TransmittanceTable {
             }
         }
     }
-}
-
-/// A `uniformgrid`'s `density`, `nx`/`ny`/`nz` and `p0`/`p1`.
-fn read_grid(
-    params: &mut ParamSet,
-    loc: &Loc,
-    medium_from_world: Mat4,
-) -> Result<DensityGrid, SceneError> {
-    let at =
-        |params: &ParamSet, name: &str| params.loc(name).cloned().unwrap_or_else(|| loc.clone());
-    let mut n = [0usize; 3];
-    for (k, name) in ["nx", "ny", "nz"].iter().enumerate() {
-        let v = params.get_int(name, 1)?;
-        if v < 1 {
-            return Err(SceneError::at(
-                &at(params, name),
-                format!("{name} must be >= 1, got {v}"),
-            ));
-        }
-        n[k] = v as usize;
-    }
-    let p0 = params.get_point3("p0", Vec3::ZERO)?;
-    let p1 = params.get_point3("p1", Vec3::ONE)?;
-    if (p1 - p0).min_element() <= 0.0 {
-        return Err(SceneError::at(
-            &at(params, "p1"),
-            "p1 must exceed p0 on every axis",
-        ));
-    }
-    let Some(values) = params.get_floats("density")? else {
-        return Err(SceneError::at(
-            loc,
-            "a \"uniformgrid\" medium needs \"float density\"",
-        ));
-    };
-    let want = n[0].checked_mul(n[1]).and_then(|v| v.checked_mul(n[2]));
-    if want != Some(values.len()) {
-        return Err(SceneError::at(
-            &at(params, "density"),
-            format!(
-                "\"density\" has {} values, nx * ny * nz = {} x {} x {} wants {}",
-                values.len(),
-                n[0],
-                n[1],
-                n[2],
-                want.map_or("more than fit".to_string(), |w| w.to_string())
-            ),
-        ));
-    }
-    if values.iter().any(|v| !v.is_finite() || *v < 0.0) {
-        return Err(SceneError::at(
-            &at(params, "density"),
-            "densities must be finite and >= 0",
-        ));
-    }
-    for name in ["temperature", "Lescale"] {
-        if params.loc(name).is_some() && name == "temperature" {
-            return Err(SceneError::at(
-                &at(params, name),
-                "emitting grid media (temperature) are not supported yet",
-            ));
-        }
-    }
-    if !medium_from_world.is_finite() {
-        return Err(SceneError::at(
-            loc,
-            "the transform at MakeNamedMedium is singular",
-        ));
-    }
-    let max = values.iter().cloned().fold(0.0, f32::max);
-    Ok(DensityGrid {
-        n,
-        values,
-        p0,
-        p1,
-        medium_from_world,
-        max,
-    })
 }
 
 /// The optical depth across one voxel of a grid medium's densest voxel that the trackers
@@ -626,7 +878,9 @@ mod tests {
             sigma_a: Vec3::new(0.5, 0.0, 0.2),
             sigma_s: Vec3::new(1.0, 0.3, 0.0),
             g: 0.0,
-            density: None,
+            le: Vec3::ZERO,
+            field: None,
+            majorant: 1.5,
         };
         let d = 1.7;
         let st = m.sigma_t();
@@ -676,20 +930,28 @@ mod tests {
     fn grid_trackers_average_to_the_transport_terms() {
         // A grid of density 2 everywhere the rays go (the box reaches far past them), with the
         // coefficients halved: the homogeneous medium of the test above, tracked.
-        let m = Medium {
+        let mut m = Medium {
             name: "m".into(),
             sigma_a: Vec3::new(0.25, 0.0, 0.1),
             sigma_s: Vec3::new(0.5, 0.15, 0.0),
             g: 0.0,
-            density: Some(DensityGrid {
-                n: [2, 2, 2],
-                values: vec![2.0; 8],
-                p0: Vec3::splat(-100.0),
-                p1: Vec3::splat(100.0),
-                medium_from_world: Mat4::IDENTITY,
-                max: 2.0,
+            le: Vec3::ZERO,
+            field: Some(Field::Density {
+                region: Region {
+                    p0: Vec3::splat(-100.0),
+                    p1: Vec3::splat(100.0),
+                    medium_from_world: Mat4::IDENTITY,
+                },
+                density: SampledGrid {
+                    n: [2, 2, 2],
+                    values: vec![2.0; 8],
+                },
+                le_scale: SampledGrid::constant(1.0),
+                temperature: None,
             }),
+            majorant: 0.0,
         };
+        m.majorant = m.bound();
         let (o, dir, d) = (Vec3::new(1.0, 2.0, 3.0), Vec3::new(0.6, 0.0, 0.8), 1.7);
         let st = (m.sigma_a + m.sigma_s) * 2.0;
         let (mut scat, mut pass, mut tr) = (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
@@ -700,7 +962,7 @@ mod tests {
                 crate::sampling::to_unit(h),
                 crate::sampling::to_unit(crate::sampling::mix64(h)),
             );
-            match m.sample_interaction(o, dir, d, uc, u) {
+            match m.sample_interaction(o, dir, d, uc, u, Vec3::ONE) {
                 MediumEvent::Scatter { weight, t } => {
                     assert!(t < d);
                     scat += weight
@@ -738,10 +1000,11 @@ mod tests {
     fn uniformgrid_parameters_are_checked_where_they_are_written() {
         let ok = create(r#""string type" "uniformgrid" "integer nx" 2 "float density" [ 0 1 ]"#)
             .unwrap();
-        assert_eq!(
-            ok.density.as_ref().map(|g| (g.n, g.max)),
-            Some(([2, 1, 1], 1.0))
-        );
+        match &ok.field {
+            Some(Field::Density { density, .. }) => assert_eq!(density.n, [2, 1, 1]),
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(ok.majorant(), 2.0);
         for (text, want) in [
             (r#""string type" "uniformgrid""#, "needs \"float density\""),
             (
@@ -776,16 +1039,32 @@ mod tests {
         let m = create(r#""string type" "homogeneous" "rgb sigma_a" [1 1 1]"#).unwrap();
         assert!(m.scatters() && m.sigma_s == Vec3::ONE);
         for (text, want) in [
-            (r#""string type" "cloud""#, "not supported yet"),
+            (r#""string type" "nanovdb""#, "not supported yet"),
             (r#""string type" "fog""#, "unknown medium type"),
             (r#""rgb sigma_s" [0 0 0]"#, "needs a \"string type\""),
             (
                 r#""string type" "homogeneous" "string preset" "Wine""#,
-                "presets",
+                "unknown medium preset \"Wine\"",
             ),
             (
-                r#""string type" "homogeneous" "rgb sigma_s" [0 0 0] "rgb Le" [1 1 1]"#,
-                "emitting",
+                r#""string type" "homogeneous" "string preset" "Merlot" "rgb sigma_a" [1 1 1]"#,
+                "unused parameter",
+            ),
+            (
+                r#""string type" "rgbgrid" "integer nx" 2 "rgb Le" [1 1 1 1 1 1] "rgb sigma_s" [1 1 1 1 1 1]"#,
+                "needs \"rgb sigma_a\"",
+            ),
+            (
+                r#""string type" "rgbgrid" "integer nx" 2 "rgb sigma_a" [1 1 1]"#,
+                "wants 2",
+            ),
+            (
+                r#""string type" "uniformgrid" "float density" [1] "rgb Le" [1 1 1] "float temperature" [2000]"#,
+                "both \"Le\" and \"temperature\"",
+            ),
+            (
+                r#""string type" "cloud" "float wispiness" -1 "rgb Le" [1 1 1]"#,
+                "unused parameter",
             ),
             (
                 r#""string type" "homogeneous" "rgb sigma_s" [0 0 0] "float density" 1"#,
@@ -799,6 +1078,70 @@ mod tests {
             let e = create(text).unwrap_err().to_string();
             assert!(e.contains(want), "{text}: {e}");
         }
+    }
+
+    #[test]
+    fn presets_scale_and_emission_read_as_pbrt_v4_reads_them() {
+        let m = create(r#""string type" "homogeneous" "string preset" "Ketchup" "float scale" 10"#)
+            .unwrap();
+        assert!((m.sigma_s - Vec3::new(1.8, 0.7, 0.3)).abs().max_element() < 1e-5);
+        assert!((m.sigma_a - Vec3::new(0.61, 9.7, 14.5)).abs().max_element() < 1e-4);
+        assert!(!m.emits());
+        // Le times Lescale; emitted per unit length as sigma_a * Le.
+        let m = create(
+            r#""string type" "homogeneous" "rgb sigma_a" [1 0 2] "rgb sigma_s" [0 0 0] "rgb Le" [1 2 3] "float Lescale" 0.5"#,
+        )
+        .unwrap();
+        assert!(m.emits() && m.le == Vec3::new(0.5, 1.0, 1.5));
+        assert_eq!(m.at(Vec3::ZERO).emission, Vec3::new(0.5, 0.0, 3.0));
+        // The closed form against a midpoint sum of T(t) sigma_a Le over 1.3 units.
+        let got = m.emitted_along(Vec3::ZERO, Vec3::X, 1.3, &mut Rng::new(1));
+        let n = 100_000;
+        let mut want = Vec3::ZERO;
+        for i in 0..n {
+            let t = (i as f32 + 0.5) / n as f32 * 1.3;
+            want += m.transmittance(t) * m.at(Vec3::ZERO).emission * (1.3 / n as f32);
+        }
+        assert!((got - want).abs().max_element() < 1e-4, "{got} vs {want}");
+        // An rgbgrid's coefficients are its grids times scale; its Le times Lescale.
+        let m = create(
+            r#""string type" "rgbgrid" "integer nx" 2 "rgb sigma_a" [1 0 0  3 0 0] "rgb Le" [0 0 0  2 2 2] "float Lescale" 0.5 "float scale" 2"#,
+        )
+        .unwrap();
+        let c = m.at(Vec3::new(0.5, 0.5, 0.5));
+        assert!((c.sigma_a - Vec3::new(4.0, 0.0, 0.0)).abs().max_element() < 1e-5);
+        assert_eq!(c.sigma_s, Vec3::splat(2.0)); // absent: 1 times scale
+        assert!((c.emission - Vec3::new(2.0, 0.0, 0.0)).abs().max_element() < 1e-5); // 4 x 1 x 0.5
+        assert_eq!(m.majorant(), 2.0 * 3.0 + 2.0 * 1.0);
+    }
+
+    #[test]
+    fn field_emission_by_ratio_tracking_averages_to_the_integral() {
+        // A uniformgrid of density 1 + x over x in [0, 2] (two samples at 0.5 and 1.5, linear
+        // between, and exactly what a 1-D midpoint sum below reads).
+        let m = create(
+            r#""string type" "uniformgrid" "integer nx" 2 "float density" [1.5 2.5] "point3 p1" [2 1 1] "rgb sigma_a" [0.5 1 0] "rgb sigma_s" [0.5 0 0] "rgb Le" [2 1 4]"#,
+        )
+        .unwrap();
+        let (o, d, dist) = (Vec3::new(0.5, 0.5, 0.5), Vec3::X, 1.0);
+        let n = 200_000u64;
+        let mut got = Vec3::ZERO;
+        for i in 0..n {
+            got += m.emitted_along(o, d, dist, &mut Rng::new(crate::sampling::hash(&[i])));
+        }
+        got /= n as f32;
+        let steps = 10_000;
+        let (mut want, mut tau) = (Vec3::ZERO, Vec3::ZERO);
+        for k in 0..steps {
+            let h = dist / steps as f32;
+            let c = m.at(o + d * ((k as f32 + 0.5) * h));
+            want += (-(tau + (c.sigma_a + c.sigma_s) * h * 0.5)).exp() * c.emission * h;
+            tau += (c.sigma_a + c.sigma_s) * h;
+        }
+        assert!(
+            (got - want).abs().max_element() < 4e-3 * want.max_element(),
+            "{got} vs {want}"
+        );
     }
 
     #[test]

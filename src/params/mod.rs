@@ -420,6 +420,11 @@ impl ParamSet {
         }))
     }
 
+    /// All colours of `"rgb name" [...]`, or `None` when absent.
+    pub fn get_rgbs(&mut self, name: &str) -> Result<Option<Vec<Vec3>>, SceneError> {
+        self.triples(name, &[ParamType::Rgb])
+    }
+
     /// All points of `"point3 name" [...]`, or `None` when absent.
     pub fn get_point3s(&mut self, name: &str) -> Result<Option<Vec<Vec3>>, SceneError> {
         self.triples(name, &[ParamType::Point3])

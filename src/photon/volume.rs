@@ -215,7 +215,7 @@ fn trace_one(
             let med: &Medium = &scene.media[m as usize];
             let d = ray.d / len;
             if med.scatters() {
-                match med.sample_interaction(ray.o, d, dist, next(), next()) {
+                match med.sample_interaction(ray.o, d, dist, next(), next(), power) {
                     MediumEvent::Scatter { t, weight } => {
                         let p = ray.o + d * t;
                         let arriving = power;
@@ -499,13 +499,7 @@ mod tests {
                 }
             })
             .collect();
-        let medium = Medium {
-            name: "m".into(),
-            sigma_a: Vec3::new(0.1, 0.2, 0.0),
-            sigma_s: Vec3::splat(0.5),
-            g: 0.4,
-            density: None,
-        };
+        let medium = Medium::homogeneous("m", Vec3::new(0.1, 0.2, 0.0), Vec3::splat(0.5), 0.4);
         for radius in [0.01f32, 0.05, 0.3] {
             let map = VolumeMap::build(photons.clone(), radius).unwrap();
             for j in 0..200u64 {

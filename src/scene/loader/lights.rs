@@ -140,6 +140,15 @@ fn light_rgb(params: &mut ParamSet, name: &str) -> Result<Vec3, SceneError> {
     )))
 }
 
+/// An emitted radiance `name` that defaults to none (a medium's `Le`): as [`light_rgb`]
+/// reads a light's value (an `rgb` as given, a `blackbody` of luminance 1), or `None`.
+pub fn emission_rgb(params: &mut ParamSet, name: &str) -> Result<Option<Vec3>, SceneError> {
+    if params.peek(name).is_none() {
+        return Ok(None);
+    }
+    light_rgb(params, name).map(Some)
+}
+
 /// The RGB of `"blackbody name" [ T ]`: T must be finite and > 0 (kelvin).
 fn blackbody(params: &mut ParamSet, name: &str) -> Result<Vec3, SceneError> {
     let t = params.get_blackbody(name)?.expect("peeked");

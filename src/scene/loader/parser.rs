@@ -541,8 +541,11 @@ impl Builder {
                 if medium.scatters() {
                     self.track(&loc, &format!("medium \"{name}\" scatters"));
                 }
-                if medium.density.is_some() {
-                    self.track(&loc, &format!("medium \"{name}\" is a density grid"));
+                if !medium.is_homogeneous() {
+                    self.track(&loc, &format!("medium \"{name}\" is heterogeneous"));
+                }
+                if medium.emits() {
+                    self.track(&loc, &format!("medium \"{name}\" emits"));
                 }
                 self.named_media.insert(name, self.media.len() as u32);
                 self.media.push(medium);
