@@ -350,7 +350,9 @@ pub struct Temperature {
     pub grid: SampledGrid<f32>,
     pub offset: f32,
     pub scale: f32,
-    /// Linear sRGB of pbrt-v4's peak-normalised blackbody at `lo + k (hi - lo) / (len - 1)`.
+    /// Linear sRGB of pbrt-v4's peak-normalised blackbody at `lo + k (hi - lo) / (len - 1)`,
+    /// as pbrt-v4's film records it (unnormalised: luminance times
+    /// [`crate::scene::loader::blackbody::CIE_Y_INTEGRAL`]).
     table: Vec<Vec3>,
     lo: f32,
     hi: f32,
@@ -378,11 +380,11 @@ impl Temperature {
                 } else {
                     lo + (hi - lo) * i as f32 / (len - 1) as f32
                 } as f64;
-                match (
-                    crate::scene::loader::blackbody::rgb(t),
-                    crate::scene::loader::blackbody::peak_normalized_luminance(t),
-                ) {
-                    (Some(c), Some(y)) => c * y as f32,
+                use crate::scene::loader::blackbody::{
+                    peak_normalized_luminance, rgb, CIE_Y_INTEGRAL,
+                };
+                match (rgb(t), peak_normalized_luminance(t)) {
+                    (Some(c), Some(y)) => c * (y * CIE_Y_INTEGRAL) as f32,
                     _ => Vec3::ZERO,
                 }
             })
@@ -495,8 +497,9 @@ mod tests {
             2.0,
         );
         // 2 x 3000 K at the second sample's centre.
-        let want = crate::scene::loader::blackbody::rgb(6000.0).unwrap()
-            * crate::scene::loader::blackbody::peak_normalized_luminance(6000.0).unwrap() as f32;
+        use crate::scene::loader::blackbody::{peak_normalized_luminance, rgb, CIE_Y_INTEGRAL};
+        let want = rgb(6000.0).unwrap()
+            * (peak_normalized_luminance(6000.0).unwrap() * CIE_Y_INTEGRAL) as f32;
         let got = t.radiance(Vec3::new(0.75, 0.5, 0.5));
         assert!(
             (got - want).abs().max_element() < 2e-3 * want.max_element(),

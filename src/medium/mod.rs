@@ -407,9 +407,9 @@ impl Medium {
                 let u = region.unit(p);
                 let a = sigma_a.as_ref().map_or(Vec3::ONE, |g| g.lookup(u)) * self.sigma_a;
                 let s = sigma_s.as_ref().map_or(Vec3::ONE, |g| g.lookup(u)) * self.sigma_s;
-                let e = le
-                    .as_ref()
-                    .map_or(Vec3::ZERO, |g| a * g.lookup(u) * *le_scale);
+                // pbrt-v4 takes these RGBs as illuminant spectra that no light normalises.
+                let k = *le_scale * crate::scene::loader::blackbody::CIE_Y_INTEGRAL as f32;
+                let e = le.as_ref().map_or(Vec3::ZERO, |g| a * g.lookup(u) * k);
                 Coefficients {
                     sigma_a: a,
                     sigma_s: s,
@@ -1111,7 +1111,14 @@ mod tests {
         let c = m.at(Vec3::new(0.5, 0.5, 0.5));
         assert!((c.sigma_a - Vec3::new(4.0, 0.0, 0.0)).abs().max_element() < 1e-5);
         assert_eq!(c.sigma_s, Vec3::splat(2.0)); // absent: 1 times scale
-        assert!((c.emission - Vec3::new(2.0, 0.0, 0.0)).abs().max_element() < 1e-5); // 4 x 1 x 0.5
+                                                 // 4 x 1 x 0.5, times pbrt-v4's unnormalised illuminant.
+        let k = crate::scene::loader::blackbody::CIE_Y_INTEGRAL as f32;
+        assert!(
+            (c.emission - Vec3::new(2.0 * k, 0.0, 0.0))
+                .abs()
+                .max_element()
+                < 1e-3
+        );
         assert_eq!(m.majorant(), 2.0 * 3.0 + 2.0 * 1.0);
     }
 

@@ -80,6 +80,12 @@ pub fn rgb(t: f64) -> Option<Vec3> {
     Some(Vec3::new(row(m[0]), row(m[1]), row(m[2])))
 }
 
+/// The integral of the CIE 1931 y-bar over wavelength in nm (pbrt-v4's `CIE_Y_integral`). pbrt-v4's
+/// film sensor integrates spectral radiance against y-bar without dividing by it, so a
+/// spectrum that no light normalises (a grid medium's blackbody, an `rgbgrid`'s `Le`) reaches
+/// the image this many times brighter than its luminance as written here.
+pub const CIE_Y_INTEGRAL: f64 = 106.856895;
+
 /// Luminance of pbrt-v4's `BlackbodySpectrum(T)` itself (Planck's law divided by its value at
 /// the peak wavelength, Wien's 2.8977721e-3 m K / T): `SpectrumToXYZ(s).Y`, the integral of
 /// y-bar times it over the integral of y-bar (106.856895). pbrt-v4's portal infinite light
@@ -89,7 +95,6 @@ pub fn peak_normalized_luminance(t: f64) -> Option<f64> {
     if !(t.is_finite() && t > 0.0) {
         return None;
     }
-    const CIE_Y_INTEGRAL: f64 = 106.856895;
     let peak = ln_planck(2.897_772_1e-3 / t * 1e9, t);
     let sum: f64 = cmf_5nm()
         .enumerate()
