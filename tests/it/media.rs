@@ -803,7 +803,7 @@ AttributeEnd
 "#
         )
     };
-    let eight = |v: &str| vec![v; 8].join(" ");
+    let eight = |v: &str| [v; 8].join(" ");
     let hot = |t: f32, offset: f32| {
         format!(
             r#""string type" "uniformgrid" "float density" [ {} ] "float Lescale" [ {} ]
