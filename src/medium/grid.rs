@@ -352,7 +352,7 @@ pub struct Temperature {
     pub scale: f32,
     /// Linear sRGB of pbrt-v4's peak-normalised blackbody at `lo + k (hi - lo) / (len - 1)`,
     /// as pbrt-v4's film records it (unnormalised: luminance times
-    /// [`crate::scene::loader::blackbody::CIE_Y_INTEGRAL`]).
+    /// [`crate::spectrum::blackbody::CIE_Y_INTEGRAL`]).
     table: Vec<Vec3>,
     lo: f32,
     hi: f32,
@@ -380,9 +380,7 @@ impl Temperature {
                 } else {
                     lo + (hi - lo) * i as f32 / (len - 1) as f32
                 } as f64;
-                use crate::scene::loader::blackbody::{
-                    peak_normalized_luminance, rgb, CIE_Y_INTEGRAL,
-                };
+                use crate::spectrum::blackbody::{peak_normalized_luminance, rgb, CIE_Y_INTEGRAL};
                 match (rgb(t), peak_normalized_luminance(t)) {
                     (Some(c), Some(y)) => c * (y * CIE_Y_INTEGRAL) as f32,
                     _ => Vec3::ZERO,
@@ -497,7 +495,7 @@ mod tests {
             2.0,
         );
         // 2 x 3000 K at the second sample's centre.
-        use crate::scene::loader::blackbody::{peak_normalized_luminance, rgb, CIE_Y_INTEGRAL};
+        use crate::spectrum::blackbody::{peak_normalized_luminance, rgb, CIE_Y_INTEGRAL};
         let want = rgb(6000.0).unwrap()
             * (peak_normalized_luminance(6000.0).unwrap() * CIE_Y_INTEGRAL) as f32;
         let got = t.radiance(Vec3::new(0.75, 0.5, 0.5));

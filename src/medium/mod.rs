@@ -139,6 +139,7 @@ impl Medium {
         params: &mut ParamSet,
         loc: &Loc,
         medium_from_world: Mat4,
+        le: Option<Vec3>,
     ) -> Result<Medium, SceneError> {
         let ty = params.get_string("type", "")?;
         let at = params.loc("type").cloned().unwrap_or_else(|| loc.clone());
@@ -166,12 +167,8 @@ impl Medium {
             },
             _ => None,
         };
-        let le = match ty.as_str() {
-            "homogeneous" | "uniformgrid" => {
-                crate::scene::loader::lights::emission_rgb(params, "Le")?
-            }
-            _ => None,
-        };
+        // `le`: the caller read `Le` (rgb or blackbody, as a light's `L`) for the types
+        // that take one value.
         let field = match ty.as_str() {
             "homogeneous" => None,
             "uniformgrid" => Some(grid::read_uniform(params, loc, medium_from_world, le)?),
@@ -408,7 +405,7 @@ impl Medium {
                 let a = sigma_a.as_ref().map_or(Vec3::ONE, |g| g.lookup(u)) * self.sigma_a;
                 let s = sigma_s.as_ref().map_or(Vec3::ONE, |g| g.lookup(u)) * self.sigma_s;
                 // pbrt-v4 takes these RGBs as illuminant spectra that no light normalises.
-                let k = *le_scale * crate::scene::loader::blackbody::CIE_Y_INTEGRAL as f32;
+                let k = *le_scale * crate::spectrum::blackbody::CIE_Y_INTEGRAL as f32;
                 let e = le.as_ref().map_or(Vec3::ZERO, |g| a * g.lookup(u) * k);
                 Coefficients {
                     sigma_a: a,
@@ -770,7 +767,15 @@ mod tests {
             line: 1,
             col: 1,
         };
-        Medium::create("m", &mut params, &loc, Mat4::IDENTITY)
+        let ty = params
+            .peek("type")
+            .and_then(|p| p.strings())
+            .and_then(|v| v.first().cloned());
+        let le = match ty.as_deref() {
+            Some("homogeneous" | "uniformgrid") => params.get_rgb_opt("Le").unwrap(),
+            _ => None,
+        };
+        Medium::create("m", &mut params, &loc, Mat4::IDENTITY, le)
     }
 
     #[test]
@@ -1112,7 +1117,7 @@ mod tests {
         assert!((c.sigma_a - Vec3::new(4.0, 0.0, 0.0)).abs().max_element() < 1e-5);
         assert_eq!(c.sigma_s, Vec3::splat(2.0)); // absent: 1 times scale
                                                  // 4 x 1 x 0.5, times pbrt-v4's unnormalised illuminant.
-        let k = crate::scene::loader::blackbody::CIE_Y_INTEGRAL as f32;
+        let k = crate::spectrum::blackbody::CIE_Y_INTEGRAL as f32;
         assert!(
             (c.emission - Vec3::new(2.0 * k, 0.0, 0.0))
                 .abs()

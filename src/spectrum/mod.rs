@@ -18,6 +18,7 @@
 //!   table), as pbrt-v4's default `cie1931` sensor.
 //!
 //! [`Lambda::Rgb`] leaves every value as it is: the renderer's RGB mode.
+pub mod blackbody;
 pub mod cie;
 pub mod fit;
 

@@ -152,7 +152,7 @@ pub fn emission_rgb(params: &mut ParamSet, name: &str) -> Result<Option<Vec3>, S
 /// The RGB of `"blackbody name" [ T ]`: T must be finite and > 0 (kelvin).
 fn blackbody(params: &mut ParamSet, name: &str) -> Result<Vec3, SceneError> {
     let t = params.get_blackbody(name)?.expect("peeked");
-    super::blackbody::rgb(t as f64).ok_or_else(|| {
+    crate::spectrum::blackbody::rgb(t as f64).ok_or_else(|| {
         let p = params.peek(name).expect("peeked");
         p.err(format!(
             "the temperature must be finite and > 0 (kelvin), got {t}"
@@ -435,7 +435,7 @@ fn portal_l_factor(params: &ParamSet) -> f64 {
     let first = p.floats().and_then(|v| v.first().copied());
     match (p.ty, first) {
         (ParamType::Blackbody, Some(t)) => {
-            super::blackbody::peak_normalized_luminance(t as f64).unwrap_or(1.0)
+            crate::spectrum::blackbody::peak_normalized_luminance(t as f64).unwrap_or(1.0)
         }
         (ParamType::Spectrum, _) => p
             .floats()

@@ -31,7 +31,6 @@
 //! [`load`] stops at the first error; [`load_collecting`] (for `photon check`) records each
 //! error, skips the directive it is in and reads on, so one pass lists every problem.
 pub mod bilinear;
-pub mod blackbody;
 pub mod extent;
 pub mod lights;
 pub use crate::params;

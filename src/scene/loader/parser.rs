@@ -536,8 +536,20 @@ impl Builder {
                     ));
                 }
                 let medium_from_world = self.gs.ctm.inverse();
+                // A homogeneous or uniformgrid medium's one `Le` reads as a light's `L`
+                // (rgb or blackbody); an rgbgrid's `Le` is a grid the medium reads itself.
+                let ty = params
+                    .peek("type")
+                    .and_then(|p| p.strings())
+                    .and_then(|v| v.first().cloned());
+                let le = match ty.as_deref() {
+                    Some("homogeneous" | "uniformgrid") => {
+                        super::lights::emission_rgb(&mut params, "Le")?
+                    }
+                    _ => None,
+                };
                 let medium =
-                    crate::medium::Medium::create(&name, &mut params, &loc, medium_from_world)?;
+                    crate::medium::Medium::create(&name, &mut params, &loc, medium_from_world, le)?;
                 if medium.scatters() {
                     self.track(&loc, &format!("medium \"{name}\" scatters"));
                 }
