@@ -23,7 +23,7 @@ MakeNamedMaterial "floor" "string type" "hair" "texture reflectance" "wood"
 NamedMaterial "floor"
 {TRI}
 Shape "plymesh" "string filename" "missing.ply"
-MakeNamedMedium "fog" "string type" "homogeneous" "rgb sigma_a" [ 1 1 1 ] "rgb Le" [ 1 1 1 ]
+MakeNamedMedium "fog" "string type" "nanovdb" "string filename" "fog.nvdb"
 Frobnicate "x" [ 1 2 3 ] "bool b" true
 LightSource "infinite" "point3 portal" [ 0 0 0  1 0 0  1 1 0 ]
 Material "diffuse" "texture reflectance" "wood"
@@ -54,7 +54,7 @@ fn collect_mode_lists_every_problem_in_order() {
         (4, "wood.png"),
         (5, "unsupported material type \"hair\""),
         (8, "missing.ply"),
-        (9, "emitting media are not supported yet"),
+        (9, "medium type \"nanovdb\" is not supported yet"),
         (10, "unknown directive \"Frobnicate\""),
         (11, "\"point3 portal\": expected 4 points, got 3"),
         // The texture failed to load on line 4, so the name is unknown here.

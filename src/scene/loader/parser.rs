@@ -1108,8 +1108,15 @@ impl Builder {
             .iter()
             .map(|m| {
                 let (a, s) = (m.sigma_a, m.sigma_s);
+                let kind = match &m.field {
+                    None => "homogeneous",
+                    Some(crate::medium::Field::Density { .. }) => "uniformgrid",
+                    Some(crate::medium::Field::Rgb { .. }) => "rgbgrid (coefficients x grids)",
+                    Some(crate::medium::Field::Cloud { .. }) => "cloud",
+                };
+                let emits = if m.emits() { ", emits" } else { "" };
                 format!(
-                    "\"{}\" (sigma_a {} {} {}, sigma_s {} {} {}, g {})",
+                    "\"{}\" ({kind}, sigma_a {} {} {}, sigma_s {} {} {}, g {}{emits})",
                     m.name, a.x, a.y, a.z, s.x, s.y, s.z, m.g
                 )
             })
