@@ -203,8 +203,8 @@ mod tests {
             let corners_plain = (0..8).all(|c| {
                 let i = [p.x, p.y, p.z].map(|v| (v.floor() as i64 & 255) as usize);
                 let (a, b, e) = (c & 1, (c >> 1) & 1, c >> 2);
-                perm(perm(perm(i[0] + a) + i[1] + b) + i[2] + e) & 15 != 13
-                    && perm(perm(perm(i[0] + a) + i[1] + b) + i[2] + e) & 15 != 14
+                let h = perm(perm(perm(i[0] + a) + i[1] + b) + i[2] + e) & 15;
+                h != 13 && h != 14
             });
             if !corners_plain {
                 continue;

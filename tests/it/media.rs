@@ -28,6 +28,15 @@ fn channel_means(image: &photon::imageio::RgbImage) -> Vec3 {
         / n
 }
 
+/// The mean of the central 8x8 pixels of a 16x16 image.
+fn centre_mean(image: &photon::imageio::RgbImage) -> Vec3 {
+    (4..12)
+        .flat_map(|y| (4..12).map(move |x| (x, y)))
+        .map(|(x, y)| Vec3::from_array(image.pixels[y * 16 + x]))
+        .fold(Vec3::ZERO, |a, p| a + p)
+        / 64.0
+}
+
 fn ink(interface: &str) -> String {
     format!(
         r#"MakeNamedMedium "ink" "string type" "homogeneous"
@@ -332,12 +341,7 @@ fn fog_in_a_white_furnace_keeps_every_pixel_at_one_on_any_thread_count() {
     let mean = channel_means(&out.image);
     assert!((mean - Vec3::ONE).abs().max_element() < 0.01, "{mean}");
     // The central 8x8 pixels all look through about 2 units of optical depth or more.
-    let px = &out.image.pixels;
-    let centre: Vec3 = (4..12)
-        .flat_map(|y| (4..12).map(move |x| (x, y)))
-        .map(|(x, y)| Vec3::from_array(px[y * 16 + x]))
-        .fold(Vec3::ZERO, |a, p| a + p)
-        / 64.0;
+    let centre = centre_mean(&out.image);
     assert!((centre - Vec3::ONE).abs().max_element() < 0.02, "{centre}");
     let one = common::render_with(
         &scene,
@@ -697,12 +701,7 @@ fn emitting_media_in_equilibrium_with_their_sky_keep_every_pixel_at_one() {
         for kind in [IntegratorKind::Path, IntegratorKind::Photonmap] {
             let out = common::render_with(&scene, kind, BackendKind::Embree, (16, 16, 64), 2, 5);
             let mean = channel_means(&out.image);
-            let px = &out.image.pixels;
-            let centre: Vec3 = (4..12)
-                .flat_map(|y| (4..12).map(move |x| (x, y)))
-                .map(|(x, y)| Vec3::from_array(px[y * 16 + x]))
-                .fold(Vec3::ZERO, |a, p| a + p)
-                / 64.0;
+            let centre = centre_mean(&out.image);
             assert!(
                 (mean - Vec3::ONE).abs().max_element() < 0.01
                     && (centre - Vec3::ONE).abs().max_element() < 0.02,
