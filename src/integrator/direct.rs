@@ -11,6 +11,15 @@
 //! Components: light reaching the camera after at most one non-delta scattering event is
 //! `direct`; light arriving through further specular/glossy bounces is `specular`.
 //!
+//! Media: in a scene whose media need tracking ([`crate::scene::Scene::media_need_tracking`])
+//! rays track the medium they travel in as the path tracer's do ([`crate::medium`]):
+//! `interface` surfaces are crossed, segments in a scattering medium sample their first
+//! interaction, and a scattering point is lit by shadow rays through the phase function
+//! (transmittance-weighted), power-heuristic-weighted against one phase-sampled ray that
+//! looks for emission only (the path's data says so: it ends at whatever it meets), so the
+//! integrator gives single scattering plus the specular chains to it; emitting media add
+//! their emission along every tracked segment.
+//!
 //! The steps of a hit (`emission`, `Vertex::new`, `shadow_rays`, `continuation`) are
 //! shared with the photon mapper ([`super::photon_mapper`]), which adds its estimates between
 //! them.
@@ -30,11 +39,15 @@ pub(super) fn dims_per_vertex(light_samples: u32) -> u32 {
 
 /// Renders the pixels `[x0, x1) x [y0, y1)`; returns per-pixel means in row-major order.
 pub fn render_tile(ctx: &RenderContext, x0: u32, y0: u32, x1: u32, y1: u32) -> Vec<Radiance> {
-    wavefront::render_tile(ctx, &Direct, x0, y0, x1, y1)
+    let tracks = ctx.scene.media_need_tracking.is_some();
+    wavefront::render_tile(ctx, &Direct { tracks }, x0, y0, x1, y1)
 }
 
 /// The direct + specular shading step.
-pub struct Direct;
+pub struct Direct {
+    /// Whether rays track the medium they travel in (the scene's media need it).
+    pub tracks: bool,
+}
 
 /// Light seen directly or after one non-delta event is `direct`, the rest `specular`.
 pub(super) fn component(direct: bool) -> Component {
@@ -52,12 +65,28 @@ pub(super) fn emitted_component<T>(path: &PathState<T>) -> Component {
 
 impl Shade for Direct {
     type Extra = ();
-    type PathData = ();
+    /// Whether the path only looks for emission (the phase-sampled ray from a scattering
+    /// point in a medium).
+    type PathData = bool;
 
-    fn shade(&self, ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<()>) {
+    fn shade(
+        &self,
+        ctx: &RenderContext,
+        mut path: PathState<bool>,
+        hit: &Hit,
+        wave: &mut Wave<(), bool>,
+    ) {
         let si = SurfaceInteraction::new(ctx.scene, hit, &path.ray);
+        if self.tracks && si.material(ctx.scene).interface {
+            // No surface: the ray goes on into the medium behind the boundary.
+            let d = path.ray.d;
+            path.medium = si.medium_leaving(d, path.medium);
+            path.ray = crate::math::Ray::new(si.spawn(d), d);
+            wave.next.push(path);
+            return;
+        }
         emission(ctx, &path, &si, wave.acc);
-        if path.depth >= ctx.settings.max_depth {
+        if path.depth >= ctx.settings.max_depth || path.data {
             return;
         }
         let v = Vertex::new(ctx, &mut path, si);
@@ -67,9 +96,79 @@ impl Shade for Direct {
         }
     }
 
-    fn emitted_component(&self, path: &PathState) -> Component {
+    fn emitted_component(&self, path: &PathState<bool>) -> Component {
         emitted_component(path)
     }
+
+    fn tracks_media(&self) -> bool {
+        self.tracks
+    }
+
+    fn shade_medium(
+        &self,
+        ctx: &RenderContext,
+        path: PathState<bool>,
+        p: Vec3,
+        wave: &mut Wave<(), bool>,
+    ) {
+        medium_vertex(ctx, path, p, wave);
+    }
+}
+
+/// Direct light at scattering point `p` of the path's medium: `light_samples` shadow rays
+/// to lights chosen by power, each weighted by the Henyey-Greenstein phase function and
+/// carried through the media on the way, power-heuristic-weighted against a phase-sampled
+/// ray that only looks for emission (pushed to `wave.next`). Reads the vertex's dimensions
+/// as a surface vertex does. A path that only looks for emission ends here.
+fn medium_vertex(
+    ctx: &RenderContext,
+    mut path: PathState<bool>,
+    p: Vec3,
+    wave: &mut Wave<(), bool>,
+) {
+    let Some(m) = path.medium else {
+        return;
+    };
+    if path.depth >= ctx.settings.max_depth || path.data {
+        return;
+    }
+    let g = ctx.scene.media[m as usize].g;
+    let wo = -path.ray.d.normalize();
+    let ls = ctx.settings.light_samples.max(1);
+    path.sampler
+        .set_dimension(CAMERA_DIMS + path.depth * dims_per_vertex(ls));
+    for _ in 0..ls {
+        let u_sel = path.sampler.next_1d();
+        let u = path.sampler.next_2d();
+        let Some(s) = ctx.lights.sample(&ctx.scene.meshes, p, u_sel, u) else {
+            continue;
+        };
+        let f = crate::medium::henyey_greenstein(wo.dot(s.wi), g);
+        let w = if s.delta {
+            1.0
+        } else {
+            power_heuristic(s.pdf, f)
+        };
+        let contrib = path.beta * path.lambda.illuminant(s.li) * (f * w / (s.pdf * ls as f32));
+        if contrib.is_finite() && contrib.max_element() > 0.0 {
+            wave.shadows.push(Shadow {
+                pixel: path.pixel,
+                ray: crate::interaction::shadow_ray_from(p, &s),
+                contrib,
+                component: component(path.depth == 0),
+                medium: path.medium,
+            });
+        }
+    }
+    // The phase-sampled ray (the phase function's weight f / pdf is 1).
+    let (wi, pdf) = crate::medium::sample_henyey_greenstein(wo, g, path.sampler.next_2d());
+    path.ray = crate::math::Ray::new(p, wi);
+    path.depth += 1;
+    path.prev_pdf = pdf;
+    path.prev_p = p;
+    path.prev_delta = false;
+    path.data = true;
+    wave.next.push(path);
 }
 
 /// Adds the light an emitter at `si` sends along the path's ray: with full weight after the
@@ -194,7 +293,7 @@ pub(super) fn shadow_rays<T>(
             ray: si.shadow_ray(&s),
             contrib,
             component: component(path.depth == 0),
-            medium: None,
+            medium: si.medium_leaving(s.wi, path.medium),
         });
     }
 }
@@ -231,8 +330,10 @@ pub(super) fn continuation<T>(
         (true, false) => bs.pdf,
         (false, _) => bsdf.mis_pdf(wo, &bs),
     };
+    let wi = v.si.frame.to_world(bs.wi);
     let next = PathState {
-        ray: v.si.spawn_ray(v.si.frame.to_world(bs.wi)),
+        ray: v.si.spawn_ray(wi),
+        medium: v.si.medium_leaving(wi, path.medium),
         beta,
         depth: path.depth + 1,
         prev_pdf,

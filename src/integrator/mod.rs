@@ -324,15 +324,19 @@ pub struct RenderContext<'a> {
     pub variance: Option<std::sync::Mutex<Vec<[f32; 6]>>>,
 }
 
-/// Whether `kind` renders `scene` right: only the path tracer tracks the medium each ray is
-/// in (the photon mapper renders such scenes with it, adding its volume map's beam
-/// estimates), so scenes whose media need that ([`Scene::media_need_tracking`]) are refused
-/// by the others with the file location of the first reason.
+/// Whether `kind` renders `scene` right: the path tracer and the direct integrator track the
+/// medium each ray is in (the photon mapper renders such scenes with the path tracer, adding
+/// its volume map's beam estimates), so scenes whose media need that
+/// ([`Scene::media_need_tracking`]) are refused by the bidirectional ones with the file
+/// location of the first reason.
 pub fn check_scene(kind: IntegratorKind, scene: &Scene) -> Result<(), String> {
     match (&scene.media_need_tracking, kind) {
-        (None, _) | (Some(_), IntegratorKind::Path | IntegratorKind::Photonmap) => Ok(()),
+        (None, _)
+        | (Some(_), IntegratorKind::Path | IntegratorKind::Photonmap | IntegratorKind::Direct) => {
+            Ok(())
+        }
         (Some(why), _) => Err(format!(
-            "{why}: only --integrator path and photonmap render such media yet (--integrator \
+            "{why}: only --integrator path, direct and photonmap render such media yet (--integrator \
              {} handles absorbing media closed by the surfaces that name them)",
             clap::ValueEnum::to_possible_value(&kind)
                 .map_or("?".into(), |v| v.get_name().to_string())

@@ -18,8 +18,10 @@
 //! A grid value at a point is pbrt-v4's `SampledGrid` lookup: samples at voxel centres of the
 //! box `p0..p1` (x fastest, then y, then z), trilinear between them, and 0 beyond the outer
 //! samples (so a value fades towards the box's faces). As in pbrt-v4 a ray sees the medium
-//! only inside the box. Rays in such a medium are tracked against one majorant (the largest
-//! `sigma_t` anywhere in it): interactions by spectral tracking (Kutz et al. 2017: a tentative
+//! only inside the box. Rays in such a medium are tracked against a [`MajorantGrid`] (as in
+//! pbrt-v4: the box cut into 16^3 cells, each with the largest `sigma_t` its samples can give,
+//! crossed cell by cell by a 3D DDA, so that a dense puff in thin air does not make every ray
+//! take the puff's tiny steps): interactions by spectral tracking (Kutz et al. 2017: a tentative
 //! collision is a scattering one with probability `mean(sigma_s(x)) / majorant`, else a null
 //! one, each weighing the throughput per channel so that the estimate stays unbiased),
 //! transmittance by ratio tracking, emission by ratio tracking's points, and the beam
@@ -412,6 +414,134 @@ impl Temperature {
         let i = (x as usize).min(self.table.len() - 2);
         let f = x - i as f32;
         self.table[i] * (1.0 - f) + self.table[i + 1] * f
+    }
+}
+
+/// Cells per axis of a [`MajorantGrid`] (pbrt-v4's choice).
+pub const MAJORANT_CELLS: usize = 16;
+
+/// Local bounds of `sigma_t` over a medium's box: `n` cells per axis (x fastest), each with
+/// the largest `sigma_t` (any channel) the grid's lookups can return inside it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MajorantGrid {
+    pub n: [usize; 3],
+    pub values: Vec<f32>,
+}
+
+impl MajorantGrid {
+    /// The bounds for a grid of `samples` per axis (trilinear between voxel centres, as
+    /// [`SampledGrid::lookup`]); `bound(i)` is the largest `sigma_t` sample `i` gives. A cell
+    /// takes the maximum over every sample whose interpolation reaches into it.
+    pub fn from_samples(samples: [usize; 3], bound: impl Fn(usize) -> f32) -> MajorantGrid {
+        let n = samples.map(|s| s.clamp(1, MAJORANT_CELLS));
+        // Samples `lo..=hi` along an axis of `s` samples reach into cell `c` of `cells`.
+        let range = |c: usize, cells: usize, s: usize| {
+            let a = c as f64 / cells as f64 * s as f64 - 0.5;
+            let b = (c + 1) as f64 / cells as f64 * s as f64 - 0.5;
+            let lo = (a.floor().max(0.0) as usize).min(s - 1);
+            let hi = ((b.floor() + 1.0).max(0.0) as usize).min(s - 1);
+            (lo, hi)
+        };
+        let mut values = Vec::with_capacity(n[0] * n[1] * n[2]);
+        for cz in 0..n[2] {
+            let (z0, z1) = range(cz, n[2], samples[2]);
+            for cy in 0..n[1] {
+                let (y0, y1) = range(cy, n[1], samples[1]);
+                for cx in 0..n[0] {
+                    let (x0, x1) = range(cx, n[0], samples[0]);
+                    let mut m = 0.0f32;
+                    for z in z0..=z1 {
+                        for y in y0..=y1 {
+                            for x in x0..=x1 {
+                                m = m.max(bound((z * samples[1] + y) * samples[0] + x));
+                            }
+                        }
+                    }
+                    values.push(m);
+                }
+            }
+        }
+        MajorantGrid { n, values }
+    }
+
+    /// The bound in the cell holding unit-box point `u` (0 outside the box).
+    pub fn at(&self, u: Vec3) -> f32 {
+        let mut idx = [0usize; 3];
+        for a in 0..3 {
+            if !(u[a] >= 0.0 && u[a] <= 1.0) {
+                return 0.0;
+            }
+            idx[a] = ((u[a] * self.n[a] as f32) as usize).min(self.n[a] - 1);
+        }
+        self.values[(idx[2] * self.n[1] + idx[1]) * self.n[0] + idx[0]]
+    }
+
+    /// Calls `f(t_start, t_end, majorant)` for the cells the ray `o + t d` (world space)
+    /// crosses between `t0` and `t1` (inside `region`'s box), in order, by a 3D DDA; stops
+    /// early when `f` returns `Some`, and returns that.
+    pub fn segments<R>(
+        &self,
+        region: &Region,
+        o: Vec3,
+        d: Vec3,
+        (t0, t1): (f32, f32),
+        mut f: impl FnMut(f32, f32, f32) -> Option<R>,
+    ) -> Option<R> {
+        if t0.is_nan() || t1.is_nan() || t1 <= t0 {
+            return None;
+        }
+        let size = region.p1 - region.p0;
+        let cells = Vec3::new(self.n[0] as f32, self.n[1] as f32, self.n[2] as f32);
+        // Grid coordinates along the ray: og + dg t.
+        let og = (region.local(o) - region.p0) / size * cells;
+        let dg = region.medium_from_world.transform_vector3(d) / size * cells;
+        let start = og + dg * t0;
+        let mut cell = [0i64; 3];
+        let mut next = [f32::INFINITY; 3];
+        let mut delta = [f32::INFINITY; 3];
+        let mut step = [0i64; 3];
+        for a in 0..3 {
+            let n = self.n[a] as i64;
+            cell[a] = (start[a].floor() as i64).clamp(0, n - 1);
+            if dg[a] > 0.0 {
+                next[a] = t0 + ((cell[a] + 1) as f32 - start[a]) / dg[a];
+                delta[a] = 1.0 / dg[a];
+                step[a] = 1;
+            } else if dg[a] < 0.0 {
+                next[a] = t0 + (cell[a] as f32 - start[a]) / dg[a];
+                delta[a] = -1.0 / dg[a];
+                step[a] = -1;
+            }
+        }
+        let mut t = t0;
+        // A ray crosses at most n0 + n1 + n2 cells.
+        for _ in 0..(self.n[0] + self.n[1] + self.n[2] + 3) {
+            let a = if next[0] <= next[1] && next[0] <= next[2] {
+                0
+            } else if next[1] <= next[2] {
+                1
+            } else {
+                2
+            };
+            let end = next[a].min(t1);
+            let idx =
+                (cell[2] as usize * self.n[1] + cell[1] as usize) * self.n[0] + cell[0] as usize;
+            if end > t {
+                if let Some(r) = f(t, end, self.values[idx]) {
+                    return Some(r);
+                }
+            }
+            if end >= t1 {
+                return None;
+            }
+            t = end;
+            cell[a] += step[a];
+            if cell[a] < 0 || cell[a] >= self.n[a] as i64 {
+                return None;
+            }
+            next[a] += delta[a];
+        }
+        None
     }
 }
 

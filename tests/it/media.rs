@@ -163,8 +163,7 @@ fn light_through_an_ink_slab_reaches_the_floor_dimmed_by_beers_law() {
 }
 
 #[test]
-fn media_that_need_tracking_are_refused_by_the_bidirectional_and_direct_integrators_with_their_location(
-) {
+fn media_that_need_tracking_are_refused_by_the_bidirectional_integrators_with_their_location() {
     let dir = TempDir::new("photon-media");
     for (text, line, want) in [
         (
@@ -206,11 +205,14 @@ fn media_that_need_tracking_are_refused_by_the_bidirectional_and_direct_integrat
         ),
     ] {
         let scene = loader::load(&dir.write("m.pbrt", text)).expect("loads");
-        for kind in [IntegratorKind::Path, IntegratorKind::Photonmap] {
+        for kind in [
+            IntegratorKind::Path,
+            IntegratorKind::Photonmap,
+            IntegratorKind::Direct,
+        ] {
             assert!(photon::integrator::check_scene(kind, &scene).is_ok());
         }
         for kind in [
-            IntegratorKind::Direct,
             IntegratorKind::Vcm,
             IntegratorKind::Bdpt,
             IntegratorKind::Lighttracer,
@@ -219,7 +221,7 @@ fn media_that_need_tracking_are_refused_by_the_bidirectional_and_direct_integrat
             let e = photon::integrator::check_scene(kind, &scene).unwrap_err();
             assert!(e.contains(&format!("m.pbrt:{line}:")), "{e}");
             assert!(
-                e.contains(want) && e.contains("only --integrator path and photonmap"),
+                e.contains(want) && e.contains("only --integrator path, direct and photonmap"),
                 "{e}"
             );
         }
@@ -282,25 +284,32 @@ fn single_scattering(g: f32, sigma_a: f32, sigma_s: f32) -> f64 {
 
 #[test]
 fn single_scattering_in_a_fog_slab_matches_the_closed_form() {
-    // Chromatic extinction exercises the per-channel distance sampling.
+    // Chromatic extinction exercises the per-channel distance sampling. The direct
+    // integrator computes single scattering whatever the depth.
     let (sigma_a, sigma_s) = ([0.5f32, 0.2, 0.0], [0.5f32, 1.0, 2.0]);
-    for g in [0.5f32, -0.3] {
+    for (g, kind) in [
+        (0.5f32, IntegratorKind::Path),
+        (-0.3, IntegratorKind::Path),
+        (0.5, IntegratorKind::Direct),
+    ] {
         let dir = TempDir::new("photon-media");
-        let scene = loader::load(&dir.write("fog.pbrt", fog_slab(g, sigma_a, sigma_s)))
-            .expect("scene loads");
-        let out = common::render_with(
-            &scene,
-            IntegratorKind::Path,
-            BackendKind::Embree,
-            (16, 16, 256),
-            2,
-            3,
-        );
+        let text = fog_slab(g, sigma_a, sigma_s);
+        let text = if kind == IntegratorKind::Direct {
+            text.replace("\"integer maxdepth\" 1", "\"integer maxdepth\" 5")
+        } else {
+            text
+        };
+        let scene = loader::load(&dir.write("fog.pbrt", text)).expect("scene loads");
+        let out = common::render_with(&scene, kind, BackendKind::Embree, (16, 16, 256), 2, 3);
         let got = channel_means(&out.image);
         for c in 0..3 {
             let want = single_scattering(g, sigma_a[c], sigma_s[c]);
             let err = (got[c] as f64 / want - 1.0).abs();
-            assert!(err < 0.01, "g {g} channel {c}: {} against {want}", got[c]);
+            assert!(
+                err < 0.01,
+                "{kind:?} g {g} channel {c}: {} against {want}",
+                got[c]
+            );
         }
     }
 }
@@ -500,6 +509,64 @@ AttributeBegin
 AttributeEnd
 "#
     )
+}
+
+/// The direct integrator in fog: single scattering and the walls' direct light, each lit
+/// through the fog, equal the path tracer stopped after one bounce (`maxdepth 1`), per
+/// channel and per 8x8 block; the full path tracer is brighter (the test can fail).
+#[test]
+fn direct_light_in_fog_equals_the_path_tracer_after_one_bounce() {
+    let dir = TempDir::new("photon-media");
+    let one = fog_box("path").replace("\"integer maxdepth\" 5", "\"integer maxdepth\" 1");
+    let path = loader::load(&dir.write("path.pbrt", one)).expect("loads");
+    let want = common::render_with(
+        &path,
+        IntegratorKind::Path,
+        BackendKind::Embree,
+        (32, 32, 512),
+        2,
+        1,
+    );
+    let direct = loader::load(&dir.write("direct.pbrt", fog_box("direct"))).expect("loads");
+    assert!(photon::integrator::check_scene(IntegratorKind::Direct, &direct).is_ok());
+    let got = common::render_with(
+        &direct,
+        IntegratorKind::Direct,
+        BackendKind::Embree,
+        (32, 32, 512),
+        2,
+        2,
+    );
+    let full = common::render_with(
+        &direct,
+        IntegratorKind::Path,
+        BackendKind::Embree,
+        (32, 32, 64),
+        2,
+        3,
+    );
+    let (a, b) = (channel_means(&got.image), channel_means(&want.image));
+    let ratio = a / b;
+    let lum = |p: [f32; 3]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+    let block = |img: &photon::imageio::RgbImage, bx: usize, by: usize| -> f32 {
+        (0..8)
+            .flat_map(|y| (0..8).map(move |x| (bx * 8 + x, by * 8 + y)))
+            .map(|(x, y)| lum(img.pixels[y * 32 + x]))
+            .sum::<f32>()
+    };
+    let blocks: Vec<f32> = (0..16)
+        .map(|i| block(&got.image, i % 4, i / 4) / block(&want.image, i % 4, i / 4))
+        .collect();
+    eprintln!("fog box direct / path maxdepth 1: channels {ratio}, blocks {blocks:?}");
+    assert!((ratio - Vec3::ONE).abs().max_element() < 0.02, "{ratio}");
+    for (i, r) in blocks.iter().enumerate() {
+        assert!((r - 1.0).abs() < 0.06, "block {i}: {r} ({blocks:?})");
+    }
+    let more = channel_means(&full.image) / a;
+    assert!(
+        more.min_element() > 1.1,
+        "multiple scattering adds light: {more}"
+    );
 }
 
 #[test]
@@ -708,8 +775,8 @@ fn emitting_media_in_equilibrium_with_their_sky_keep_every_pixel_at_one() {
                 "{what} {kind:?}: mean {mean}, centre {centre}"
             );
         }
-        // Emitting media need tracking: the others refuse them.
-        let e = photon::integrator::check_scene(IntegratorKind::Direct, &scene).unwrap_err();
+        // Emitting media need tracking: the bidirectional integrators refuse them.
+        let e = photon::integrator::check_scene(IntegratorKind::Bdpt, &scene).unwrap_err();
         assert!(e.contains("eq.pbrt:"), "{e}");
     }
     // Without its emission the same medium darkens the centre: the test can fail.
