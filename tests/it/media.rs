@@ -205,6 +205,24 @@ fn media_that_need_tracking_are_refused_by_the_bidirectional_integrators_with_th
         ),
     ] {
         let scene = loader::load(&dir.write("m.pbrt", text)).expect("loads");
+        // `photon check` says what each integrator does, one readable line each.
+        let media: Vec<&String> = scene
+            .notes
+            .iter()
+            .filter(|n| n.starts_with("media: ") || n.starts_with("medium \""))
+            .collect();
+        assert!(
+            media.iter().any(|n| n.contains("direct tracks them too"))
+                && media.iter().any(|n| n.contains("photonmap: "))
+                && media.iter().any(|n| n.contains("bdpt")
+                    && n.contains("refuse the scene")
+                    && n.contains(&format!("m.pbrt:{line}:"))),
+            "{media:?}"
+        );
+        for n in &media {
+            let short = n.replace(dir.0.to_str().unwrap(), "");
+            assert!(short.len() <= photon::params::MAX_LINE, "{} bytes: {short}", short.len());
+        }
         for kind in [
             IntegratorKind::Path,
             IntegratorKind::Photonmap,

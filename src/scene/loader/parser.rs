@@ -1097,47 +1097,57 @@ impl Builder {
         }
     }
 
-    /// A note naming the media and what every integrator does with them.
+    /// Notes naming the media (one per medium) and what every integrator does with them (one
+    /// line per group of integrators), each short enough for `photon check`'s one-line notes.
     fn note_media(&mut self) {
         if self.media.is_empty() {
             return;
         }
         let boundaries = self.meshes.iter().filter(|m| m.interface.is_some()).count();
-        let names: Vec<String> = self
-            .media
-            .iter()
-            .map(|m| {
-                let (a, s) = (m.sigma_a, m.sigma_s);
-                let kind = match &m.field {
-                    None => "homogeneous",
-                    Some(crate::medium::Field::Density { .. }) => "uniformgrid",
-                    Some(crate::medium::Field::Rgb { .. }) => "rgbgrid (coefficients x grids)",
-                    Some(crate::medium::Field::Cloud { .. }) => "cloud",
+        for m in &self.media {
+            let (a, s) = (m.sigma_a, m.sigma_s);
+            let kind = match &m.field {
+                None => "homogeneous",
+                Some(crate::medium::Field::Density { .. }) => "uniformgrid",
+                Some(crate::medium::Field::Rgb { .. }) => "rgbgrid (coefficients x grids)",
+                Some(crate::medium::Field::Cloud { .. }) => "cloud",
+            };
+            let emits = if m.emits() { ", emits" } else { "" };
+            self.notes.push(format!(
+                "medium \"{}\": {kind}, sigma_a {} {} {}, sigma_s {} {} {}, g {}, majorant {}{emits}",
+                crate::params::clip_for_message(&m.name, crate::params::MAX_TOKEN),
+                a.x,
+                a.y,
+                a.z,
+                s.x,
+                s.y,
+                s.z,
+                m.g,
+                m.majorant()
+            ));
+        }
+        let n = self.media.len();
+        let scatters = self.media.iter().any(|m| m.scatters());
+        match &self.needs_tracking {
+            None => self.notes.push(format!(
+                "media: {n}, bounded by {boundaries} shapes, absorbing only: every integrator \
+                 dims each ray segment inside them by Beer's law; no volume photon map is built"
+            )),
+            Some(why) => {
+                let volume = if scatters {
+                    "photonmap: surfaces as path, in-scattering by volume photon beams"
+                } else {
+                    "photonmap: as path (nothing scatters: no volume photon map)"
                 };
-                let emits = if m.emits() { ", emits" } else { "" };
-                format!(
-                    "\"{}\" ({kind}, sigma_a {} {} {}, sigma_s {} {} {}, g {}{emits})",
-                    m.name, a.x, a.y, a.z, s.x, s.y, s.z, m.g
-                )
-            })
-            .collect();
-        let what = match &self.needs_tracking {
-            None => "every integrator dims each ray segment inside them by Beer's law \
-                     (photons, camera, gather and bidirectional paths alike); nothing scatters, \
-                     so no volume photon map is built"
-                .to_string(),
-            Some(why) => format!(
-                "--integrator path tracks the medium each ray is in, scatters and takes light \
-                 samples in it; photonmap renders the surfaces so and the media by beam \
-                 estimates of its volume photon map; the others refuse the scene because \
-                 {why}"
-            ),
-        };
-        self.notes.push(format!(
-            "media: {} ({}) bounded by {boundaries} shapes: {what}",
-            self.media.len(),
-            names.join(", ")
-        ));
+                self.notes.push(format!(
+                    "media: {n}, bounded by {boundaries} shapes, tracked: path as pbrt-v4's \
+                     volpath; direct tracks them too (single scattering); {volume}"
+                ));
+                self.notes.push(format!(
+                    "media: vcm, bdpt, bpm and lighttracer refuse the scene: {why}"
+                ));
+            }
+        }
     }
 
     /// The medium boundary the current `MediumInterface` makes of a shape at `at`: `None`
