@@ -34,6 +34,14 @@
 //! BSDF-sampled ray hitting an emitter), is `direct`; everything else (any path through a delta
 //! bounce or with two or more bounces) is `indirect`. The other components stay zero.
 //!
+//! **Caustics through media** (`--integrator photonmap` on a scene whose media need
+//! tracking, which renders with this tracer): at a purely diffuse point the caustic photons
+//! traced through the media ([`crate::photon::volume`]) give the light of `L S+ D` paths
+//! ([`PhotonPass::caustic_through_media`](super::photonmap::PhotonPass::caustic_through_media)),
+//! so a path that leaves such a point and reaches an emitter (or the sky) through delta
+//! bounces only, without scattering in a medium on the way, does not count that emission:
+//! each such path is counted once, by the photons. The path's data ([`Chain`]) tracks that.
+//!
 //! Randomness: each vertex reads its numbers from fixed dimensions of the pixel sample's
 //! [`crate::sampling::Sampler`] stream (2 for the pixel filter, then [`DIMS_PER_VERTEX`] per vertex: light
 //! choice, light point, lobe choice, direction, roulette), so an image depends only on the
@@ -66,15 +74,36 @@ pub fn render_tile(ctx: &RenderContext, x0: u32, y0: u32, x1: u32, y1: u32) -> V
 /// The path tracer's shading step.
 pub struct PathTracer;
 
-impl Shade for PathTracer {
-    type PathData = ();
-    type Extra = ();
+/// Where a path stands towards the caustic photons through media (see the module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Chain {
+    /// No caustic photons cover the light this path finds next.
+    #[default]
+    Open,
+    /// The last non-delta vertex was a purely diffuse point that read caustic photons.
+    FromReceiver,
+    /// ... and one or more delta bounces followed, with no scattering in a medium: emission
+    /// found now is in those photons.
+    Covered,
+}
 
-    fn shade(&self, ctx: &RenderContext, path: PathState, hit: &Hit, wave: &mut Wave<()>) {
+type Path = PathState<Chain>;
+
+impl Shade for PathTracer {
+    type PathData = Chain;
+    type Extra = crate::photon::KnnResult;
+
+    fn shade(
+        &self,
+        ctx: &RenderContext,
+        path: Path,
+        hit: &Hit,
+        wave: &mut Wave<Self::Extra, Chain>,
+    ) {
         shade(ctx, path, hit, wave)
     }
 
-    fn emitted_component(&self, path: &PathState) -> Component {
+    fn emitted_component(&self, path: &Path) -> Component {
         component(path.depth == 0 || (path.depth == 1 && path.prev_pdf > 0.0))
     }
 
@@ -82,8 +111,21 @@ impl Shade for PathTracer {
         true
     }
 
-    fn shade_medium(&self, ctx: &RenderContext, path: PathState, p: Vec3, wave: &mut Wave<()>) {
+    fn shade_medium(
+        &self,
+        ctx: &RenderContext,
+        path: Path,
+        p: Vec3,
+        wave: &mut Wave<Self::Extra, Chain>,
+    ) {
         shade_medium(ctx, path, p, wave)
+    }
+
+    fn escaped(&self, ctx: &RenderContext, path: &Path) -> Vec3 {
+        if path.data == Chain::Covered {
+            return Vec3::ZERO;
+        }
+        wavefront::escaped(ctx, path)
     }
 }
 
@@ -97,8 +139,14 @@ fn component(direct: bool) -> Component {
     }
 }
 
-/// Shades one hit: emission, a light sample, and a BSDF-sampled continuation.
-fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<()>) {
+/// Shades one hit: emission, a light sample, the caustic photons through media at a purely
+/// diffuse point, and a BSDF-sampled continuation.
+fn shade(
+    ctx: &RenderContext,
+    mut path: Path,
+    hit: &Hit,
+    wave: &mut Wave<crate::photon::KnnResult, Chain>,
+) {
     let mut si = SurfaceInteraction::new(ctx.scene, hit, &path.ray);
     if si.material(ctx.scene).interface {
         // No surface: the ray goes on into the medium behind the boundary, no bounce taken.
@@ -108,7 +156,7 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<()
         wave.next.push(path);
         return;
     }
-    if let Some(li) = si.area_light() {
+    if let (Some(li), false) = (si.area_light(), path.data == Chain::Covered) {
         let le = emitted(ctx, &path, li, si.p, si.ng);
         add(
             wave.acc,
@@ -128,15 +176,43 @@ fn shade(ctx: &RenderContext, mut path: PathState, hit: &Hit, wave: &mut Wave<()
             wave.shadows.push(s);
         }
     }
+    // Caustics through media: photons that took at most the bounces the path has left.
+    let caustics = ctx.photons.filter(|p| p.maps.caustic.is_some());
+    let receiver = caustics.is_some() && crate::photon::volume::is_caustic_receiver(bsdf.flags());
+    if let (Some(pass), true) = (caustics, receiver) {
+        let left = ctx.settings.max_depth.saturating_sub(path.depth + 1);
+        if left >= 1 {
+            let t = std::time::Instant::now();
+            let l = pass.caustic_through_media(
+                &si,
+                &bsdf,
+                left.min(u8::MAX as u32) as u8,
+                path.lambda,
+                wave.extra,
+            );
+            super::charge(&ctx.counters.lookup_ns, t);
+            let c = if path.depth == 0 {
+                Component::Caustic
+            } else {
+                Component::Indirect
+            };
+            add(wave.acc, path.pixel, c, path.beta * l);
+        }
+    }
     path.sampler.set_dimension(base + 3);
-    if let Some(cont) = continue_path(path, &bsdf, &si) {
+    if let Some(mut cont) = continue_path(path, &bsdf, &si) {
+        cont.data = match (receiver, cont.prev_pdf > 0.0 || cont.data == Chain::Open) {
+            (true, _) => Chain::FromReceiver,
+            (false, true) => Chain::Open,
+            (false, false) => Chain::Covered,
+        };
         wave.next.push(cont);
     }
 }
 
 /// Radiance emitted by area light `li` at `p` (geometric normal `ng`) towards the path's
 /// previous vertex, times the throughput and the MIS weight.
-fn emitted(ctx: &RenderContext, path: &PathState, li: usize, p: Vec3, ng: Vec3) -> Vec3 {
+fn emitted(ctx: &RenderContext, path: &Path, li: usize, p: Vec3, ng: Vec3) -> Vec3 {
     let le = path
         .lambda
         .illuminant(ctx.lights.le(li, ng, -path.ray.d.normalize()));
@@ -157,7 +233,7 @@ fn emitted(ctx: &RenderContext, path: &PathState, li: usize, p: Vec3, ng: Vec3) 
 /// the sample carries nothing.
 fn light_sample(
     ctx: &RenderContext,
-    path: &PathState,
+    path: &Path,
     bsdf: &Bsdf,
     v: &SurfaceInteraction,
 ) -> Option<Shadow> {
@@ -190,7 +266,7 @@ fn light_sample(
 
 /// Samples the BSDF for the next bounce and applies Russian roulette; `None` when the path
 /// ends. Reads 4 dimensions of the path's sampler (lobe, direction, roulette).
-fn continue_path(mut path: PathState, bsdf: &Bsdf, v: &SurfaceInteraction) -> Option<PathState> {
+fn continue_path(mut path: Path, bsdf: &Bsdf, v: &SurfaceInteraction) -> Option<Path> {
     let uc = path.sampler.next_1d();
     let u = path.sampler.next_2d();
     let u_rr = path.sampler.next_1d();
@@ -236,7 +312,12 @@ fn roulette(beta: &mut Vec3, eta_scale: f32, depth: u32, u_rr: f32) -> bool {
 /// `sigma_s T / pdf`): a light sample through the phase function, MIS-weighted against phase
 /// sampling, and a phase-sampled continuation; a medium vertex is a bounce like a surface one
 /// and reads the same dimensions.
-fn shade_medium(ctx: &RenderContext, mut path: PathState, p: Vec3, wave: &mut Wave<()>) {
+fn shade_medium(
+    ctx: &RenderContext,
+    mut path: Path,
+    p: Vec3,
+    wave: &mut Wave<crate::photon::KnnResult, Chain>,
+) {
     if path.depth >= ctx.settings.max_depth {
         return;
     }
@@ -245,6 +326,27 @@ fn shade_medium(ctx: &RenderContext, mut path: PathState, p: Vec3, wave: &mut Wa
         None => return,
     };
     let wo = -path.ray.d.normalize();
+    let medium = &ctx.scene.media[path.medium.unwrap_or(0) as usize];
+    let volume = ctx.photons.and_then(|p| p.volume.as_ref());
+    if let (Some(map), false) = (volume, medium.emits()) {
+        // The photon mapper: all the light scattered here, direct and multiple, from the
+        // volume map's photons around p (a point estimate), and the path ends.
+        let t = std::time::Instant::now();
+        // Photons whose path joined to this one stays within maxdepth scattering events.
+        let left = ctx.settings.max_depth - path.depth;
+        let (l, _) = map.point(p, -wo, g, left);
+        super::charge(&ctx.counters.lookup_ns, t);
+        // The photons carry sigma_s; the throughput holds it already.
+        let s = medium.at(p).sigma_s;
+        let l = Vec3::select(s.cmpgt(Vec3::ZERO), l / s, Vec3::ZERO);
+        add(
+            wave.acc,
+            path.pixel,
+            component(false),
+            path.beta * path.lambda.illuminant(l),
+        );
+        return;
+    }
     let base = CAMERA_DIMS.wrapping_add(path.depth.wrapping_mul(DIMS_PER_VERTEX));
     path.sampler.set_dimension(base);
     let mut sampler = path.sampler.clone();
@@ -281,5 +383,6 @@ fn shade_medium(ctx: &RenderContext, mut path: PathState, p: Vec3, wave: &mut Wa
     path.prev_pdf = pdf;
     path.prev_p = p;
     path.prev_delta = false;
+    path.data = Chain::Open;
     wave.next.push(path);
 }

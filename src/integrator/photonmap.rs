@@ -278,9 +278,9 @@ pub fn prepare(
     if !need_caustic || volume_scene {
         s.trace.caustic_photons = 0;
     }
-    let maps = trace::trace(scene, accel, lights, &s.trace);
+    let mut maps = trace::trace(scene, accel, lights, &s.trace);
     let (volume, volume_stats) = if volume_scene {
-        let (photons, st) = crate::photon::volume::trace(
+        let (photons, caustic, st) = crate::photon::volume::trace(
             scene,
             accel,
             lights,
@@ -292,6 +292,10 @@ pub fn prepare(
         let r = s.volume_radius * lights.scene_sphere().1 * (s.radius_scale2 as f32).sqrt();
         let t = Instant::now();
         let map = crate::photon::volume::VolumeMap::build(photons, r);
+        // The caustic photons through the media, read by the path tracer at diffuse points.
+        if !caustic.is_empty() && need_caustic {
+            maps.caustic = PhotonMap::new(&caustic).ok();
+        }
         let st = crate::photon::volume::VolumeStats {
             build_seconds: t.elapsed().as_secs_f64(),
             ..st
@@ -405,6 +409,41 @@ pub fn prepare(
         cache_seconds: t.elapsed().as_secs_f64(),
         skipped,
         lights: owned_lights,
+    }
+}
+
+impl PhotonPass {
+    /// In a scene whose media need tracking: the radiance the caustic photons through the
+    /// media ([`crate::photon::volume`]) give at a purely diffuse point `si` with BSDF
+    /// `bsdf`, from the photons that took at most `max_bounce` bounces; zero without such
+    /// photons.
+    pub fn caustic_through_media(
+        &self,
+        si: &SurfaceInteraction,
+        bsdf: &Bsdf,
+        max_bounce: u8,
+        lambda: Lambda,
+        buf: &mut KnnResult,
+    ) -> Vec3 {
+        let Some(map) = &self.maps.caustic else {
+            return Vec3::ZERO;
+        };
+        let params = EstimateParams {
+            max_bounce: max_bounce.min(self.caustic_params.max_bounce),
+            ..self.caustic_params
+        };
+        let (wo, n) = (si.wo, si.facing_normal());
+        let f_d = bsdf.f(
+            wo,
+            Vec3::new(0.0, 0.0, wo.z.signum()),
+            TransportMode::Radiance,
+        );
+        let mut l = f_d * lambda.illuminant(irradiance_with(map, si.p, n, &params, buf).0);
+        let f_t = far_side_value(bsdf, wo);
+        if f_t != Vec3::ZERO {
+            l += f_t * lambda.illuminant(irradiance_with(map, si.p, -n, &params, buf).0);
+        }
+        l
     }
 }
 
@@ -1256,9 +1295,10 @@ pub fn describe(pass: &PhotonPass) -> Vec<String> {
     let vs = &pass.volume_stats;
     if vs.emitted > 0 {
         return vec![format!(
-            "volume photons: {} emitted -> {} stored in scattering media in {:.3} s ({:.2} rays/photon), binned in {:.3} s, {:.1} MB, sphere radius {:.4}; the surfaces are path-traced (the surface photon maps are not built in a scene whose media need tracking), the media read by beam estimates",
+            "volume photons: {} emitted -> {} stored in scattering media and {} caustic photons through them on diffuse surfaces in {:.3} s ({:.2} rays/photon), binned in {:.3} s, {:.1} MB, sphere radius {:.4}; the surfaces are path-traced with the caustic photons, the media read by beams (camera segments) and point estimates (later scattering points)",
             vs.emitted,
             vs.stored,
+            pass.maps.caustic.as_ref().map_or(0, |m| m.len()),
             vs.seconds,
             vs.rays as f64 / vs.emitted.max(1) as f64,
             vs.build_seconds,

@@ -40,8 +40,11 @@
 //! - `--integrator photonmap` renders such scenes as the path tracer does, except that camera
 //!   segments (and those after delta bounces) in a scattering medium read all the light it
 //!   scatters towards them from the volume photon map by a beam estimate
-//!   ([`crate::photon::volume`]) and go on to their hit dimmed by the transmittance; the
-//!   surface photon maps are not built there.
+//!   ([`crate::photon::volume`]) and go on to their hit dimmed by the transmittance; a
+//!   later scattering point reads the light scattered there from the same map by a point
+//!   estimate and ends the path; purely diffuse surfaces read the caustic photons that
+//!   reached them through the media (`L S+ D`), and the traced paths those cover are left
+//!   out ([`crate::integrator::path`]). The global surface map is not built there.
 //! - `--integrator direct` tracks them as the path tracer does where the scene needs it, and
 //!   ends each path at its first scattering point (single scattering: light samples through
 //!   the phase function, MIS against one phase-sampled ray that looks for emission only).

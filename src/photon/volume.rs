@@ -21,13 +21,24 @@
 //!   (each photon listed in every cell its sphere's box touches, at most 8); a 3D DDA walks the
 //!   cells the segment crosses and counts a photon only in the cell that holds the ray's point
 //!   of closest approach to it, so no photon counts twice.
-//! - The radius is fixed for a render (`volumeradius`, a fraction of the scene's bounding
-//!   radius); progressive radius reduction is not done yet.
+//! - **Caustic photons through media**: a photon that reaches a purely diffuse surface
+//!   through one or more delta bounces and no scattering in a medium (`L S+ D`, each
+//!   segment only dimmed by the media it crossed) is stored there too, into the surface
+//!   caustic map the path tracer reads in such scenes ([`crate::integrator::path`]); at most
+//!   as many as the volume photons, counted in the same photon order.
+//! - **Point estimate** ([`VolumeMap::point`]): at the scattering points of paths past the
+//!   camera segments, the photons within twice the radius give all the light scattered there
+//!   (Jensen & Christensen's volume radiance estimate), from photons whose path joined to
+//!   the camera's stays within `maxdepth` scattering events; the path ends there.
+//! - The radius is `volumeradius`, a fraction of the scene's bounding radius; progressive
+//!   passes (`--progressive`) re-trace the map each pass and shrink the radius with the
+//!   surface maps' (Knaus-Zwicker's `alpha`).
 use crate::accel::{Accel, RayKind};
 use crate::interaction::SurfaceInteraction;
 use crate::light::Lights;
 use crate::math::{spawn_origin, Ray, Vec2, Vec3};
 use crate::medium::{henyey_greenstein, sample_henyey_greenstein, Medium, MediumEvent};
+use crate::photon::stored::Photon;
 use crate::sampling::{hash, mix64, to_unit};
 use crate::scene::Scene;
 use rayon::prelude::*;
@@ -40,12 +51,14 @@ pub struct VolumePhoton {
     pub d: Vec3,
     /// The power it scatters here.
     pub power: Vec3,
+    /// Its scattering vertices from the light, this one included (surfaces and media).
+    pub vertices: u32,
 }
 
 /// Bytes a stored volume photon costs at its peak, for the memory model: the photon with the
-/// tracer's growth slack (2 x 36), and while the grid is built up to 8 (cell, photon) pairs
+/// tracer's growth slack (2 x 40), and while the grid is built up to 8 (cell, photon) pairs
 /// (8 x 8) beside the 8 references they become (8 x 4).
-pub const VOLUME_PHOTON_BYTES: u64 = 2 * 36 + 8 * 8 + 8 * 4;
+pub const VOLUME_PHOTON_BYTES: u64 = 2 * 40 + 8 * 8 + 8 * 4;
 
 /// Bytes of the dense cell grid at most ([`MAX_CELLS_PER_AXIS`] cubed, 8 bytes a cell).
 pub const MAX_GRID_BYTES: u64 = (MAX_CELLS_PER_AXIS as u64).pow(3) * 8;
@@ -53,17 +66,36 @@ pub const MAX_GRID_BYTES: u64 = (MAX_CELLS_PER_AXIS as u64).pow(3) * 8;
 /// The grid has at most this many cells along an axis (cells widen past `2r` to keep to it).
 pub const MAX_CELLS_PER_AXIS: u32 = 128;
 
+/// The point estimates' radius over the beams' ([`VolumeMap::point`]): twice as wide, eight
+/// times the photons, for the scattering points of paths that read the map many times each.
+pub const POINT_RADIUS_SCALE: f32 = 2.0;
+
 /// Photons emitted per batch between checks of the stored count.
 const BATCH: u64 = 1 << 16;
 
 /// Photons per parallel work item within a batch.
 const CHUNK: u64 = 1 << 10;
 
+/// What a traced photon leaves behind.
+enum Store {
+    Volume(VolumePhoton),
+    /// An `L S+ D` photon on a purely diffuse surface.
+    Caustic(Photon),
+}
+
+/// Whether photons landing on a surface with these lobes are stored as caustic photons
+/// through media, and camera paths there read them: purely diffuse surfaces.
+pub fn is_caustic_receiver(flags: crate::bsdf::BxdfFlags) -> bool {
+    flags.has_diffuse() && !flags.has_specular() && !flags.has_glossy()
+}
+
 /// What [`trace`] did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct VolumeStats {
     pub emitted: u64,
     pub stored: u64,
+    /// Caustic photons stored on diffuse surfaces (see the module docs).
+    pub caustic: u64,
     pub rays: u64,
     /// Tracing, and binning ([`VolumeMap::build`], filled in by its caller).
     pub seconds: f64,
@@ -71,7 +103,8 @@ pub struct VolumeStats {
 }
 
 /// Traces photons from `lights` until `target` are stored in scattering media (or `64 *
-/// target` were emitted). Deterministic for a seed, whatever the thread count.
+/// target` were emitted), and keeps at most `target` caustic photons of the same photons.
+/// Deterministic for a seed, whatever the thread count.
 pub fn trace(
     scene: &Scene,
     accel: &Accel,
@@ -79,13 +112,13 @@ pub fn trace(
     target: u64,
     max_bounces: u32,
     seed: u64,
-) -> (Vec<VolumePhoton>, VolumeStats) {
+) -> (Vec<VolumePhoton>, Vec<Photon>, VolumeStats) {
     let start = std::time::Instant::now();
     let powers = lights.powers();
     let total: f32 = powers.iter().sum();
     let mut stats = VolumeStats::default();
     if target == 0 || total <= 0.0 || !scene.media.iter().any(|m| m.scatters()) {
-        return (Vec::new(), stats);
+        return (Vec::new(), Vec::new(), stats);
     }
     let cdf: Vec<f32> = powers
         .iter()
@@ -95,6 +128,7 @@ pub fn trace(
         })
         .collect();
     let mut out: Vec<VolumePhoton> = Vec::new();
+    let mut caustic: Vec<Photon> = Vec::new();
     let mut emitted = 0u64;
     crate::progress::begin("volume photons", target);
     while (out.len() as u64) < target && emitted < target.saturating_mul(64) {
@@ -104,7 +138,7 @@ pub fn trace(
         }
         let lo = emitted;
         // Each chunk's stores in photon order, and its rays.
-        let parts: Vec<(Vec<(u64, VolumePhoton)>, u64)> = (0..BATCH / CHUNK)
+        let parts: Vec<(Vec<(u64, Store)>, u64)> = (0..BATCH / CHUNK)
             .into_par_iter()
             .map(|c| {
                 let mut v = Vec::new();
@@ -136,7 +170,11 @@ pub fn trace(
                     break 'parts;
                 }
                 last = Some(i);
-                out.push(ph);
+                match ph {
+                    Store::Volume(ph) => out.push(ph),
+                    Store::Caustic(ph) if (caustic.len() as u64) < target => caustic.push(ph),
+                    Store::Caustic(_) => {}
+                }
             }
         }
         emitted = stop_at.unwrap_or(lo + BATCH);
@@ -149,13 +187,19 @@ pub fn trace(
     for ph in &mut out {
         ph.power *= inv;
     }
+    for ph in &mut caustic {
+        *ph = Photon::new(ph.pos(), ph.power() * inv, ph.dir(), ph.flags())
+            .with_bounce(ph.bounce() as u32);
+    }
     stats.emitted = emitted;
     stats.stored = out.len() as u64;
+    stats.caustic = caustic.len() as u64;
     stats.seconds = start.elapsed().as_secs_f64();
-    (out, stats)
+    (out, caustic, stats)
 }
 
-/// Traces photon `i`: calls `store` at each medium interaction; returns the rays it cast.
+/// Traces photon `i`: calls `store` at each medium interaction and at each caustic landing;
+/// returns the rays it cast.
 #[allow(clippy::too_many_arguments)]
 fn trace_one(
     scene: &Scene,
@@ -165,7 +209,7 @@ fn trace_one(
     i: u64,
     seed: u64,
     max_bounces: u32,
-    store: &mut dyn FnMut(VolumePhoton),
+    store: &mut dyn FnMut(Store),
 ) -> u64 {
     let key = hash(&[seed, 0x766f_6c75_6d65, i]);
     let mut dim = 0u64;
@@ -205,6 +249,8 @@ fn trace_one(
     // (`max_bounces + 1`, as the surface maps' bounces are counted).
     let mut vertices = 0u32;
     let max_vertices = max_bounces.saturating_add(1);
+    // Every bounce so far a delta one, at least one, and no scattering in a medium.
+    let (mut all_delta, mut any_delta) = (true, false);
     // Crossings of `interface` surfaces are no bounce; they are bounded all the same.
     for _ in 0..max_vertices.saturating_mul(4).max(8) {
         rays += 1;
@@ -220,8 +266,14 @@ fn trace_one(
                         let p = ray.o + d * t;
                         let arriving = power;
                         power *= weight;
-                        store(VolumePhoton { p, d, power });
                         vertices += 1;
+                        store(Store::Volume(VolumePhoton {
+                            p,
+                            d,
+                            power,
+                            vertices,
+                        }));
+                        all_delta = false;
                         if vertices >= max_vertices {
                             return rays;
                         }
@@ -257,11 +309,17 @@ fn trace_one(
             continue;
         }
         vertices += 1;
+        let footprint = crate::camera::Footprint::of_file(scene);
+        let bsdf = si.bsdf(scene, footprint, crate::spectrum::Lambda::Rgb);
+        if all_delta && any_delta && is_caustic_receiver(bsdf.flags()) {
+            let d = ray.d / ray.d.length();
+            store(Store::Caustic(
+                Photon::new(si.p, power, d, Photon::CAUSTIC).with_bounce(vertices - 1),
+            ));
+        }
         if vertices >= max_vertices {
             return rays;
         }
-        let footprint = crate::camera::Footprint::of_file(scene);
-        let bsdf = si.bsdf(scene, footprint, crate::spectrum::Lambda::Rgb);
         let mut sampler = crate::sampling::Sampler::new(
             crate::sampling::Pattern::Independent,
             seed,
@@ -273,6 +331,8 @@ fn trace_one(
             return rays;
         };
         power *= sc.power_scale;
+        all_delta &= sc.specular;
+        any_delta |= sc.specular;
         medium = si.medium_leaving(sc.ray.d, medium);
         ray = sc.ray;
     }
@@ -376,6 +436,52 @@ impl VolumeMap {
         (self.photons.len() * std::mem::size_of::<VolumePhoton>()
             + self.cells.len() * 8
             + self.refs.len() * 4) as u64
+    }
+
+    /// The point estimate of the light scattered at `p` towards `-d` (`d` unit, the
+    /// direction of travel of the ray that reached `p`): `sum_i p(d, d_i) Phi_i / (4/3 pi
+    /// R^3)` over the photons within `R = POINT_RADIUS_SCALE x` the beam radius (Jensen &
+    /// Christensen's volume radiance estimate, `sigma_s` folded into the photons' powers)
+    /// that took at most `max_vertices` scattering vertices from the light, and how many
+    /// photons it used. Each photon counts once: in the cell holding it.
+    pub fn point(&self, p: Vec3, d: Vec3, g: f32, max_vertices: u32) -> (Vec3, u32) {
+        let r = self.radius * POINT_RADIUS_SCALE;
+        let r2 = r * r;
+        let cell_of = |v: Vec3| -> [i32; 3] {
+            let c = ((v - self.lo) / self.cell).floor();
+            [
+                (c.x as i32).clamp(0, self.dims[0] - 1),
+                (c.y as i32).clamp(0, self.dims[1] - 1),
+                (c.z as i32).clamp(0, self.dims[2] - 1),
+            ]
+        };
+        if !p.is_finite() {
+            return (Vec3::ZERO, 0);
+        }
+        let (a, b) = (cell_of(p - Vec3::splat(r)), cell_of(p + Vec3::splat(r)));
+        let mut sum = Vec3::ZERO;
+        let mut used = 0u32;
+        for z in a[2]..=b[2] {
+            for y in a[1]..=b[1] {
+                for x in a[0]..=b[0] {
+                    let (start, count) =
+                        self.cells[((z * self.dims[1] + y) * self.dims[0] + x) as usize];
+                    for &i in &self.refs[start as usize..(start + count) as usize] {
+                        let ph = &self.photons[i as usize];
+                        if ph.vertices > max_vertices
+                            || (ph.p - p).length_squared() > r2
+                            || cell_of(ph.p) != [x, y, z]
+                        {
+                            continue;
+                        }
+                        sum += ph.power * henyey_greenstein(d.dot(ph.d), g);
+                        used += 1;
+                    }
+                }
+            }
+        }
+        let volume = 4.0 / 3.0 * std::f32::consts::PI * r2 * r;
+        (sum / volume, used)
     }
 
     /// The beam radiance estimate along the segment `o + t d`, `t` in `[0, t_max]` (`d` unit,
@@ -496,6 +602,7 @@ mod tests {
                     p: Vec3::new(h(0), h(1), h(2)) * Vec3::new(2.0, 1.0, 0.5),
                     d: Vec3::new(h(3) - 0.5, h(4) - 0.5, h(5) - 0.5).normalize(),
                     power: Vec3::new(h(6), h(7), h(8)),
+                    vertices: 1,
                 }
             })
             .collect();
