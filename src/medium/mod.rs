@@ -1024,24 +1024,37 @@ mod tests {
                 }
             }
         }
+        density_grid(
+            (Vec3::new(0.3, 0.1, 0.2), Vec3::new(0.7, 0.9, 0.4)),
+            Region {
+                p0: Vec3::new(-1.0, -1.0, -1.0),
+                p1: Vec3::new(1.0, 2.0, 1.5),
+                medium_from_world: (Mat4::from_rotation_y(0.6)
+                    * Mat4::from_scale(Vec3::new(0.5, 1.0, 1.0)))
+                .inverse(),
+            },
+            SampledGrid {
+                n: [n, n, n],
+                values,
+            },
+        )
+    }
+
+    /// A `uniformgrid` medium with its bounds computed as `create` computes them.
+    fn density_grid(
+        (sigma_a, sigma_s): (Vec3, Vec3),
+        region: Region,
+        density: SampledGrid<f32>,
+    ) -> Medium {
         let mut m = Medium {
-            name: "puff".into(),
-            sigma_a: Vec3::new(0.3, 0.1, 0.2),
-            sigma_s: Vec3::new(0.7, 0.9, 0.4),
+            name: "grid".into(),
+            sigma_a,
+            sigma_s,
             g: 0.0,
             le: Vec3::ZERO,
             field: Some(Field::Density {
-                region: Region {
-                    p0: Vec3::new(-1.0, -1.0, -1.0),
-                    p1: Vec3::new(1.0, 2.0, 1.5),
-                    medium_from_world: (Mat4::from_rotation_y(0.6)
-                        * Mat4::from_scale(Vec3::new(0.5, 1.0, 1.0)))
-                    .inverse(),
-                },
-                density: SampledGrid {
-                    n: [n, n, n],
-                    values,
-                },
+                region,
+                density,
                 le_scale: SampledGrid::constant(1.0),
                 temperature: None,
             }),
@@ -1176,30 +1189,18 @@ mod tests {
     fn grid_trackers_average_to_the_transport_terms() {
         // A grid of density 2 everywhere the rays go (the box reaches far past them), with the
         // coefficients halved: the homogeneous medium of the test above, tracked.
-        let mut m = Medium {
-            name: "m".into(),
-            sigma_a: Vec3::new(0.25, 0.0, 0.1),
-            sigma_s: Vec3::new(0.5, 0.15, 0.0),
-            g: 0.0,
-            le: Vec3::ZERO,
-            field: Some(Field::Density {
-                region: Region {
-                    p0: Vec3::splat(-100.0),
-                    p1: Vec3::splat(100.0),
-                    medium_from_world: Mat4::IDENTITY,
-                },
-                density: SampledGrid {
-                    n: [2, 2, 2],
-                    values: vec![2.0; 8],
-                },
-                le_scale: SampledGrid::constant(1.0),
-                temperature: None,
-            }),
-            majorant: 0.0,
-            majorants: None,
-        };
-        m.majorant = m.bound();
-        m.majorants = m.majorant_grid();
+        let m = density_grid(
+            (Vec3::new(0.25, 0.0, 0.1), Vec3::new(0.5, 0.15, 0.0)),
+            Region {
+                p0: Vec3::splat(-100.0),
+                p1: Vec3::splat(100.0),
+                medium_from_world: Mat4::IDENTITY,
+            },
+            SampledGrid {
+                n: [2, 2, 2],
+                values: vec![2.0; 8],
+            },
+        );
         let (o, dir, d) = (Vec3::new(1.0, 2.0, 3.0), Vec3::new(0.6, 0.0, 0.8), 1.7);
         let st = (m.sigma_a + m.sigma_s) * 2.0;
         let (mut scat, mut pass, mut tr) = (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);

@@ -533,6 +533,20 @@ AttributeEnd
     )
 }
 
+/// Luminance ratios of `got` over `want` (32x32 images) in 4x4 blocks of 8x8 pixels.
+fn block_ratios(got: &photon::imageio::RgbImage, want: &photon::imageio::RgbImage) -> Vec<f32> {
+    let lum = |p: [f32; 3]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+    let block = |img: &photon::imageio::RgbImage, bx: usize, by: usize| -> f32 {
+        (0..8)
+            .flat_map(|y| (0..8).map(move |x| (bx * 8 + x, by * 8 + y)))
+            .map(|(x, y)| lum(img.pixels[y * 32 + x]))
+            .sum::<f32>()
+    };
+    (0..16)
+        .map(|i| block(got, i % 4, i / 4) / block(want, i % 4, i / 4))
+        .collect()
+}
+
 /// [`fog_box`] in thin fog with a glass sphere under the lamp: a caustic on the floor and a
 /// beam of light in the fog under the sphere.
 fn fog_glass_box(integrator: &str) -> String {
@@ -577,16 +591,7 @@ fn fog_and_glass_photon_mapper_against_the_path_tracer() {
     );
     let (a, b) = (channel_means(&got.image), channel_means(&want.image));
     let ratio = a / b;
-    let lum = |p: [f32; 3]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
-    let block = |img: &photon::imageio::RgbImage, bx: usize, by: usize| -> f32 {
-        (0..8)
-            .flat_map(|y| (0..8).map(move |x| (bx * 8 + x, by * 8 + y)))
-            .map(|(x, y)| lum(img.pixels[y * 32 + x]))
-            .sum::<f32>()
-    };
-    let blocks: Vec<f32> = (0..16)
-        .map(|i| block(&got.image, i % 4, i / 4) / block(&want.image, i % 4, i / 4))
-        .collect();
+    let blocks = block_ratios(&got.image, &want.image);
     eprintln!(
         "fog and glass photonmap / path: channels {ratio}, blocks {blocks:?}; notes {:?}",
         got.notes
@@ -633,16 +638,7 @@ fn direct_light_in_fog_equals_the_path_tracer_after_one_bounce() {
     );
     let (a, b) = (channel_means(&got.image), channel_means(&want.image));
     let ratio = a / b;
-    let lum = |p: [f32; 3]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
-    let block = |img: &photon::imageio::RgbImage, bx: usize, by: usize| -> f32 {
-        (0..8)
-            .flat_map(|y| (0..8).map(move |x| (bx * 8 + x, by * 8 + y)))
-            .map(|(x, y)| lum(img.pixels[y * 32 + x]))
-            .sum::<f32>()
-    };
-    let blocks: Vec<f32> = (0..16)
-        .map(|i| block(&got.image, i % 4, i / 4) / block(&want.image, i % 4, i / 4))
-        .collect();
+    let blocks = block_ratios(&got.image, &want.image);
     eprintln!("fog box direct / path maxdepth 1: channels {ratio}, blocks {blocks:?}");
     assert!((ratio - Vec3::ONE).abs().max_element() < 0.02, "{ratio}");
     for (i, r) in blocks.iter().enumerate() {
@@ -684,16 +680,7 @@ fn fog_box_photon_mapper_beams_against_the_path_tracer() {
     let (a, b) = (channel_means(&got.image), channel_means(&want.image));
     let ratio = a / b;
     // 4x4 blocks of 8x8 pixels, luminance.
-    let lum = |p: [f32; 3]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
-    let block = |img: &photon::imageio::RgbImage, bx: usize, by: usize| -> f32 {
-        (0..8)
-            .flat_map(|y| (0..8).map(move |x| (bx * 8 + x, by * 8 + y)))
-            .map(|(x, y)| lum(img.pixels[y * 32 + x]))
-            .sum::<f32>()
-    };
-    let blocks: Vec<f32> = (0..16)
-        .map(|i| block(&got.image, i % 4, i / 4) / block(&want.image, i % 4, i / 4))
-        .collect();
+    let blocks = block_ratios(&got.image, &want.image);
     eprintln!("fog box photonmap / path: channels {ratio} ({a} / {b}), blocks {blocks:?}");
     assert!((ratio - Vec3::ONE).abs().max_element() < 0.02, "{ratio}");
     for (i, r) in blocks.iter().enumerate() {
