@@ -129,15 +129,16 @@ pub fn estimate(
     }
     if let (IntegratorKind::Photonmap, Some(_)) = (kind, &scene.media_need_tracking) {
         // Media that need tracking: the volume map (its photons and at most its grid) and
-        // at most as many caustic photons through the media.
+        // the caustic photons through the media (at most one per photon emitted for them).
         let n = settings.photon.volume_photons;
+        let c = settings.photon.trace.caustic_photons;
         let bytes = n
             .saturating_mul(crate::photon::volume::VOLUME_PHOTON_BYTES)
             .saturating_add(crate::photon::volume::MAX_GRID_BYTES)
-            .saturating_add(n.saturating_mul(PHOTON_PEAK_BYTES));
+            .saturating_add(c.saturating_mul(PHOTON_PEAK_BYTES));
         e.parts.push(("photon maps", bytes));
         e.what += &format!(
-            ", {n} volume photons x {} B + at most {n} caustic x {PHOTON_PEAK_BYTES} B",
+            ", {n} volume photons x {} B + at most {c} caustic x {PHOTON_PEAK_BYTES} B",
             crate::photon::volume::VOLUME_PHOTON_BYTES
         );
     } else if let (IntegratorKind::Photonmap, Some(per)) = (kind, landings) {

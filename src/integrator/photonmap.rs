@@ -280,7 +280,7 @@ pub fn prepare(
     }
     let mut maps = trace::trace(scene, accel, lights, &s.trace);
     let (volume, volume_stats) = if volume_scene {
-        let (photons, caustic, st) = crate::photon::volume::trace(
+        let (photons, st) = crate::photon::volume::trace(
             scene,
             accel,
             lights,
@@ -292,12 +292,36 @@ pub fn prepare(
         let r = s.volume_radius * lights.scene_sphere().1 * (s.radius_scale2 as f32).sqrt();
         let t = Instant::now();
         let map = crate::photon::volume::VolumeMap::build(photons, r);
+        let build_seconds = t.elapsed().as_secs_f64();
         // The caustic photons through the media, read by the path tracer at diffuse points.
-        if !caustic.is_empty() && need_caustic {
-            maps.caustic = PhotonMap::new(&caustic).ok();
-        }
+        let t = Instant::now();
+        let emitted = if need_caustic {
+            settings.trace.caustic_photons
+        } else {
+            0
+        };
+        let targets = trace::caustic_targets(scene, s.trace.receiver_alpha);
+        let projection = s
+            .trace
+            .projection_maps
+            .then_some(s.trace.projection_resolution);
+        let (caustic, rays) = crate::photon::volume::trace_caustic(
+            scene,
+            accel,
+            lights,
+            &targets,
+            emitted,
+            projection,
+            s.trace.max_bounces,
+            s.trace.seed,
+        );
+        maps.caustic = PhotonMap::new(&caustic).ok();
         let st = crate::photon::volume::VolumeStats {
-            build_seconds: t.elapsed().as_secs_f64(),
+            build_seconds,
+            caustic_emitted: emitted,
+            caustic: caustic.len() as u64,
+            caustic_seconds: t.elapsed().as_secs_f64(),
+            rays: st.rays + rays,
             ..st
         };
         (map, st)
@@ -1295,15 +1319,17 @@ pub fn describe(pass: &PhotonPass) -> Vec<String> {
     let vs = &pass.volume_stats;
     if vs.emitted > 0 {
         return vec![format!(
-            "volume photons: {} emitted -> {} stored in scattering media and {} caustic photons through them on diffuse surfaces in {:.3} s ({:.2} rays/photon), binned in {:.3} s, {:.1} MB, sphere radius {:.4}; the surfaces are path-traced with the caustic photons, the media read by beams (camera segments) and point estimates (later scattering points)",
+            "volume photons: {} emitted -> {} stored in scattering media in {:.3} s, binned in {:.3} s, {:.1} MB, sphere radius {:.4}; caustic photons through the media: {} emitted (aimed) -> {} stored on diffuse surfaces in {:.3} s; {:.2} rays/photon; the surfaces are path-traced with the caustic photons, the media read by beams (camera segments) and point estimates (later scattering points)",
             vs.emitted,
             vs.stored,
-            pass.maps.caustic.as_ref().map_or(0, |m| m.len()),
             vs.seconds,
-            vs.rays as f64 / vs.emitted.max(1) as f64,
             vs.build_seconds,
             pass.volume.as_ref().map_or(0, |v| v.bytes()) as f64 / 1e6,
             pass.volume.as_ref().map_or(0.0, |v| v.radius()),
+            vs.caustic_emitted,
+            vs.caustic,
+            vs.caustic_seconds,
+            vs.rays as f64 / (vs.emitted + vs.caustic_emitted).max(1) as f64,
         )];
     }
     let st = &pass.maps.stats;

@@ -627,7 +627,7 @@ pub fn scatter(si: &SurfaceInteraction, bsdf: &Bsdf, sampler: &mut Sampler) -> O
 }
 
 /// Whether the ray from `o` along unit `d` meets the sphere `(c, r)`.
-fn ray_meets_sphere(o: Vec3, d: Vec3, c: Vec3, r: f32) -> bool {
+pub(crate) fn ray_meets_sphere(o: Vec3, d: Vec3, c: Vec3, r: f32) -> bool {
     let v = c - o;
     if v.length_squared() <= r * r {
         return true;

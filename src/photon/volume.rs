@@ -21,11 +21,11 @@
 //!   (each photon listed in every cell its sphere's box touches, at most 8); a 3D DDA walks the
 //!   cells the segment crosses and counts a photon only in the cell that holds the ray's point
 //!   of closest approach to it, so no photon counts twice.
-//! - **Caustic photons through media**: a photon that reaches a purely diffuse surface
-//!   through one or more delta bounces and no scattering in a medium (`L S+ D`, each
-//!   segment only dimmed by the media it crossed) is stored there too, into the surface
-//!   caustic map the path tracer reads in such scenes ([`crate::integrator::path`]); at most
-//!   as many as the volume photons, counted in the same photon order.
+//! - **Caustic photons through media** ([`trace_caustic`]): photons aimed by projection maps
+//!   at the specular objects, as the surface caustic map's are, followed while they bounce off
+//!   delta lobes only and nothing in a medium scatters them (each segment dimmed by its
+//!   medium), and stored where they land on a purely diffuse surface (`L S+ D`): the caustic
+//!   map the path tracer reads in such scenes ([`crate::integrator::path`]).
 //! - **Point estimate** ([`VolumeMap::point`]): at the scattering points of paths past the
 //!   camera segments, the photons within twice the radius give all the light scattered there
 //!   (Jensen & Christensen's volume radiance estimate), from photons whose path joined to
@@ -94,8 +94,11 @@ pub fn is_caustic_receiver(flags: crate::bsdf::BxdfFlags) -> bool {
 pub struct VolumeStats {
     pub emitted: u64,
     pub stored: u64,
-    /// Caustic photons stored on diffuse surfaces (see the module docs).
+    /// Caustic photons emitted and stored on diffuse surfaces (see the module docs), and
+    /// the seconds they took.
+    pub caustic_emitted: u64,
     pub caustic: u64,
+    pub caustic_seconds: f64,
     pub rays: u64,
     /// Tracing, and binning ([`VolumeMap::build`], filled in by its caller).
     pub seconds: f64,
@@ -103,8 +106,7 @@ pub struct VolumeStats {
 }
 
 /// Traces photons from `lights` until `target` are stored in scattering media (or `64 *
-/// target` were emitted), and keeps at most `target` caustic photons of the same photons.
-/// Deterministic for a seed, whatever the thread count.
+/// target` were emitted). Deterministic for a seed, whatever the thread count.
 pub fn trace(
     scene: &Scene,
     accel: &Accel,
@@ -112,13 +114,13 @@ pub fn trace(
     target: u64,
     max_bounces: u32,
     seed: u64,
-) -> (Vec<VolumePhoton>, Vec<Photon>, VolumeStats) {
+) -> (Vec<VolumePhoton>, VolumeStats) {
     let start = std::time::Instant::now();
     let powers = lights.powers();
     let total: f32 = powers.iter().sum();
     let mut stats = VolumeStats::default();
     if target == 0 || total <= 0.0 || !scene.media.iter().any(|m| m.scatters()) {
-        return (Vec::new(), Vec::new(), stats);
+        return (Vec::new(), stats);
     }
     let cdf: Vec<f32> = powers
         .iter()
@@ -128,7 +130,6 @@ pub fn trace(
         })
         .collect();
     let mut out: Vec<VolumePhoton> = Vec::new();
-    let mut caustic: Vec<Photon> = Vec::new();
     let mut emitted = 0u64;
     crate::progress::begin("volume photons", target);
     while (out.len() as u64) < target && emitted < target.saturating_mul(64) {
@@ -170,10 +171,8 @@ pub fn trace(
                     break 'parts;
                 }
                 last = Some(i);
-                match ph {
-                    Store::Volume(ph) => out.push(ph),
-                    Store::Caustic(ph) if (caustic.len() as u64) < target => caustic.push(ph),
-                    Store::Caustic(_) => {}
+                if let Store::Volume(ph) = ph {
+                    out.push(ph);
                 }
             }
         }
@@ -187,15 +186,99 @@ pub fn trace(
     for ph in &mut out {
         ph.power *= inv;
     }
-    for ph in &mut caustic {
-        *ph = Photon::new(ph.pos(), ph.power() * inv, ph.dir(), ph.flags())
-            .with_bounce(ph.bounce() as u32);
-    }
     stats.emitted = emitted;
     stats.stored = out.len() as u64;
-    stats.caustic = caustic.len() as u64;
     stats.seconds = start.elapsed().as_secs_f64();
-    (out, caustic, stats)
+    (out, stats)
+}
+
+/// The caustic photons through the media: `emitted` photons split among the lights by power,
+/// each aimed by the light's projection map at the specular objects `targets` (as the
+/// surface caustic map's photons are, [`super::trace`]; `projection`: the maps' resolution,
+/// `None` for no maps), followed through the media while every bounce is a delta one and
+/// nothing scatters them, and stored where they land on a purely diffuse surface (at most
+/// one each). Deterministic for a seed, whatever the thread count. Returns the photons and
+/// the rays cast.
+#[allow(clippy::too_many_arguments)]
+pub fn trace_caustic(
+    scene: &Scene,
+    accel: &Accel,
+    lights: &Lights,
+    targets: &[(Vec3, f32)],
+    emitted: u64,
+    projection: Option<u32>,
+    max_bounces: u32,
+    seed: u64,
+) -> (Vec<Photon>, u64) {
+    let powers = lights.powers();
+    if emitted == 0 || targets.is_empty() {
+        return (Vec::new(), 0);
+    }
+    let counts = super::trace::allocate(emitted, &powers);
+    let maps: Vec<super::projection::ProjectionMap> = (0..powers.len())
+        .map(|i| match projection {
+            Some(res) => super::projection::ProjectionMap::build(scene, lights, i, targets, res),
+            None => super::projection::ProjectionMap::full(lights.emission_domain(i)),
+        })
+        .collect();
+    let mut first = 0u64;
+    let mut out = Vec::new();
+    let mut rays = 0u64;
+    for (light, (&count, map)) in counts.iter().zip(&maps).enumerate() {
+        let chunks = count.div_ceil(CHUNK);
+        let parts: Vec<(Vec<Photon>, u64)> = (0..chunks)
+            .into_par_iter()
+            .map(|c| {
+                let mut v = Vec::new();
+                let mut rays = 0;
+                for j in c * CHUNK..((c + 1) * CHUNK).min(count) {
+                    let i = first + j;
+                    let mut numbers = Numbers::new(hash(&[seed, 0x0063_6175_7374_6963, i]));
+                    let (mut u_pos, mut u_dir) = (numbers.next2(), numbers.next2());
+                    let restricted = match map.domain {
+                        crate::light::EmissionDomain::Direction => &mut u_dir,
+                        crate::light::EmissionDomain::Position => &mut u_pos,
+                    };
+                    let Some(u) = map.sample(*restricted) else {
+                        continue;
+                    };
+                    *restricted = u;
+                    let Some(e) = lights.emit_caustic(&scene.meshes, light, u_pos, u_dir, targets)
+                    else {
+                        continue;
+                    };
+                    if !targets
+                        .iter()
+                        .any(|&(c, r)| super::trace::ray_meets_sphere(e.p, e.dir, c, r))
+                    {
+                        continue; // cannot reach a specular object
+                    }
+                    let power = e.flux * (map.fraction() / count as f32);
+                    let walk = Walk {
+                        scene,
+                        accel,
+                        max_bounces,
+                        seed,
+                        index: i,
+                        volume: false,
+                        caustic: true,
+                    };
+                    rays += walk.follow(light, &e, power, &mut numbers, &mut |st| {
+                        if let Store::Caustic(ph) = st {
+                            v.push(ph);
+                        }
+                    });
+                }
+                (v, rays)
+            })
+            .collect();
+        for (v, r) in parts {
+            out.extend(v);
+            rays += r;
+        }
+        first += count;
+    }
+    (out, rays)
 }
 
 /// Traces photon `i`: calls `store` at each medium interaction and at each caustic landing;
@@ -212,12 +295,8 @@ fn trace_one(
     store: &mut dyn FnMut(Store),
 ) -> u64 {
     let key = hash(&[seed, 0x766f_6c75_6d65, i]);
-    let mut dim = 0u64;
-    let mut next = || {
-        dim += 1;
-        to_unit(mix64(key ^ dim.wrapping_mul(0x9E37_79B9_7F4A_7C15)))
-    };
-    let u_light = next();
+    let mut numbers = Numbers::new(key);
+    let u_light = numbers.next();
     let light = cdf
         .iter()
         .position(|&c| u_light < c)
@@ -226,117 +305,187 @@ fn trace_one(
     if p_light <= 0.0 {
         return 0;
     }
-    let (u_pos, u_dir) = (Vec2::new(next(), next()), Vec2::new(next(), next()));
+    let (u_pos, u_dir) = (numbers.next2(), numbers.next2());
     let Some(e) = lights.emit_aimed(&scene.meshes, light, u_pos, u_dir, None) else {
         return 0;
     };
-    let mut power = e.flux / p_light;
-    let mi = scene.light_media.get(light).copied().unwrap_or_default();
-    let mut medium = if e.n == Vec3::ZERO {
-        mi.outside
-    } else {
-        mi.leaving(e.dir, e.n)
+    let power = e.flux / p_light;
+    let walk = Walk {
+        scene,
+        accel,
+        max_bounces,
+        seed,
+        index: i,
+        volume: true,
+        caustic: false,
     };
-    let o = if e.n == Vec3::ZERO {
-        e.p
-    } else {
-        spawn_origin(e.p, e.err, if e.n.dot(e.dir) >= 0.0 { e.n } else { -e.n })
-    };
-    let mut ray = Ray::new(o, e.dir);
-    let mut rays = 0;
-    // Scattering vertices so far: a photon stored at its k-th is read by a camera ray as the
-    // light of a path of k vertices, so photons are stored up to the render's maxdepth
-    // (`max_bounces + 1`, as the surface maps' bounces are counted).
-    let mut vertices = 0u32;
-    let max_vertices = max_bounces.saturating_add(1);
-    // Every bounce so far a delta one, at least one, and no scattering in a medium.
-    let (mut all_delta, mut any_delta) = (true, false);
-    // Crossings of `interface` surfaces are no bounce; they are bounded all the same.
-    for _ in 0..max_vertices.saturating_mul(4).max(8) {
-        rays += 1;
-        let hit = accel.intersect(RayKind::Photon, &ray);
-        let len = ray.d.length();
-        let dist = hit.as_ref().map_or(f32::INFINITY, |h| h.t * len);
-        if let Some(m) = medium {
-            let med: &Medium = &scene.media[m as usize];
-            let d = ray.d / len;
-            if med.scatters() {
-                match med.sample_interaction(ray.o, d, dist, next(), next(), power) {
-                    MediumEvent::Scatter { t, weight } => {
-                        let p = ray.o + d * t;
-                        let arriving = power;
-                        power *= weight;
-                        vertices += 1;
-                        store(Store::Volume(VolumePhoton {
-                            p,
-                            d,
-                            power,
-                            vertices,
-                        }));
-                        all_delta = false;
-                        if vertices >= max_vertices {
-                            return rays;
-                        }
-                        // Roulette on the albedo weight (power relative to what arrived).
-                        let q = (power / arriving.max(Vec3::splat(1e-30)))
-                            .max_element()
-                            .min(1.0);
-                        if q.is_nan() || q <= 0.0 || next() >= q {
-                            return rays;
-                        }
-                        power /= q;
-                        let (wi, _) =
-                            sample_henyey_greenstein(-d, med.g, Vec2::new(next(), next()));
-                        ray = Ray::new(p, wi);
-                        continue;
-                    }
-                    MediumEvent::Pass { weight } => power *= weight,
-                }
-            } else {
-                let mut rng = crate::medium::grid::Rng::new(hash(&[key, 0x7472, rays]));
-                power *= med.transmittance_along(ray.o, d, dist, &mut rng);
-            }
-        }
-        let Some(hit) = hit else {
-            return rays;
-        };
-        let mut si = SurfaceInteraction::new(scene, &hit, &ray);
-        let material = si.material(scene);
-        if material.interface {
-            let d = ray.d;
-            medium = si.medium_leaving(d, medium);
-            ray = Ray::new(si.spawn(d), d);
-            continue;
-        }
-        vertices += 1;
-        let footprint = crate::camera::Footprint::of_file(scene);
-        let bsdf = si.bsdf(scene, footprint, crate::spectrum::Lambda::Rgb);
-        if all_delta && any_delta && is_caustic_receiver(bsdf.flags()) {
-            let d = ray.d / ray.d.length();
-            store(Store::Caustic(
-                Photon::new(si.p, power, d, Photon::CAUSTIC).with_bounce(vertices - 1),
-            ));
-        }
-        if vertices >= max_vertices {
-            return rays;
-        }
-        let mut sampler = crate::sampling::Sampler::new(
-            crate::sampling::Pattern::Independent,
-            seed,
-            hash(&[0x766f_6c75_6d65, i, vertices as u64]),
-            0,
-            1,
-        );
-        let Some(sc) = super::trace::scatter(&si, &bsdf, &mut sampler) else {
-            return rays;
-        };
-        power *= sc.power_scale;
-        all_delta &= sc.specular;
-        any_delta |= sc.specular;
-        medium = si.medium_leaving(sc.ray.d, medium);
-        ray = sc.ray;
+    walk.follow(light, &e, power, &mut numbers, store)
+}
+
+/// A photon's stream of numbers beyond the sampler's: keyed by the seed and its index.
+struct Numbers {
+    key: u64,
+    dim: u64,
+}
+
+impl Numbers {
+    fn new(key: u64) -> Numbers {
+        Numbers { key, dim: 0 }
     }
-    rays
+
+    fn next(&mut self) -> f32 {
+        self.dim += 1;
+        to_unit(mix64(
+            self.key ^ self.dim.wrapping_mul(0x9E37_79B9_7F4A_7C15),
+        ))
+    }
+
+    fn next2(&mut self) -> Vec2 {
+        let a = self.next();
+        Vec2::new(a, self.next())
+    }
+}
+
+/// How photons are followed through the scene and its media.
+struct Walk<'a> {
+    scene: &'a Scene,
+    accel: &'a Accel,
+    max_bounces: u32,
+    seed: u64,
+    /// The photon's index (keys its samplers).
+    index: u64,
+    /// Whether it stores volume photons (else it follows caustic chains only).
+    volume: bool,
+    /// Whether it stores caustic photons.
+    caustic: bool,
+}
+
+impl Walk<'_> {
+    /// Follows the photon `e` of light `light` carrying `power`: stores it at each medium
+    /// interaction (when `self.volume`) and at each caustic landing; returns the rays cast.
+    fn follow(
+        &self,
+        light: usize,
+        e: &crate::light::Emission,
+        mut power: Vec3,
+        numbers: &mut Numbers,
+        store: &mut dyn FnMut(Store),
+    ) -> u64 {
+        let (scene, accel, i, seed) = (self.scene, self.accel, self.index, self.seed);
+        let key = numbers.key;
+        let mi = scene.light_media.get(light).copied().unwrap_or_default();
+        let mut medium = if e.n == Vec3::ZERO {
+            mi.outside
+        } else {
+            mi.leaving(e.dir, e.n)
+        };
+        let o = if e.n == Vec3::ZERO {
+            e.p
+        } else {
+            spawn_origin(e.p, e.err, if e.n.dot(e.dir) >= 0.0 { e.n } else { -e.n })
+        };
+        let mut ray = Ray::new(o, e.dir);
+        let mut rays = 0;
+        // Scattering vertices so far: a photon stored at its k-th is read by a camera ray as
+        // the light of a path of k vertices, so photons are stored up to the render's
+        // maxdepth (`max_bounces + 1`, as the surface maps' bounces are counted).
+        let mut vertices = 0u32;
+        let max_vertices = self.max_bounces.saturating_add(1);
+        // Every bounce so far a delta one, at least one, and no scattering in a medium.
+        let (mut all_delta, mut any_delta) = (true, false);
+        // Crossings of `interface` surfaces are no bounce; they are bounded all the same.
+        for _ in 0..max_vertices.saturating_mul(4).max(8) {
+            rays += 1;
+            let hit = accel.intersect(RayKind::Photon, &ray);
+            let len = ray.d.length();
+            let dist = hit.as_ref().map_or(f32::INFINITY, |h| h.t * len);
+            if let Some(m) = medium {
+                let med: &Medium = &scene.media[m as usize];
+                let d = ray.d / len;
+                if med.scatters() {
+                    let (u1, u2) = (numbers.next(), numbers.next());
+                    match med.sample_interaction(ray.o, d, dist, u1, u2, power) {
+                        MediumEvent::Scatter { t, weight } => {
+                            if !self.volume {
+                                return rays; // no longer a caustic photon
+                            }
+                            let p = ray.o + d * t;
+                            let arriving = power;
+                            power *= weight;
+                            vertices += 1;
+                            store(Store::Volume(VolumePhoton {
+                                p,
+                                d,
+                                power,
+                                vertices,
+                            }));
+                            all_delta = false;
+                            if vertices >= max_vertices {
+                                return rays;
+                            }
+                            // Roulette on the albedo weight (power relative to what arrived).
+                            let q = (power / arriving.max(Vec3::splat(1e-30)))
+                                .max_element()
+                                .min(1.0);
+                            if q.is_nan() || q <= 0.0 || numbers.next() >= q {
+                                return rays;
+                            }
+                            power /= q;
+                            let (wi, _) = sample_henyey_greenstein(-d, med.g, numbers.next2());
+                            ray = Ray::new(p, wi);
+                            continue;
+                        }
+                        MediumEvent::Pass { weight } => power *= weight,
+                    }
+                } else {
+                    let mut rng = crate::medium::grid::Rng::new(hash(&[key, 0x7472, rays]));
+                    power *= med.transmittance_along(ray.o, d, dist, &mut rng);
+                }
+            }
+            let Some(hit) = hit else {
+                return rays;
+            };
+            let mut si = SurfaceInteraction::new(scene, &hit, &ray);
+            let material = si.material(scene);
+            if material.interface {
+                let d = ray.d;
+                medium = si.medium_leaving(d, medium);
+                ray = Ray::new(si.spawn(d), d);
+                continue;
+            }
+            vertices += 1;
+            let footprint = crate::camera::Footprint::of_file(scene);
+            let bsdf = si.bsdf(scene, footprint, crate::spectrum::Lambda::Rgb);
+            if self.caustic && all_delta && any_delta && is_caustic_receiver(bsdf.flags()) {
+                let d = ray.d / ray.d.length();
+                store(Store::Caustic(
+                    Photon::new(si.p, power, d, Photon::CAUSTIC).with_bounce(vertices - 1),
+                ));
+            }
+            if vertices >= max_vertices {
+                return rays;
+            }
+            let mut sampler = crate::sampling::Sampler::new(
+                crate::sampling::Pattern::Independent,
+                seed,
+                hash(&[0x766f_6c75_6d65 ^ self.volume as u64, i, vertices as u64]),
+                0,
+                1,
+            );
+            let Some(sc) = super::trace::scatter(&si, &bsdf, &mut sampler) else {
+                return rays;
+            };
+            power *= sc.power_scale;
+            all_delta &= sc.specular;
+            any_delta |= sc.specular;
+            if !self.volume && !sc.specular {
+                return rays;
+            }
+            medium = si.medium_leaving(sc.ray.d, medium);
+            ray = sc.ray;
+        }
+        rays
+    }
 }
 
 /// Stored volume photons binned for beam estimates.

@@ -600,6 +600,35 @@ fn fog_and_glass_photon_mapper_against_the_path_tracer() {
     for (i, r) in blocks.iter().enumerate() {
         assert!((r - 1.0).abs() < 0.1, "block {i}: {r} ({blocks:?})");
     }
+    // The aimed caustic photons, the volume photons and the estimates do not depend on the
+    // thread count.
+    let caustic = |out: &photon::integrator::RenderOutput| {
+        out.notes
+            .iter()
+            .find(|n| n.starts_with("volume photons: "))
+            .cloned()
+            .unwrap_or_default()
+    };
+    assert!(
+        caustic(&got).contains("caustic photons through the media"),
+        "{:?}",
+        got.notes
+    );
+    let small = |threads| {
+        common::render_with(
+            &pm,
+            IntegratorKind::Photonmap,
+            BackendKind::Embree,
+            (32, 32, 4),
+            threads,
+            1,
+        )
+    };
+    assert_eq!(
+        small(1).image.pixels,
+        small(2).image.pixels,
+        "1 and 2 threads differ"
+    );
 }
 
 /// The direct integrator in fog: single scattering and the walls' direct light, each lit
