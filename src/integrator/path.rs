@@ -200,12 +200,7 @@ fn shade(
         }
     }
     path.sampler.set_dimension(base + 3);
-    if let Some(mut cont) = continue_path(path, &bsdf, &si) {
-        cont.data = match (receiver, cont.prev_pdf > 0.0 || cont.data == Chain::Open) {
-            (true, _) => Chain::FromReceiver,
-            (false, true) => Chain::Open,
-            (false, false) => Chain::Covered,
-        };
+    if let Some(cont) = continue_path(path, &bsdf, &si, receiver) {
         wave.next.push(cont);
     }
 }
@@ -265,8 +260,14 @@ fn light_sample(
 }
 
 /// Samples the BSDF for the next bounce and applies Russian roulette; `None` when the path
-/// ends. Reads 4 dimensions of the path's sampler (lobe, direction, roulette).
-fn continue_path(mut path: Path, bsdf: &Bsdf, v: &SurfaceInteraction) -> Option<Path> {
+/// ends. Reads 4 dimensions of the path's sampler (lobe, direction, roulette). `receiver`:
+/// the vertex read caustic photons (sets the path's [`Chain`]).
+fn continue_path(
+    mut path: Path,
+    bsdf: &Bsdf,
+    v: &SurfaceInteraction,
+    receiver: bool,
+) -> Option<Path> {
     let uc = path.sampler.next_1d();
     let u = path.sampler.next_2d();
     let u_rr = path.sampler.next_1d();
@@ -289,6 +290,13 @@ fn continue_path(mut path: Path, bsdf: &Bsdf, v: &SurfaceInteraction) -> Option<
     path.prev_p = v.p;
     path.prev_delta &= bs.specular;
     path.eta_scale = eta_scale;
+    // Delta bounces after a receiver lead to light its caustic photons hold (the photons'
+    // own test: `Scattered::specular`).
+    path.data = match (receiver, bs.specular, path.data) {
+        (true, _, _) => Chain::FromReceiver,
+        (false, true, Chain::FromReceiver | Chain::Covered) => Chain::Covered,
+        _ => Chain::Open,
+    };
     Some(path)
 }
 
