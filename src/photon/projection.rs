@@ -66,6 +66,15 @@ impl ProjectionMap {
         self.marked.len() as f32 / (self.res * self.res) as f32
     }
 
+    /// The emission samples `(u_pos, u_dir)` with the one of them this map's domain restricts
+    /// moved into the marked cells ([`Self::sample`]); `None` when nothing is marked.
+    pub fn restrict(&self, u_pos: Vec2, u_dir: Vec2) -> Option<(Vec2, Vec2)> {
+        Some(match self.domain {
+            EmissionDomain::Direction => (u_pos, self.sample(u_dir)?),
+            EmissionDomain::Position => (self.sample(u_pos)?, u_dir),
+        })
+    }
+
     /// Maps a uniform `u` in [0,1)^2 to a uniform point of the marked cells (keeps `u`'s
     /// stratification: `u.x` picks the cell and is re-stretched inside it).
     pub fn sample(&self, u: Vec2) -> Option<Vec2> {

@@ -482,30 +482,20 @@ fn trace_one(
     out: &mut Vec<Landing>,
 ) -> (bool, u64) {
     // Emission: the projection map restricts one of the two 2D samples.
-    let (mut u_pos, mut u_dir) = (sampler.next_2d(), sampler.next_2d());
-    let restricted = match map.domain {
-        crate::light::EmissionDomain::Direction => &mut u_dir,
-        crate::light::EmissionDomain::Position => &mut u_pos,
-    };
-    let Some(u) = map.sample(*restricted) else {
-        return (false, 0);
-    };
-    *restricted = u;
+    let (u_pos, u_dir) = (sampler.next_2d(), sampler.next_2d());
     let e = match kind {
-        MapKind::Global => lights.emit_aimed(&scene.meshes, light, u_pos, u_dir, aim),
-        MapKind::Caustic => lights.emit_caustic(&scene.meshes, light, u_pos, u_dir, targets),
+        MapKind::Global => {
+            let Some((u_pos, u_dir)) = map.restrict(u_pos, u_dir) else {
+                return (false, 0);
+            };
+            lights.emit_aimed(&scene.meshes, light, u_pos, u_dir, aim)
+        }
+        MapKind::Caustic => emit_caustic(scene, lights, light, map, targets, u_pos, u_dir),
     };
     let Some(e) = e else {
         return (false, 0);
     };
     let mut power = e.flux * (map.fraction() / count as f32);
-    if kind == MapKind::Caustic
-        && !targets
-            .iter()
-            .any(|&(c, r)| ray_meets_sphere(e.p, e.dir, c, r))
-    {
-        return (false, 0); // rejected: cannot reach a specular object
-    }
     let o = if e.n == Vec3::ZERO {
         e.p
     } else {
@@ -626,8 +616,29 @@ pub fn scatter(si: &SurfaceInteraction, bsdf: &Bsdf, sampler: &mut Sampler) -> O
     })
 }
 
+/// A caustic photon of light `light`: the emission samples restricted by its projection map
+/// `map`, emitted towards `targets` (the specular objects), and `None` when the map marks
+/// nothing or the photon cannot reach a target (rejected). Its power is `flux *
+/// map.fraction() / photons emitted`.
+pub(crate) fn emit_caustic(
+    scene: &Scene,
+    lights: &Lights,
+    light: usize,
+    map: &ProjectionMap,
+    targets: &[(Vec3, f32)],
+    u_pos: crate::math::Vec2,
+    u_dir: crate::math::Vec2,
+) -> Option<crate::light::Emission> {
+    let (u_pos, u_dir) = map.restrict(u_pos, u_dir)?;
+    let e = lights.emit_caustic(&scene.meshes, light, u_pos, u_dir, targets)?;
+    targets
+        .iter()
+        .any(|&(c, r)| ray_meets_sphere(e.p, e.dir, c, r))
+        .then_some(e)
+}
+
 /// Whether the ray from `o` along unit `d` meets the sphere `(c, r)`.
-pub(crate) fn ray_meets_sphere(o: Vec3, d: Vec3, c: Vec3, r: f32) -> bool {
+fn ray_meets_sphere(o: Vec3, d: Vec3, c: Vec3, r: f32) -> bool {
     let v = c - o;
     if v.length_squared() <= r * r {
         return true;

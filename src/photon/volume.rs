@@ -234,25 +234,13 @@ pub fn trace_caustic(
                 for j in c * CHUNK..((c + 1) * CHUNK).min(count) {
                     let i = first + j;
                     let mut numbers = Numbers::new(hash(&[seed, 0x0063_6175_7374_6963, i]));
-                    let (mut u_pos, mut u_dir) = (numbers.next2(), numbers.next2());
-                    let restricted = match map.domain {
-                        crate::light::EmissionDomain::Direction => &mut u_dir,
-                        crate::light::EmissionDomain::Position => &mut u_pos,
-                    };
-                    let Some(u) = map.sample(*restricted) else {
+                    let (u_pos, u_dir) = (numbers.next2(), numbers.next2());
+                    let emitted = super::trace::emit_caustic(
+                        scene, lights, light, map, targets, u_pos, u_dir,
+                    );
+                    let Some(e) = emitted else {
                         continue;
                     };
-                    *restricted = u;
-                    let Some(e) = lights.emit_caustic(&scene.meshes, light, u_pos, u_dir, targets)
-                    else {
-                        continue;
-                    };
-                    if !targets
-                        .iter()
-                        .any(|&(c, r)| super::trace::ray_meets_sphere(e.p, e.dir, c, r))
-                    {
-                        continue; // cannot reach a specular object
-                    }
                     let power = e.flux * (map.fraction() / count as f32);
                     let walk = Walk {
                         scene,
@@ -260,7 +248,6 @@ pub fn trace_caustic(
                         max_bounces,
                         seed,
                         index: i,
-                        volume: false,
                         caustic: true,
                     };
                     rays += walk.follow(light, &e, power, &mut numbers, &mut |st| {
@@ -281,7 +268,7 @@ pub fn trace_caustic(
     (out, rays)
 }
 
-/// Traces photon `i`: calls `store` at each medium interaction and at each caustic landing;
+/// Traces photon `i` of the volume pass: calls `store` at each medium interaction;
 /// returns the rays it cast.
 #[allow(clippy::too_many_arguments)]
 fn trace_one(
@@ -316,7 +303,6 @@ fn trace_one(
         max_bounces,
         seed,
         index: i,
-        volume: true,
         caustic: false,
     };
     walk.follow(light, &e, power, &mut numbers, store)
@@ -354,15 +340,14 @@ struct Walk<'a> {
     seed: u64,
     /// The photon's index (keys its samplers).
     index: u64,
-    /// Whether it stores volume photons (else it follows caustic chains only).
-    volume: bool,
-    /// Whether it stores caustic photons.
+    /// Whether it follows a caustic chain only and stores caustic photons (else it stores
+    /// volume photons).
     caustic: bool,
 }
 
 impl Walk<'_> {
     /// Follows the photon `e` of light `light` carrying `power`: stores it at each medium
-    /// interaction (when `self.volume`) and at each caustic landing; returns the rays cast.
+    /// interaction or (a caustic walk) at its caustic landing; returns the rays cast.
     fn follow(
         &self,
         light: usize,
@@ -406,7 +391,7 @@ impl Walk<'_> {
                     let (u1, u2) = (numbers.next(), numbers.next());
                     match med.sample_interaction(ray.o, d, dist, u1, u2, power) {
                         MediumEvent::Scatter { t, weight } => {
-                            if !self.volume {
+                            if self.caustic {
                                 return rays; // no longer a caustic photon
                             }
                             let p = ray.o + d * t;
@@ -468,7 +453,7 @@ impl Walk<'_> {
             let mut sampler = crate::sampling::Sampler::new(
                 crate::sampling::Pattern::Independent,
                 seed,
-                hash(&[0x766f_6c75_6d65 ^ self.volume as u64, i, vertices as u64]),
+                hash(&[0x766f_6c75_6d65 ^ !self.caustic as u64, i, vertices as u64]),
                 0,
                 1,
             );
@@ -478,7 +463,7 @@ impl Walk<'_> {
             power *= sc.power_scale;
             all_delta &= sc.specular;
             any_delta |= sc.specular;
-            if !self.volume && !sc.specular {
+            if self.caustic && !sc.specular {
                 return rays;
             }
             medium = si.medium_leaving(sc.ray.d, medium);
