@@ -226,9 +226,14 @@ fn shade(
     let mut receiver = false;
     if !v.flags.has_diffuse() {
         let buf = &mut wave.extra.buf;
-        if let Some(l) =
-            photonmap::at_glossy(pass, &ctx.counters.lookup_ns, si, &v.bsdf, path.lambda, buf)
-        {
+        if let Some(l) = photonmap::at_glossy(
+            pass,
+            &ctx.counters.lookup_ns,
+            (si, path.depth),
+            &v.bsdf,
+            path.lambda,
+            buf,
+        ) {
             receiver = true;
             let c = if path.depth == 0 {
                 Component::Caustic

@@ -141,7 +141,8 @@ impl PhotonSettings {
     /// visible point), so photons are traced for `maxdepth - 1` hits (at least 1). Without
     /// this the maps carried light that pbrt-v4, Mitsuba and our path tracer leave out: in a
     /// closed room of albedo 0.7 at maxdepth 8, 3-5% of the image (measured on
-    /// scenes/lamp-enclosed.pbrt against our path tracer at maxdepth 8 and 100).
+    /// scenes/lamp-enclosed.pbrt against our path tracer at maxdepth 8 and 100). Reads later
+    /// in a camera path (behind specular bounces, at gather hits) take fewer: [`read_limit`].
     pub fn follow_depth(&mut self, max_depth: u32) {
         if !self.bounces_given {
             self.trace.max_bounces = max_depth.saturating_sub(1).max(1);
@@ -670,6 +671,13 @@ pub fn at_diffuse(
         caustic: Vec3::ZERO,
         indirect: Vec3::ZERO,
     };
+    let Some(last) = read_limit(&pass.settings.trace, depth + 1) else {
+        return out;
+    };
+    let limited = |params: &EstimateParams| EstimateParams {
+        max_bounce: params.max_bounce.min(last),
+        ..*params
+    };
     // A coated surface's body is no Lambertian: its photon estimates weigh photons by its own
     // (stochastic) BSDF, evaluated at a few photons drawn by power (`radiance_sampled`).
     let coated = bsdf.has_coat();
@@ -697,11 +705,11 @@ pub fn at_diffuse(
         beta * l
     };
     if let Some(caustic) = &pass.maps.caustic {
-        out.caustic = estimate(caustic, &pass.caustic_params, buf);
+        out.caustic = estimate(caustic, &limited(&pass.caustic_params), buf);
     }
     if let Some(glossy) = &pass.glossy_map {
         // Glossy caustics: spread wide, so estimated with the global map's radius.
-        out.caustic += estimate(glossy, &pass.glossy_params, buf);
+        out.caustic += estimate(glossy, &limited(&pass.glossy_params), buf);
     }
     let Some(global) = &pass.maps.global else {
         return out;
@@ -711,7 +719,7 @@ pub fn at_diffuse(
         // rays and the caustic map have the rest).
         let params = EstimateParams {
             exclude_flags: Photon::DIRECT | Photon::CAUSTIC,
-            ..pass.global_params
+            ..limited(&pass.global_params)
         };
         out.indirect = estimate(global, &params, buf);
         return out;
@@ -819,7 +827,7 @@ pub fn caustic_alpha(pass: &PhotonPass) -> Option<f32> {
 pub fn at_glossy(
     pass: &PhotonPass,
     counters: &AtomicU64,
-    si: &SurfaceInteraction,
+    (si, depth): (&SurfaceInteraction, u32),
     bsdf: &Bsdf,
     lambda: Lambda,
     buf: &mut KnnResult,
@@ -827,12 +835,19 @@ pub fn at_glossy(
     if !trace::is_receiver(bsdf, caustic_alpha(pass)?) {
         return None;
     }
+    let Some(last) = read_limit(&pass.settings.trace, depth + 1) else {
+        return Some(Vec3::ZERO);
+    };
+    let params = EstimateParams {
+        max_bounce: pass.receiver_params.max_bounce.min(last),
+        ..pass.receiver_params
+    };
     let Some(map) = &pass.maps.caustic_glossy else {
         return Some(Vec3::ZERO); // photons were shot and none arrived on a glossy surface
     };
     let t = Instant::now();
     let wo = si.wo;
-    let (l, _, _) = radiance_with(map, si.p, si.ng, &pass.receiver_params, buf, |ph| {
+    let (l, _, _) = radiance_with(map, si.p, si.ng, &params, buf, |ph| {
         let wi = si.frame.to_local(-ph.dir());
         bsdf.f(wo, wi, TransportMode::Radiance) * lambda.illuminant(ph.power())
     });
@@ -857,8 +872,10 @@ fn reflected(
     let mut hit = hit;
     let mut ray = g.ray;
     let mut throughput = Vec3::ONE;
-    // Light taken at thin points passed on (see below), and how many.
-    let (mut out, mut continued) = (Vec3::ZERO, 0);
+    // Light taken at thin points passed on (see below), and how many; the specular and coat
+    // bounces followed. With the camera path's depth they make the read point later
+    // ([`bounce_limit`]).
+    let (mut out, mut continued, mut followed) = (Vec3::ZERO, 0, 0);
     // The density of the direction just drawn at a thin point: an emitter it reaches
     // counts, weighed against that point's shadow ray by the power heuristic.
     let mut from_thin: Option<f32> = None;
@@ -868,6 +885,7 @@ fn reflected(
             out += throughput * emitted(ctx, &ray, hit.as_ref(), g.lambda, mis);
         }
         let Some(h) = hit else { return out };
+        let extra = g.depth + continued + followed;
         let mut si = SurfaceInteraction::new(scene, &h, &ray);
         let bsdf = si.bsdf(scene, ctx.settings.footprint(), g.lambda);
         let wo = si.wo;
@@ -882,7 +900,7 @@ fn reflected(
                 let wi = if wo.z < 0.0 { -wi } else { wi };
                 let f_b = bsdf.f_body(wo, wi, TransportMode::Radiance);
                 let n = si.facing_normal();
-                let e = cached_irradiance(pass, global, si.p, n, continued, buf);
+                let e = cached_irradiance(pass, global, si.p, n, extra, buf);
                 let direct = direct_at_gather(ctx, &si, &mut g.sampler, g.lambda, |wi| {
                     bsdf.f_body(wo, wi, TransportMode::Radiance)
                 });
@@ -901,6 +919,7 @@ fn reflected(
             ray = si.spawn_ray(si.frame.to_world(bs.wi));
             let (h, tr) = gather_segment(ctx, &ray);
             (hit, throughput) = (h, throughput * tr);
+            followed += 1;
             continue;
         }
         if bsdf.flags().has_diffuse() {
@@ -910,12 +929,12 @@ fn reflected(
                 TransportMode::Radiance,
             );
             let n = si.facing_normal();
-            let cached = cached_irradiance(pass, global, si.p, n, continued, buf);
+            let cached = cached_irradiance(pass, global, si.p, n, extra, buf);
             // A diffuse transmitter (a curtain) passes on what lands on its far side.
             let f_t = far_side_value(&bsdf, wo);
             if cached.fill < pass.settings.thin_fill
                 && continued < THIN_CONTINUATIONS
-                && bounce_limit(&pass.settings.trace, continued + 1).is_some()
+                && bounce_limit(&pass.settings.trace, extra + 1).is_some()
                 && f_t == Vec3::ZERO
             {
                 // Thin geometry: the estimate's photons fill a strip of its disc (a tube, an
@@ -929,8 +948,15 @@ fn reflected(
                 // onto a chair's tube), which its estimate held and no shadow ray finds: the
                 // caustic map's. (Tracing on to the lights through the glass made fireflies:
                 // cornell-spheres at 16 spp, relMSE 0.0081 -> 0.0091.)
-                if let Some(caustic) = &pass.maps.caustic {
-                    let e = irradiance_with(caustic, si.p, n, &pass.caustic_params, buf).0;
+                if let (Some(caustic), Some(last)) = (
+                    &pass.maps.caustic,
+                    bounce_limit(&pass.settings.trace, extra),
+                ) {
+                    let params = EstimateParams {
+                        max_bounce: pass.caustic_params.max_bounce.min(last),
+                        ..pass.caustic_params
+                    };
+                    let e = irradiance_with(caustic, si.p, n, &params, buf).0;
                     out += throughput * f_d * g.lambda.illuminant(e);
                 }
                 let local = crate::sampling::warp::square_to_cosine_hemisphere(g.sampler.next_2d());
@@ -948,7 +974,7 @@ fn reflected(
             }
             let mut e = f_d * g.lambda.illuminant(cached.irradiance);
             if f_t != Vec3::ZERO {
-                let far = cached_irradiance(pass, global, si.p, -n, continued, buf).irradiance;
+                let far = cached_irradiance(pass, global, si.p, -n, extra, buf).irradiance;
                 e += f_t * g.lambda.illuminant(far);
             }
             let direct = direct_at_gather(ctx, &si, &mut g.sampler, g.lambda, |wi| {
@@ -969,6 +995,7 @@ fn reflected(
         ray = si.spawn_ray(si.frame.to_world(bs.wi));
         let (h, tr) = gather_segment(ctx, &ray);
         (hit, throughput) = (h, throughput * tr);
+        followed += 1;
     }
     out
 }
@@ -1049,10 +1076,17 @@ fn traced(
                 }
             };
             out += throughput * direct_mis(ctx, &si, &mut g.sampler, g.lambda, f) / choice;
-            if let Some(map) = caustic {
+            // The caustic photons this point may read: all of them up to the second vertex
+            // (the cache's), then fewer ([`read_limit`]).
+            let last = read_limit(&pass.settings.trace, depth + 1);
+            if let (Some(map), Some(last)) = (caustic, last) {
                 let n = si.facing_normal();
-                let cached = (pass.caustic_cache.as_ref())
-                    .and_then(|c| c.lookup(si.p, n, pass.caustic_params.max_r2, 0, buf));
+                let params = EstimateParams {
+                    max_bounce: pass.caustic_params.max_bounce.min(last),
+                    ..pass.caustic_params
+                };
+                let cache = (pass.caustic_cache.as_ref()).filter(|_| depth < 2 || last == u8::MAX);
+                let cached = cache.and_then(|c| c.lookup(si.p, n, params.max_r2, 0, buf));
                 let l = if let Some(c) = cached {
                     // The body at a cosine-drawn direction for light from all around, as the
                     // dense maps' gather hits read it.
@@ -1060,7 +1094,7 @@ fn traced(
                         crate::sampling::warp::square_to_cosine_hemisphere(g.sampler.next_2d());
                     let wi = if wo.z < 0.0 { -local } else { local };
                     f(wi) * g.lambda.illuminant(c.irradiance)
-                } else if pass.caustic_cache.is_some() {
+                } else if cache.is_some() {
                     // No cache point's estimate covers this point: at most a few caustic
                     // photons lie near it. Zero, not a full search (which there walks every
                     // photon of the other side of a thin panel: car 2.6 s -> 1.7 s at 16 spp;
@@ -1070,19 +1104,10 @@ fn traced(
                     let u = g.sampler.next_1d();
                     let fw =
                         |w: Vec3, power: Vec3| f(si.frame.to_local(w)) * g.lambda.illuminant(power);
-                    radiance_sampled(
-                        map,
-                        si.p,
-                        n,
-                        &pass.caustic_params,
-                        buf,
-                        (BODY_SAMPLES, u),
-                        fw,
-                    )
-                    .0
+                    radiance_sampled(map, si.p, n, &params, buf, (BODY_SAMPLES, u), fw).0
                 } else {
                     let f_d = f(Vec3::new(0.0, 0.0, wo.z.signum()));
-                    let e = irradiance_with(map, si.p, n, &pass.caustic_params, buf).0;
+                    let e = irradiance_with(map, si.p, n, &params, buf).0;
                     f_d * g.lambda.illuminant(e)
                 };
                 out += throughput * l / choice;
@@ -1260,16 +1285,17 @@ fn coat_choice(bsdf: &Bsdf, wo: Vec3) -> f32 {
     crate::bsdf::fresnel::fr_dielectric(wo.z.abs(), eta).clamp(0.1, 0.9)
 }
 
-/// The last bounce ([`Photon::bounce`]) of the photons a gather path that passed on
-/// `continued` thin points may read without growing longer than the photons were traced for
-/// (a photon stored at bounce `b` and read there makes `b + 2 + continued` scattering
-/// vertices; see [`PhotonSettings::follow_depth`]): `Some(u8::MAX)` when no photon is too
-/// late, `None` when every one is.
-fn bounce_limit(trace: &TraceSettings, continued: u32) -> Option<u8> {
-    if continued == 0 {
-        return Some(u8::MAX);
-    }
-    let last = trace.max_bounces.checked_sub(1 + continued)?;
+/// The last bounce ([`Photon::bounce`]) of the photons a read at the `vertex`-th scattering
+/// vertex of a camera path (1: the camera's first hit) may use: a photon stored at bounce `b`
+/// (0 straight from the light) read there makes a light path of `vertex + b` scattering
+/// vertices, at most the render's `maxdepth` (`max_bounces + 1`, see
+/// [`PhotonSettings::follow_depth`]). `Some(u8::MAX)` when no photon is too late, `None`
+/// when every one is. Without it a camera path that reached its diffuse point through
+/// specular bounces read light one bounce too long per bounce: water-caustic (seen through
+/// its water, light trapped below it by total internal reflection) 2-6% too bright against
+/// pbrt-v4 and our vcm at maxdepth 9.
+fn read_limit(trace: &TraceSettings, vertex: u32) -> Option<u8> {
+    let last = (trace.max_bounces + 1).checked_sub(vertex)?;
     Some(if last >= Photon::MAX_BOUNCE as u32 {
         u8::MAX
     } else {
@@ -1277,29 +1303,34 @@ fn bounce_limit(trace: &TraceSettings, continued: u32) -> Option<u8> {
     })
 }
 
-/// Irradiance at `p` (normal `n`) read by a gather path that passed on `continued` thin
-/// points, from the photons it may read ([`bounce_limit`]): the cached value that covers `p`
-/// (see [`IrradianceCache::lookup`]), else a full global-map estimate.
+/// [`read_limit`] at a gather hit `extra` scattering vertices later than the shortest one
+/// (the gather from the camera's first hit): the camera path's depth, the specular bounces
+/// and thin points the gather passed.
+fn bounce_limit(trace: &TraceSettings, extra: u32) -> Option<u8> {
+    read_limit(trace, extra + 2)
+}
+
+/// Irradiance at `p` (normal `n`) read by a gather path whose read point lies `extra`
+/// scattering vertices later than the shortest gather's, from the photons it may read
+/// ([`bounce_limit`]): the cached value that covers `p` (see [`IrradianceCache::lookup`]),
+/// else a full global-map estimate.
 fn cached_irradiance(
     pass: &PhotonPass,
     global: &PhotonMap,
     p: Vec3,
     n: Vec3,
-    continued: u32,
+    extra: u32,
     buf: &mut KnnResult,
 ) -> Cached {
-    let Some(max_bounce) = bounce_limit(&pass.settings.trace, continued) else {
+    let Some(max_bounce) = bounce_limit(&pass.settings.trace, extra) else {
         return Cached {
             irradiance: Vec3::ZERO,
             fill: 1.0,
         };
     };
-    let cached = pass
-        .cache
-        .as_ref()
-        .filter(|_| (continued as usize) < LEVELS);
+    let cached = pass.cache.as_ref().filter(|_| (extra as usize) < LEVELS);
     let max_r2 = pass.global_params.max_r2;
-    if let Some(c) = cached.and_then(|c| c.lookup(p, n, max_r2, continued as usize, buf)) {
+    if let Some(c) = cached.and_then(|c| c.lookup(p, n, max_r2, extra as usize, buf)) {
         return c;
     }
     let params = EstimateParams {

@@ -23,10 +23,14 @@ pub const CACHE_SPACING: usize = 4;
 /// Smallest cosine between a cache point's normal and the query's.
 const MIN_NORMAL_COS: f32 = 0.9;
 
-/// Bounce limits a cache point keeps an irradiance for (see [`IrradianceCache::build`]).
-pub const LEVELS: usize = 3;
+/// Bounce limits a cache point keeps an irradiance for (see [`IrradianceCache::build`]): one
+/// per gather read point's place in its camera path (behind the camera's specular bounces,
+/// the gather's own, thin points passed on), later ones estimated in full. Water-caustic at
+/// 128 px, 64 spp (most gathers start behind the water surface): 3 levels 5.91 s, 6 levels
+/// 4.51 s.
+pub const LEVELS: usize = 6;
 
-/// One cache point: what a lookup reads of it, in one 56-byte record (a lookup's filter
+/// One cache point: what a lookup reads of it, in one 92-byte record (a lookup's filter
 /// touches one record per candidate).
 #[derive(Clone, Copy, Debug)]
 struct CachePoint {

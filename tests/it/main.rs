@@ -31,6 +31,7 @@ mod image_tools;
 mod kdtree;
 mod lamp_can;
 mod layers;
+mod maxdepth;
 mod media;
 mod orthographic;
 mod parser;
