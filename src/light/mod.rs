@@ -221,9 +221,16 @@ impl Lights {
         })
     }
 
-    /// Picks a light in proportion to power (`u_sel`) and a point on it (`u`) as seen from `p`.
+    /// Picks a light in proportion to power (`u_sel`) and a point on it (`u`) as seen from `p`,
+    /// for next-event estimation: a sphere light by the cone it subtends
+    /// ([`AreaLight::sample_visible`]; [`Self::pdf_area`] is its density).
     pub fn sample(&self, meshes: &[Mesh], p: Vec3, u_sel: f32, u: Vec2) -> Option<LightSample> {
         let (i, pmf) = self.select.sample(u_sel)?;
+        if let Emitter::Area(a) = &self.emitters[i] {
+            let mut s = a.sample_visible(meshes, p, u)?;
+            s.pdf *= pmf;
+            return (s.pdf > 0.0 && s.li.max_element() > 0.0).then_some(s);
+        }
         self.sample_light(meshes, i, pmf, p, u)
     }
 
@@ -281,7 +288,8 @@ impl Lights {
         matches!(self.emitters[i], Emitter::Distant(_))
     }
 
-    /// A point `u` on light `i`, chosen with probability `pmf`, as seen from `p`.
+    /// A point `u` on light `i`, chosen with probability `pmf`, as seen from `p`; area lights
+    /// by area (the density the bidirectional integrators' partial sums assume).
     pub fn sample_light(
         &self,
         meshes: &[Mesh],
@@ -316,12 +324,12 @@ impl Lights {
         (s.pdf > 0.0 && s.li.max_element() > 0.0).then_some(s)
     }
 
-    /// Solid-angle density with which `sample` would have produced the point `p_light` (normal
-    /// `n_light`) on area light `i` as seen from `p_ref`; for MIS when a BSDF-sampled ray hits
-    /// an emitter.
+    /// Solid-angle density with which [`Self::sample`] would have produced the point `p_light`
+    /// (normal `n_light`) on area light `i` as seen from `p_ref`; for MIS when a BSDF-sampled
+    /// ray hits an emitter.
     pub fn pdf_area(&self, i: usize, p_ref: Vec3, p_light: Vec3, n_light: Vec3) -> f32 {
         match self.area_light(i) {
-            Some(a) => self.selection_pmf(i) * a.pdf(p_ref, p_light, n_light),
+            Some(a) => self.selection_pmf(i) * a.pdf_visible(p_ref, p_light, n_light),
             None => 0.0,
         }
     }

@@ -1097,6 +1097,84 @@ AttributeEnd
     assert!(worst_ring < 0.02, "ring error {worst_ring}");
 }
 
+/// Next-event samples of a sphere light (radius a, radiance 1, resting on the floor as in
+/// [`sphere_light_touching_the_floor`]) seen from floor points at distance rho from the
+/// contact: the estimate of the irradiance `sum L cos / pdf` against `pi a^3 / (rho^2 +
+/// a^2)^1.5`, its spread per sample against area sampling's (`Lights::sample_light`, which
+/// the bidirectional integrators keep), and the density `Lights::pdf_area` gives a hit on the
+/// point drawn (what MIS weighs a BSDF sample with) against the sample's own.
+#[test]
+fn sphere_light_is_sampled_by_the_cone_it_subtends() {
+    let a = 0.5f32;
+    let sc = scene(
+        "sphere_cone",
+        &format!(
+            r#"LookAt 0 6 0.1  0 0 0  0 0 1
+Camera "perspective"
+WorldBegin
+AttributeBegin
+  AreaLightSource "diffuse" "rgb L" [ 1 1 1 ]
+  Translate 0 {a} 0
+  Shape "sphere" "float radius" [ {a} ]
+AttributeEnd
+"#
+        ),
+    );
+    let lights = sc.emitters();
+    let mut rng = Rng(11);
+    let mut lines = vec![];
+    for rho in [0.2f32, 1.0, 4.0] {
+        let p = Vec3::new(rho, 0.0, 0.0);
+        let want = (PI * a.powi(3) / (rho * rho + a * a).powf(1.5)) as f64;
+        let n = 1 << 14;
+        let mut stats = |cone: bool| {
+            let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+            for _ in 0..n {
+                let u = Vec2::new(rng.f(), rng.f());
+                let s = if cone {
+                    lights.sample(&sc.meshes, p, 0.5, u)
+                } else {
+                    lights.sample_light(&sc.meshes, 0, 1.0, p, u)
+                };
+                let Some(s) = s else { continue };
+                if cone {
+                    let pdf = lights.pdf_area(0, p, s.p, s.n);
+                    assert!((pdf / s.pdf - 1.0).abs() < 1e-3, "pdf {pdf} vs {}", s.pdf);
+                    assert!(((s.p - Vec3::new(0.0, a, 0.0)).length() / a - 1.0).abs() < 1e-4);
+                }
+                let v = (s.li.x * s.wi.y.max(0.0) / s.pdf) as f64;
+                sum += v;
+                sum2 += v * v;
+            }
+            let mean = sum / n as f64;
+            let std = (sum2 / n as f64 - mean * mean).max(0.0).sqrt();
+            (mean / want, std / mean)
+        };
+        let (cone_ratio, cone_spread) = stats(true);
+        let (area_ratio, area_spread) = stats(false);
+        lines.push(format!(
+            "rho {rho}: cone {cone_ratio:.4} (spread {cone_spread:.3}), area {area_ratio:.4} (spread {area_spread:.3})"
+        ));
+        // The tessellation's area is 0.05% short; the cone is the analytic sphere's.
+        assert!(
+            (cone_ratio - 1.0).abs() < 0.01,
+            "rho {rho}: cone mean {cone_ratio}"
+        );
+        assert!(
+            (area_ratio - 1.0).abs() < 0.03,
+            "rho {rho}: area mean {area_ratio}"
+        );
+        assert!(
+            cone_spread < 0.5 * area_spread,
+            "rho {rho}: cone spread {cone_spread}, area {area_spread}"
+        );
+    }
+    summary(format!(
+        "sphere light next-event samples: {}",
+        lines.join("; ")
+    ));
+}
+
 /// A closed diffuse box lit by a quad light of radiance `l` (photon mapper).
 fn lit_box(name: &str, l: f32) -> Scene {
     scene(
