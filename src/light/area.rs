@@ -104,18 +104,27 @@ impl AreaLight {
             -cos_alpha,
         ));
         let n = n.normalize();
-        let p = c + n * r;
+        let err = (c.abs() + Vec3::splat(r)) * (8.0 * f32::EPSILON);
+        let pdf = 1.0 / (2.0 * PI * one_minus_cos);
+        self.towards(p_ref, (c + n * r, n, err), pdf)
+    }
+
+    /// The sample of point `p` (unit normal `n`, rounding-error bound `err`) drawn with
+    /// solid-angle density `pdf` as seen from `p_ref`.
+    fn towards(
+        &self,
+        p_ref: Vec3,
+        (p, n, err): (Vec3, Vec3, Vec3),
+        pdf: f32,
+    ) -> Option<LightSample> {
         let to = p - p_ref;
         let dist = to.length();
         if dist <= 0.0 || !dist.is_finite() {
             return None;
         }
         let wi = to / dist;
-        let pdf = 1.0 / (2.0 * PI * one_minus_cos);
-        let err = (c.abs() + Vec3::splat(r)) * (8.0 * f32::EPSILON);
-        let li = self.le(n, -wi);
         (pdf > 0.0 && pdf.is_finite()).then_some(LightSample {
-            li,
+            li: self.le(n, -wi),
             wi,
             p,
             n,
@@ -209,23 +218,7 @@ impl AreaLight {
         let p = mesh.point(t as u32, b.x, b.y);
         let err = mesh.point_error(t as u32, b.x, b.y);
         let n = mesh.geometric_normal(t as u32, b.x, b.y);
-        let to = p - p_ref;
-        let d2 = to.length_squared();
-        if d2 <= 0.0 {
-            return None;
-        }
-        let wi = to / d2.sqrt();
-        let pdf = self.pdf(p_ref, p, n);
-        let li = self.le(n, -wi);
-        (pdf > 0.0 && pdf.is_finite()).then_some(LightSample {
-            li,
-            wi,
-            p,
-            n,
-            err,
-            pdf,
-            delta: false,
-        })
+        self.towards(p_ref, (p, n, err), self.pdf(p_ref, p, n))
     }
 
     /// Solid-angle density of `sample` producing `p` (normal `n`) as seen from `p_ref`.
