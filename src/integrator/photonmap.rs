@@ -674,10 +674,6 @@ pub fn at_diffuse(
     let Some(last) = read_limit(&pass.settings.trace, depth + 1) else {
         return out;
     };
-    let limited = |params: &EstimateParams| EstimateParams {
-        max_bounce: params.max_bounce.min(last),
-        ..*params
-    };
     // A coated surface's body is no Lambertian: its photon estimates weigh photons by its own
     // (stochastic) BSDF, evaluated at a few photons drawn by power (`radiance_sampled`).
     let coated = bsdf.has_coat();
@@ -705,11 +701,11 @@ pub fn at_diffuse(
         beta * l
     };
     if let Some(caustic) = &pass.maps.caustic {
-        out.caustic = estimate(caustic, &limited(&pass.caustic_params), buf);
+        out.caustic = estimate(caustic, &pass.caustic_params.up_to(last), buf);
     }
     if let Some(glossy) = &pass.glossy_map {
         // Glossy caustics: spread wide, so estimated with the global map's radius.
-        out.caustic += estimate(glossy, &limited(&pass.glossy_params), buf);
+        out.caustic += estimate(glossy, &pass.glossy_params.up_to(last), buf);
     }
     let Some(global) = &pass.maps.global else {
         return out;
@@ -719,7 +715,7 @@ pub fn at_diffuse(
         // rays and the caustic map have the rest).
         let params = EstimateParams {
             exclude_flags: Photon::DIRECT | Photon::CAUSTIC,
-            ..limited(&pass.global_params)
+            ..pass.global_params.up_to(last)
         };
         out.indirect = estimate(global, &params, buf);
         return out;
@@ -838,10 +834,7 @@ pub fn at_glossy(
     let Some(last) = read_limit(&pass.settings.trace, depth + 1) else {
         return Some(Vec3::ZERO);
     };
-    let params = EstimateParams {
-        max_bounce: pass.receiver_params.max_bounce.min(last),
-        ..pass.receiver_params
-    };
+    let params = pass.receiver_params.up_to(last);
     let Some(map) = &pass.maps.caustic_glossy else {
         return Some(Vec3::ZERO); // photons were shot and none arrived on a glossy surface
     };
@@ -952,10 +945,7 @@ fn reflected(
                     &pass.maps.caustic,
                     bounce_limit(&pass.settings.trace, extra),
                 ) {
-                    let params = EstimateParams {
-                        max_bounce: pass.caustic_params.max_bounce.min(last),
-                        ..pass.caustic_params
-                    };
+                    let params = pass.caustic_params.up_to(last);
                     let e = irradiance_with(caustic, si.p, n, &params, buf).0;
                     out += throughput * f_d * g.lambda.illuminant(e);
                 }
@@ -1081,10 +1071,7 @@ fn traced(
             let last = read_limit(&pass.settings.trace, depth + 1);
             if let (Some(map), Some(last)) = (caustic, last) {
                 let n = si.facing_normal();
-                let params = EstimateParams {
-                    max_bounce: pass.caustic_params.max_bounce.min(last),
-                    ..pass.caustic_params
-                };
+                let params = pass.caustic_params.up_to(last);
                 let cache = (pass.caustic_cache.as_ref()).filter(|_| depth < 2 || last == u8::MAX);
                 let cached = cache.and_then(|c| c.lookup(si.p, n, params.max_r2, 0, buf));
                 let l = if let Some(c) = cached {

@@ -62,9 +62,9 @@ impl AreaLight {
         }
     }
 
-    /// The cone a sphere light subtends from `p_ref` outside it: (centre, distance to it,
-    /// sin^2 theta_max, 1 - cos theta_max); `None` for other lights or from inside.
-    fn cone(&self, p_ref: Vec3) -> Option<(Vec3, f32, f32, f32)> {
+    /// The cone a sphere light subtends from `p_ref` outside it: (centre, radius, distance to
+    /// the centre, sin^2 theta_max, 1 - cos theta_max); `None` for other lights or from inside.
+    fn cone(&self, p_ref: Vec3) -> Option<(Vec3, f32, f32, f32, f32)> {
         let (c, r) = self.sphere?;
         let d2 = (c - p_ref).length_squared();
         if d2 <= r * r * 1.0001 {
@@ -76,16 +76,15 @@ impl AreaLight {
         } else {
             1.0 - (1.0 - sin2_max).max(0.0).sqrt()
         };
-        Some((c, d2.sqrt(), sin2_max, one_minus_cos))
+        Some((c, r, d2.sqrt(), sin2_max, one_minus_cos))
     }
 
     /// Next-event sample seen from `p_ref`: uniform in the cone of a sphere light (see the
     /// module docs), else [`Self::sample`].
     pub fn sample_visible(&self, meshes: &[Mesh], p_ref: Vec3, u: Vec2) -> Option<LightSample> {
-        let Some((c, d, sin2_max, one_minus_cos)) = self.cone(p_ref) else {
+        let Some((c, r, d, sin2_max, one_minus_cos)) = self.cone(p_ref) else {
             return self.sample(meshes, p_ref, u);
         };
-        let r = self.sphere?.1;
         let (sin2, cos) = if sin2_max < SMALL_SIN2 {
             let sin2 = sin2_max * u.x;
             (sin2, (1.0 - sin2).sqrt())
@@ -138,7 +137,7 @@ impl AreaLight {
     /// `n`) as seen from `p_ref`.
     pub fn pdf_visible(&self, p_ref: Vec3, p: Vec3, n: Vec3) -> f32 {
         match self.cone(p_ref) {
-            Some((_, _, _, one_minus_cos)) => 1.0 / (2.0 * PI * one_minus_cos),
+            Some((_, _, _, _, one_minus_cos)) => 1.0 / (2.0 * PI * one_minus_cos),
             None => self.pdf(p_ref, p, n),
         }
     }

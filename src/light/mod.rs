@@ -226,12 +226,7 @@ impl Lights {
     /// ([`AreaLight::sample_visible`]; [`Self::pdf_area`] is its density).
     pub fn sample(&self, meshes: &[Mesh], p: Vec3, u_sel: f32, u: Vec2) -> Option<LightSample> {
         let (i, pmf) = self.select.sample(u_sel)?;
-        if let Emitter::Area(a) = &self.emitters[i] {
-            let mut s = a.sample_visible(meshes, p, u)?;
-            s.pdf *= pmf;
-            return (s.pdf > 0.0 && s.li.max_element() > 0.0).then_some(s);
-        }
-        self.sample_light(meshes, i, pmf, p, u)
+        self.sample_by(meshes, (i, pmf), p, u, true)
     }
 
     /// Picks a light in proportion to power: its index and probability.
@@ -298,7 +293,21 @@ impl Lights {
         p: Vec3,
         u: Vec2,
     ) -> Option<LightSample> {
+        self.sample_by(meshes, (i, pmf), p, u, false)
+    }
+
+    /// [`Self::sample_light`], a sphere light by its cone when `visible`
+    /// ([`AreaLight::sample_visible`]).
+    fn sample_by(
+        &self,
+        meshes: &[Mesh],
+        (i, pmf): (usize, f32),
+        p: Vec3,
+        u: Vec2,
+        visible: bool,
+    ) -> Option<LightSample> {
         let mut s = match &self.emitters[i] {
+            Emitter::Area(a) if visible => a.sample_visible(meshes, p, u)?,
             Emitter::Area(a) => a.sample(meshes, p, u)?,
             Emitter::Point(l) => l.sample(p)?,
             Emitter::Spot(l) => l.sample(p)?,

@@ -107,6 +107,14 @@ impl EstimateParams {
 }
 
 impl EstimateParams {
+    /// These parameters reading only the photons stored at bounce `last` or earlier.
+    pub fn up_to(&self, last: u8) -> EstimateParams {
+        EstimateParams {
+            max_bounce: self.max_bounce.min(last),
+            ..*self
+        }
+    }
+
     /// The stretch `1 / f^2 - 1` of the flattened search for `f` = [`Self::disc_fraction`]:
     /// 0 for `f >= 1` (a sphere), infinite for `f <= 0` or NaN (only photons on the plane).
     pub fn stretch(&self) -> f32 {
