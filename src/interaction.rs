@@ -206,6 +206,12 @@ impl<'s> SurfaceInteraction<'s> {
         self.mesh.area_light.map(|l| l as usize)
     }
 
+    /// This point and its shading normal (after any bump or normal map), as a receiver of
+    /// light for light selection ([`crate::light::Lights::pick_at`]).
+    pub fn receiver(&self) -> crate::light::Receiver {
+        crate::light::Receiver::new(self.p, self.frame.n)
+    }
+
     /// The shading normal turned to the side `wo` is on.
     pub fn facing_normal(&self) -> Vec3 {
         if self.wo.z >= 0.0 {

@@ -3,8 +3,8 @@
 //! then all their shadow rays, then all continuation rays of the next bounce.
 //!
 //! At each hit: emitted light (MIS-weighted after a glossy bounce); direct light by shadow rays
-//! to a light chosen in proportion to power (power-heuristic MIS with BSDF sampling on glossy
-//! surfaces); then, on specular and glossy surfaces and coats only, a BSDF-sampled
+//! to a light chosen by its importance at the point (power-heuristic MIS with BSDF sampling
+//! on glossy surfaces); then, on specular and glossy surfaces and coats only, a BSDF-sampled
 //! continuation. Rays that leave the scene see the infinite lights, weighted like emission
 //! ([`wavefront::escaped`]). Diffuse surfaces end the path.
 //!
@@ -29,6 +29,7 @@ use crate::accel::Hit;
 use crate::bsdf::{Bsdf, BsdfSample, BxdfFlags, TransportMode};
 use crate::film::Radiance;
 use crate::interaction::SurfaceInteraction;
+use crate::light::Receiver;
 use crate::math::Vec3;
 use crate::sampling::power_heuristic;
 
@@ -116,7 +117,7 @@ impl Shade for Direct {
 }
 
 /// Direct light at scattering point `p` of the path's medium: `light_samples` shadow rays
-/// to lights chosen by power, each weighted by the Henyey-Greenstein phase function and
+/// to lights chosen by importance, each weighted by the Henyey-Greenstein phase function and
 /// carried through the media on the way, power-heuristic-weighted against a phase-sampled
 /// ray that only looks for emission (pushed to `wave.next`). Reads the vertex's dimensions
 /// as a surface vertex does. A path that only looks for emission ends here.
@@ -140,7 +141,10 @@ fn medium_vertex(
     for _ in 0..ls {
         let u_sel = path.sampler.next_1d();
         let u = path.sampler.next_2d();
-        let Some(s) = ctx.lights.sample(&ctx.scene.meshes, p, u_sel, u) else {
+        let Some(s) = ctx
+            .lights
+            .sample(&ctx.scene.meshes, Receiver::in_medium(p), u_sel, u)
+        else {
             continue;
         };
         let f = crate::medium::henyey_greenstein(wo.dot(s.wi), g);
@@ -165,7 +169,7 @@ fn medium_vertex(
     path.ray = crate::math::Ray::new(p, wi);
     path.depth += 1;
     path.prev_pdf = pdf;
-    path.prev_p = p;
+    path.prev = Receiver::in_medium(p);
     path.prev_delta = false;
     path.data = true;
     wave.next.push(path);
@@ -187,7 +191,7 @@ pub(super) fn emission<T>(
         .illuminant(ctx.lights.le(li, si.ng, si.wo_world));
     if le.max_element() > 0.0 {
         let w = if path.prev_pdf > 0.0 {
-            let light_pdf = ctx.lights.pdf_area(li, path.ray.o, si.p, si.ng);
+            let light_pdf = ctx.lights.pdf_area(li, path.prev, si.p, si.ng);
             power_heuristic(path.prev_pdf, light_pdf)
         } else {
             1.0
@@ -233,7 +237,7 @@ impl<'a> Vertex<'a> {
     }
 }
 
-/// Direct light at `v` by `v.ls` shadow rays to lights chosen in proportion to power (each
+/// Direct light at `v` by `v.ls` shadow rays to lights chosen by importance (each
 /// draws three sampler dimensions, also when `skip` says the vertex casts none). On a coated
 /// surface the coat (MIS against the coat's continuation) and the body are lit apart; glossy
 /// lobes are weighed by the power heuristic against BSDF sampling, diffuse ones by
@@ -258,7 +262,10 @@ pub(super) fn shadow_rays<T>(
     for _ in 0..ls {
         let u_sel = path.sampler.next_1d();
         let u = path.sampler.next_2d();
-        let Some(s) = ctx.lights.sample(&ctx.scene.meshes, si.p, u_sel, u) else {
+        let Some(s) = ctx
+            .lights
+            .sample(&ctx.scene.meshes, si.receiver(), u_sel, u)
+        else {
             continue;
         };
         let wi = si.frame.to_local(s.wi);
@@ -337,7 +344,7 @@ pub(super) fn continuation<T>(
         beta,
         depth: path.depth + 1,
         prev_pdf,
-        prev_p: v.si.p,
+        prev: v.si.receiver(),
         prev_delta: path.prev_delta && bs.specular,
         ..path
     };

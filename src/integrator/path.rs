@@ -53,6 +53,7 @@ use crate::accel::Hit;
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::film::Radiance;
 use crate::interaction::{shadow_ray_from, SurfaceInteraction};
+use crate::light::Receiver;
 use crate::math::{max_component, Ray, Vec3};
 use crate::medium::{henyey_greenstein, sample_henyey_greenstein};
 use crate::sampling::power_heuristic;
@@ -215,7 +216,7 @@ fn emitted(ctx: &RenderContext, path: &Path, li: usize, p: Vec3, ng: Vec3) -> Ve
         return Vec3::ZERO;
     }
     let w = if path.prev_pdf > 0.0 {
-        let light_pdf = ctx.lights.pdf_area(li, path.prev_p, p, ng);
+        let light_pdf = ctx.lights.pdf_area(li, path.prev, p, ng);
         power_heuristic(path.prev_pdf, light_pdf)
     } else {
         1.0
@@ -223,7 +224,7 @@ fn emitted(ctx: &RenderContext, path: &Path, li: usize, p: Vec3, ng: Vec3) -> Ve
     path.beta * le * w
 }
 
-/// Next-event estimation at a non-delta vertex: one light chosen by power, one point on it,
+/// Next-event estimation at a non-delta vertex: one light chosen by importance, one point on it,
 /// MIS-weighted against BSDF sampling. Reads 3 dimensions of the path's sampler. `None` when
 /// the sample carries nothing.
 fn light_sample(
@@ -235,7 +236,9 @@ fn light_sample(
     let mut sampler = path.sampler.clone();
     let u_sel = sampler.next_1d();
     let u = sampler.next_2d();
-    let s = ctx.lights.sample(&ctx.scene.meshes, v.p, u_sel, u)?;
+    let s = ctx
+        .lights
+        .sample(&ctx.scene.meshes, v.receiver(), u_sel, u)?;
     let wi = v.frame.to_local(s.wi);
     let f = bsdf.f(v.wo, wi, TransportMode::Radiance) * wi.z.abs();
     if f.max_element() <= 0.0 {
@@ -287,7 +290,7 @@ fn continue_path(
     path.beta = beta;
     path.depth = depth;
     path.prev_pdf = bsdf.mis_pdf(v.wo, &bs);
-    path.prev_p = v.p;
+    path.prev = v.receiver();
     path.prev_delta &= bs.specular;
     path.eta_scale = eta_scale;
     // Delta bounces after a receiver lead to light its caustic photons hold (the photons'
@@ -360,7 +363,10 @@ fn shade_medium(
     let mut sampler = path.sampler.clone();
     let u_sel = sampler.next_1d();
     let u = sampler.next_2d();
-    if let Some(s) = ctx.lights.sample(&ctx.scene.meshes, p, u_sel, u) {
+    if let Some(s) = ctx
+        .lights
+        .sample(&ctx.scene.meshes, Receiver::in_medium(p), u_sel, u)
+    {
         let f = henyey_greenstein(wo.dot(s.wi), g);
         let w = if s.delta {
             1.0
@@ -389,7 +395,7 @@ fn shade_medium(
     path.ray = Ray::new(p, wi);
     path.depth = depth;
     path.prev_pdf = pdf;
-    path.prev_p = p;
+    path.prev = Receiver::in_medium(p);
     path.prev_delta = false;
     path.data = Chain::Open;
     wave.next.push(path);

@@ -33,7 +33,7 @@ use super::{charge, RenderContext};
 use crate::accel::{Accel, Hit, RayKind};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::interaction::SurfaceInteraction;
-use crate::light::{LightSample, Lights};
+use crate::light::{LightSample, Lights, Pick, Receiver};
 use crate::math::{Frame, Ray, Vec2, Vec3};
 use crate::photon::cache::{Cached, IrradianceCache, LEVELS};
 use crate::photon::estimate::{irradiance_with, radiance_sampled, radiance_with, EstimateParams};
@@ -533,8 +533,9 @@ pub struct Gather {
     pub weight: Vec3,
     /// Solid-angle density of the ray's direction (for MIS with shadow rays).
     pub pdf: f32,
-    /// Shadow rays taken at the gather's origin (for MIS).
+    /// Shadow rays taken at the gather's origin (for MIS), and that origin as their receiver.
     pub light_samples: u32,
+    pub from: Receiver,
     /// Counts towards the `indirect` component (else `specular`: seen through a bounce).
     pub primary: bool,
     /// Bounces behind the ray's origin (0 at the camera's first hit).
@@ -764,6 +765,7 @@ pub fn at_diffuse(
             weight: w,
             pdf,
             light_samples,
+            from: si.receiver(),
             primary: depth == 0,
             depth,
             sampler: gs,
@@ -803,7 +805,7 @@ pub fn gather_radiance(
     };
     // The gather ray's own segment (a medium it crosses) weighs both.
     let tr = crate::accel::transmittance(ctx.scene, hit.as_ref(), &g.ray);
-    let direct = emitted(ctx, &g.ray, hit.as_ref(), g.lambda, mis);
+    let direct = emitted(ctx, &g.ray, g.from, hit.as_ref(), g.lambda, mis);
     (tr * direct, tr * reflected(ctx, pass, global, g, hit, buf))
 }
 
@@ -871,11 +873,11 @@ fn reflected(
     let (mut out, mut continued, mut followed) = (Vec3::ZERO, 0, 0);
     // The density of the direction just drawn at a thin point: an emitter it reaches
     // counts, weighed against that point's shadow ray by the power heuristic.
-    let mut from_thin: Option<f32> = None;
+    let mut from_thin: Option<(f32, Receiver)> = None;
     for _ in 0..=GATHER_SPECULAR_BOUNCES + THIN_CONTINUATIONS {
-        if let Some(pdf) = from_thin.take() {
+        if let Some((pdf, from)) = from_thin.take() {
             let mis = |light_pdf: f32| crate::sampling::power_heuristic(pdf, light_pdf);
-            out += throughput * emitted(ctx, &ray, hit.as_ref(), g.lambda, mis);
+            out += throughput * emitted(ctx, &ray, from, hit.as_ref(), g.lambda, mis);
         }
         let Some(h) = hit else { return out };
         let extra = g.depth + continued + followed;
@@ -956,7 +958,7 @@ fn reflected(
                     return out;
                 }
                 throughput *= f(wi) * (wi.z.abs() / pdf);
-                from_thin = Some(pdf);
+                from_thin = Some((pdf, si.receiver()));
                 ray = si.spawn_ray(si.frame.to_world(wi));
                 let (h, tr) = gather_segment(ctx, &ray);
                 (hit, throughput) = (h, throughput * tr);
@@ -994,8 +996,8 @@ fn reflected(
 #[derive(Clone, Copy)]
 enum EmitterWeight {
     /// Right after a vertex that took a shadow ray: the power heuristic of the sampled
-    /// direction's density against the light's.
-    Mis(f32),
+    /// direction's density against the light's for that vertex's shadow ray.
+    Mis(f32, Receiver),
     /// After a bounce that no shadow ray stands for (a glossy or coat reflection).
     Full,
     /// Counted elsewhere: the gather's own origin weighs it against its shadow rays
@@ -1034,13 +1036,14 @@ fn traced(
         let w = match weight {
             EmitterWeight::Zero => None,
             EmitterWeight::Full => Some(None),
-            EmitterWeight::Mis(pdf) => Some(Some(pdf)),
+            EmitterWeight::Mis(pdf, from) => Some(Some((pdf, from))),
         };
         if let Some(pdf) = w {
+            let from = pdf.map_or(g.from, |(_, from)| from);
             let mis = |light_pdf: f32| {
-                pdf.map_or(1.0, |p| crate::sampling::power_heuristic(p, light_pdf))
+                pdf.map_or(1.0, |(p, _)| crate::sampling::power_heuristic(p, light_pdf))
             };
-            out += throughput * emitted(ctx, &ray, hit.as_ref(), g.lambda, mis);
+            out += throughput * emitted(ctx, &ray, from, hit.as_ref(), g.lambda, mis);
         }
         let Some(h) = hit else { return out };
         if depth >= ctx.settings.max_depth {
@@ -1106,7 +1109,7 @@ fn traced(
             }
             wi = if wo.z < 0.0 { -local } else { local };
             throughput *= f(wi) * (wi.z.abs() / (pdf * choice));
-            weight = EmitterWeight::Mis(pdf);
+            weight = EmitterWeight::Mis(pdf, si.receiver());
             sharp_chain = true;
         } else {
             // Specular, glossy, a coat's reflection or a diffuse transmitter: one sampled
@@ -1165,7 +1168,7 @@ const _: () = assert!(
     "the cache keeps a level per continuation"
 );
 
-/// Direct light at a thin point `si` from one light of any kind picked by power: one shadow
+/// Direct light at a thin point `si` from one light of any kind picked by importance: one shadow
 /// ray, weighted by `f(wi)` (local `wi`) `|cos| / pdf` and, for lights a cosine-drawn
 /// direction can reach, by the power heuristic against that direction (its half is
 /// [`emitted`]). Without the heuristic a thin point beside a lamp's bulb made fireflies
@@ -1179,24 +1182,27 @@ fn direct_mis(
 ) -> Vec3 {
     let u_sel = sampler.next_1d();
     let u = sampler.next_2d();
-    let s = ctx.lights.sample(&ctx.scene.meshes, si.p, u_sel, u);
+    let s = ctx
+        .lights
+        .sample(&ctx.scene.meshes, si.receiver(), u_sel, u);
     shadow_ray_value(ctx, si, s, lambda, f, true)
 }
 
 /// The light a ray finds straight away: the emitter it hit, or the infinite lights when it
 /// left the scene (`hit` `None`), each times `weight(pdf)` where `pdf` is the density with
-/// which a shadow ray would have picked that point ([`Lights::pdf_area`],
+/// which a shadow ray from `from` would have picked that point ([`Lights::pdf_area`],
 /// [`Lights::escaped`]): the BSDF-sampling half of MIS at gather origins and at thin points
 /// ([`direct_mis`]).
 fn emitted(
     ctx: &RenderContext,
     ray: &Ray,
+    from: Receiver,
     hit: Option<&Hit>,
     lambda: Lambda,
     weight: impl Fn(f32) -> f32,
 ) -> Vec3 {
     let Some(h) = hit else {
-        return lambda.illuminant(ctx.lights.escaped(ray.o, ray.d, weight));
+        return lambda.illuminant(ctx.lights.escaped(ray.o, ray.d, Pick::At(from), weight));
     };
     let mesh = &ctx.scene.meshes[h.mesh as usize];
     let Some(li) = mesh.area_light else {
@@ -1205,7 +1211,7 @@ fn emitted(
     let p = mesh.point(h.prim, h.u, h.v);
     let ng = mesh.geometric_normal(h.prim, h.u, h.v);
     let le = lambda.illuminant(ctx.lights.le(li as usize, ng, -ray.d));
-    le * weight(ctx.lights.pdf_area(li as usize, ray.o, p, ng))
+    le * weight(ctx.lights.pdf_area(li as usize, from, p, ng))
 }
 
 /// Direct light of the lights without a surface (point, spot, distant, infinite) at a gather

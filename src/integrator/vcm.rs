@@ -55,6 +55,7 @@ use crate::accel::{Hit, RayKind};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::film::{Component, Radiance};
 use crate::interaction::SurfaceInteraction;
+use crate::light::Pick;
 use crate::math::{spawn_origin, Frame, Ray, Vec2, Vec3};
 use crate::sampling::Sampler;
 use rayon::prelude::*;
@@ -990,20 +991,21 @@ fn escaped(ctx: &RenderContext, wt: &Weights, path: &SubPath) -> Vec3 {
     }
     let disc = ctx.lights.disc_area();
     let d = path.ray.d.normalize();
-    ctx.lights.escaped(path.ray.o, d, |direct_pdf| {
-        if path.len == 1 {
-            1.0
-        } else if !wt.use_vc {
-            if path.specular {
+    ctx.lights
+        .escaped(path.ray.o, d, Pick::Power, |direct_pdf| {
+            if path.len == 1 {
                 1.0
+            } else if !wt.use_vc {
+                if path.specular {
+                    1.0
+                } else {
+                    0.0
+                }
             } else {
-                0.0
+                let emission_pdf = direct_pdf / disc;
+                1.0 / (1.0 + direct_pdf * path.dvcm + emission_pdf * path.dvc)
             }
-        } else {
-            let emission_pdf = direct_pdf / disc;
-            1.0 / (1.0 + direct_pdf * path.dvcm + emission_pdf * path.dvc)
-        }
-    })
+        })
 }
 
 /// Next-event estimation at camera vertex `v` (the report's `DirectIllumination`); reads 3

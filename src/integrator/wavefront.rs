@@ -11,6 +11,7 @@ use super::{charge, tile_pixels, RenderContext};
 use crate::accel::{Hit, RayKind};
 pub use crate::film::Component;
 use crate::film::Radiance;
+use crate::light::{Pick, Receiver};
 use crate::limits::BATCH;
 use crate::math::{Ray, Vec3};
 use crate::sampling::Sampler;
@@ -42,8 +43,9 @@ pub struct PathState<T = ()> {
     /// Solid-angle BSDF density of the last bounce if it was non-delta, else 0 (camera or
     /// delta bounce: emission then counts with full weight).
     pub prev_pdf: f32,
-    /// The last scattering point (the camera at first), for the light density at an emitter.
-    pub prev_p: Vec3,
+    /// The last scattering point (the camera at first) and its shading normal (zero in a
+    /// medium), for the light density at an emitter.
+    pub prev: Receiver,
     /// Whether every bounce so far was a delta (specular) one.
     pub prev_delta: bool,
     /// Product of `eta^2` over the delta refractions so far (for roulette).
@@ -70,7 +72,7 @@ impl<T: Default> PathState<T> {
             beta: Vec3::ONE,
             depth: 0,
             prev_pdf: 0.0,
-            prev_p: ray.o,
+            prev: Receiver::in_medium(ray.o),
             prev_delta: true,
             eta_scale: 1.0,
             medium: None,
@@ -564,13 +566,15 @@ pub const MAX_CROSSINGS: u32 = 64;
 /// sampling (the BSDF density of the last bounce against the lights' density of the direction).
 pub fn escaped<T>(ctx: &RenderContext, path: &PathState<T>) -> Vec3 {
     let d = path.ray.d.normalize_or_zero();
-    let le = ctx.lights.escaped(path.ray.o, d, |light_pdf| {
-        if path.prev_pdf > 0.0 {
-            crate::sampling::power_heuristic(path.prev_pdf, light_pdf)
-        } else {
-            1.0
-        }
-    });
+    let le = ctx
+        .lights
+        .escaped(path.ray.o, d, Pick::At(path.prev), |light_pdf| {
+            if path.prev_pdf > 0.0 {
+                crate::sampling::power_heuristic(path.prev_pdf, light_pdf)
+            } else {
+                1.0
+            }
+        });
     path.beta * path.lambda.illuminant(le)
 }
 

@@ -14,19 +14,23 @@
 //! ```
 //! One file per variant; [`Lights`] dispatches over the closed set.
 //!
-//! Shadow rays and photons pick a light in proportion to its power through an alias table
-//! (pbrt-v4's `PowerLightSampler`); rays that leave the scene see the infinite lights
+//! Photons and the bidirectional integrators pick a light in proportion to its power through an
+//! alias table (pbrt-v4's `PowerLightSampler`); next-event estimation in the path tracer, the
+//! direct integrator and the photon mapper picks by what each light can send to the receiving
+//! point ([`select`], pbrt-v4's light bounds); rays that leave the scene see the infinite lights
 //! ([`Lights::escaped`]).
 mod area;
 mod distant;
 mod infinite;
 mod point;
+mod select;
 mod spot;
 
 pub use area::AreaLight;
 pub use distant::DistantLight;
 pub use infinite::{EnvMap, Portal};
 pub use point::PointLight;
+pub use select::{Pick, Receiver, EXHAUSTIVE_MAX};
 pub use spot::SpotLight;
 
 use crate::math::{luminance, Frame, Vec2, Vec3};
@@ -98,6 +102,15 @@ pub struct Lights {
     /// The infinite lights: (index in the scene's lights, map).
     envs: Vec<(usize, Arc<EnvMap>)>,
     select: AliasTable,
+    /// Each light's bounds when it has a position (area, point, spot): see [`select`].
+    bounds: Vec<Option<select::Bounds>>,
+    /// The lights with bounds, when there are at most [`EXHAUSTIVE_MAX`] of them (else empty:
+    /// every light is picked by power).
+    bounded: Vec<usize>,
+    /// The lights without a position (distant, infinite) by power among them, and their
+    /// share of the total power.
+    unbounded: AliasTable,
+    p_unbounded: f32,
     /// The lights without a surface (point, spot, distant, infinite) alone, by power: what
     /// final-gather hits take direct light from by shadow rays ([`Self::sample_surfaceless`]).
     surfaceless: AliasTable,
@@ -138,10 +151,16 @@ impl Lights {
                 _ => None,
             })
             .collect();
+        let bounds: Vec<Option<select::Bounds>> =
+            emitters.iter().map(|e| e.bounds(meshes)).collect();
         let mut out = Lights {
             emitters,
             envs,
             select: AliasTable::default(),
+            bounds,
+            bounded: Vec::new(),
+            unbounded: AliasTable::default(),
+            p_unbounded: 0.0,
             surfaceless: AliasTable::default(),
             center,
             radius,
@@ -153,6 +172,31 @@ impl Lights {
             .map(|(&w, l)| if l.is_surfaceless() { w } else { 0.0 })
             .collect();
         out.select = AliasTable::new(&powers);
+        let bounded: Vec<usize> = (0..powers.len())
+            .filter(|&i| out.bounds[i].is_some_and(|b| b.phi > 0.0))
+            .collect();
+        if bounded.len() <= EXHAUSTIVE_MAX {
+            let unbounded: Vec<f32> = (0..powers.len())
+                .map(|i| {
+                    if out.bounds[i].is_none() {
+                        powers[i]
+                    } else {
+                        0.0
+                    }
+                })
+                .collect();
+            out.p_unbounded = (0..powers.len())
+                .filter(|&i| out.bounds[i].is_none())
+                .map(|i| out.select.pmf(i))
+                .sum::<f32>()
+                .min(1.0);
+            if unbounded.iter().any(|&w| w > 0.0) {
+                out.unbounded = AliasTable::new(&unbounded);
+            } else {
+                out.p_unbounded = 0.0;
+            }
+            out.bounded = bounded;
+        }
         if surfaceless.iter().any(|&w| w > 0.0) {
             out.surfaceless = AliasTable::new(&surfaceless);
         }
@@ -206,9 +250,9 @@ impl Lights {
     /// Radiance arriving along a ray from `o` that leaves the scene in unit direction `d`: the
     /// sum over the infinite lights of `Le(-d)` (zero from a portal light unless the ray
     /// leaves through its portal), each times `weight(pdf)` where `pdf` is the density with
-    /// which [`Self::sample`] would have produced that direction from that light (selection
-    /// included), for MIS; `weight` returns 1 where there is no MIS.
-    pub fn escaped(&self, o: Vec3, d: Vec3, weight: impl Fn(f32) -> f32) -> Vec3 {
+    /// which a shadow ray from `o` would have taken that direction from that light, its
+    /// selection counted as `pick` says, for MIS; `weight` returns 1 where there is no MIS.
+    pub fn escaped(&self, o: Vec3, d: Vec3, pick: Pick, weight: impl Fn(f32) -> f32) -> Vec3 {
         self.envs.iter().fold(Vec3::ZERO, |acc, (i, map)| {
             if !map.admits(o, d) {
                 return acc;
@@ -217,16 +261,96 @@ impl Lights {
             if le.max_element() <= 0.0 {
                 return acc;
             }
-            acc + le * weight(self.selection_pmf(*i) * map.pdf(d))
+            let pmf = match pick {
+                Pick::At(r) => self.pmf_at(r, *i),
+                Pick::Power => self.selection_pmf(*i),
+            };
+            acc + le * weight(pmf * map.pdf(d))
         })
     }
 
-    /// Picks a light in proportion to power (`u_sel`) and a point on it (`u`) as seen from `p`,
-    /// for next-event estimation: a sphere light by the cone it subtends
-    /// ([`AreaLight::sample_visible`]; [`Self::pdf_area`] is its density).
-    pub fn sample(&self, meshes: &[Mesh], p: Vec3, u_sel: f32, u: Vec2) -> Option<LightSample> {
-        let (i, pmf) = self.select.sample(u_sel)?;
-        self.sample_by(meshes, (i, pmf), p, u, true)
+    /// Picks a light by its importance at `r` (`u_sel`, [`Self::pick_at`]) and a point on it
+    /// (`u`) as seen from `r.p`, for next-event estimation: a sphere light by the cone it
+    /// subtends ([`AreaLight::sample_visible`]; [`Self::pdf_area`] is its density).
+    pub fn sample(&self, meshes: &[Mesh], r: Receiver, u_sel: f32, u: Vec2) -> Option<LightSample> {
+        let (i, pmf) = self.pick_at(r, u_sel)?;
+        self.sample_by(meshes, (i, pmf), r.p, u, true)
+    }
+
+    /// The importance of each positioned light at `r` ([`select`]) into `imp` (in the order of
+    /// `self.bounded`), and their sum.
+    fn importances(&self, r: Receiver, imp: &mut [f32; EXHAUSTIVE_MAX]) -> f32 {
+        let mut sum = 0.0;
+        for (k, &i) in self.bounded.iter().enumerate() {
+            imp[k] = self.bounds[i].map_or(0.0, |b| b.importance(r));
+            sum += imp[k];
+        }
+        sum
+    }
+
+    /// The share of the lights without a position when the positioned ones' importances at
+    /// the receiver sum to `sum`: their share of the power, or everything where no positioned
+    /// light can reach the receiver.
+    fn unbounded_share(&self, sum: f32) -> f32 {
+        if sum > 0.0 && sum.is_finite() {
+            self.p_unbounded
+        } else if self.unbounded.is_empty() {
+            0.0
+        } else {
+            1.0
+        }
+    }
+
+    /// Picks a light for a shadow ray from `r` (`u` in `[0, 1)`): the lights without a
+    /// position by power within their share of the power, the rest by importance at `r`
+    /// (see [`select`]); by power alone when there are more than [`EXHAUSTIVE_MAX`] positioned
+    /// lights. `None` when no light can reach `r`.
+    pub fn pick_at(&self, r: Receiver, u: f32) -> Option<(usize, f32)> {
+        if self.bounded.is_empty() {
+            return self.select.sample(u);
+        }
+        let mut imp = [0.0; EXHAUSTIVE_MAX];
+        let sum = self.importances(r, &mut imp);
+        let share = self.unbounded_share(sum);
+        if u < share {
+            let (i, pmf) = self.unbounded.sample((u / share).min(ONE_MINUS_EPSILON))?;
+            return Some((i, pmf * share));
+        }
+        if !(sum > 0.0 && sum.is_finite()) {
+            return None;
+        }
+        let target = ((u - share) / (1.0 - share)).min(ONE_MINUS_EPSILON) * sum;
+        let mut acc = 0.0;
+        let mut last = None;
+        for (k, &i) in self.bounded.iter().enumerate() {
+            if imp[k] <= 0.0 {
+                continue;
+            }
+            last = Some((i, imp[k]));
+            acc += imp[k];
+            if target < acc {
+                break;
+            }
+        }
+        let (i, w) = last?;
+        Some((i, (1.0 - share) * w / sum))
+    }
+
+    /// The probability that [`Self::pick_at`] picks light `i` for `r`.
+    pub fn pmf_at(&self, r: Receiver, i: usize) -> f32 {
+        if self.bounded.is_empty() {
+            return self.select.pmf(i);
+        }
+        let mut imp = [0.0; EXHAUSTIVE_MAX];
+        let sum = self.importances(r, &mut imp);
+        let share = self.unbounded_share(sum);
+        if self.bounds.get(i).is_some_and(|b| b.is_none()) {
+            return share * self.unbounded.pmf(i);
+        }
+        match self.bounded.iter().position(|&j| j == i) {
+            Some(k) if sum > 0.0 && sum.is_finite() => (1.0 - share) * imp[k] / sum,
+            _ => 0.0,
+        }
     }
 
     /// Picks a light in proportion to power: its index and probability.
@@ -334,11 +458,11 @@ impl Lights {
     }
 
     /// Solid-angle density with which [`Self::sample`] would have produced the point `p_light`
-    /// (normal `n_light`) on area light `i` as seen from `p_ref`; for MIS when a BSDF-sampled
+    /// (normal `n_light`) on area light `i` for the receiver `r`; for MIS when a BSDF-sampled
     /// ray hits an emitter.
-    pub fn pdf_area(&self, i: usize, p_ref: Vec3, p_light: Vec3, n_light: Vec3) -> f32 {
+    pub fn pdf_area(&self, i: usize, r: Receiver, p_light: Vec3, n_light: Vec3) -> f32 {
         match self.area_light(i) {
-            Some(a) => self.selection_pmf(i) * a.pdf_visible(p_ref, p_light, n_light),
+            Some(a) => self.pmf_at(r, i) * a.pdf_visible(r.p, p_light, n_light),
             None => 0.0,
         }
     }
@@ -584,6 +708,69 @@ impl Lights {
         (0..self.emitters.len())
             .map(|i| self.power(i).max(0.0))
             .collect()
+    }
+}
+
+impl Emitter {
+    /// The light's bounds for importance-based selection ([`select`]); `None` for lights
+    /// without a position.
+    fn bounds(&self, meshes: &[Mesh]) -> Option<select::Bounds> {
+        let point = |pos: Vec3, phi: f32| select::Bounds {
+            lo: pos,
+            hi: pos,
+            phi,
+            w: Vec3::Z,
+            cos_o: -1.0,
+            cos_e: 0.0,
+            two_sided: false,
+        };
+        match self {
+            Emitter::Area(a) => {
+                let mesh = meshes.get(a.mesh as usize)?;
+                let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+                let (mut ns, mut ws) = (Vec::new(), Vec::new());
+                for (t, tri) in mesh.indices.iter().enumerate() {
+                    for &v in tri {
+                        let p = mesh.positions[v as usize];
+                        (lo, hi) = (lo.min(p), hi.max(p));
+                    }
+                    let area = mesh.area(t as u32);
+                    if area > 0.0 {
+                        ns.push(mesh.geometric_normal(t as u32, 1.0 / 3.0, 1.0 / 3.0));
+                        ws.push(area);
+                    }
+                }
+                if lo.x > hi.x || !(lo.is_finite() && hi.is_finite()) {
+                    return None;
+                }
+                let (w, cos_o) = match a.plane_normal() {
+                    Some(n) => (n, 1.0),
+                    None => select::normal_cone(&ns, &ws),
+                };
+                Some(select::Bounds {
+                    lo,
+                    hi,
+                    phi: a.power(),
+                    w,
+                    cos_o,
+                    cos_e: 0.0,
+                    two_sided: a.two_sided,
+                })
+            }
+            // pbrt-v4's point and spot bounds: 4 pi I for both, the spot's cone around its axis.
+            Emitter::Point(l) => Some(point(l.pos, l.power())),
+            Emitter::Spot(l) => {
+                let (start, end) = (l.cos_falloff_start, l.cos_falloff_end);
+                let cos_e = (end.clamp(-1.0, 1.0).acos() - start.clamp(-1.0, 1.0).acos()).cos();
+                Some(select::Bounds {
+                    w: l.dir,
+                    cos_o: start,
+                    cos_e,
+                    ..point(l.pos, 4.0 * PI * scalar_power(l.intensity))
+                })
+            }
+            Emitter::Distant(_) | Emitter::Infinite(_) => None,
+        }
     }
 }
 

@@ -14,7 +14,7 @@ use crate::support as common;
 use common::TempDir;
 use photon::accel::{Accel, AccelOptions, BackendKind};
 use photon::integrator::{IntegratorKind, RenderSettings};
-use photon::light::EnvMap;
+use photon::light::{EnvMap, Receiver};
 use photon::math::{luminance, Mat3, Vec2, Vec3};
 use photon::sampling::warp::{
     equal_area_sphere_to_square, equal_area_square_to_sphere, square_to_uniform_sphere,
@@ -533,7 +533,12 @@ fn lights_are_selected_by_power() {
         .filter(|&k| {
             let u = (k as f32 + 0.5) / n as f32;
             let s = lights
-                .sample(&scene.meshes, Vec3::new(0.5, 0.5, 0.5), u, Vec2::splat(0.5))
+                .sample(
+                    &scene.meshes,
+                    Receiver::in_medium(Vec3::new(0.5, 0.5, 0.5)),
+                    u,
+                    Vec2::splat(0.5),
+                )
                 .unwrap();
             s.wi.y > 0.0
         })

@@ -34,6 +34,7 @@ use photon::camera::Camera;
 use photon::imageio::RgbImage;
 use photon::integrator::{IntegratorKind, RenderOutput};
 use photon::interaction::SurfaceInteraction;
+use photon::light::Receiver;
 use photon::math::{spawn_origin, Ray, Vec2, Vec3};
 use photon::photon::estimate::{irradiance_with, EstimateParams};
 use photon::photon::trace::{self, TraceSettings};
@@ -1132,13 +1133,13 @@ AttributeEnd
             for _ in 0..n {
                 let u = Vec2::new(rng.f(), rng.f());
                 let s = if cone {
-                    lights.sample(&sc.meshes, p, 0.5, u)
+                    lights.sample(&sc.meshes, Receiver::new(p, Vec3::Y), 0.5, u)
                 } else {
                     lights.sample_light(&sc.meshes, 0, 1.0, p, u)
                 };
                 let Some(s) = s else { continue };
                 if cone {
-                    let pdf = lights.pdf_area(0, p, s.p, s.n);
+                    let pdf = lights.pdf_area(0, Receiver::new(p, Vec3::Y), s.p, s.n);
                     assert!((pdf / s.pdf - 1.0).abs() < 1e-3, "pdf {pdf} vs {}", s.pdf);
                     assert!(((s.p - Vec3::new(0.0, a, 0.0)).length() / a - 1.0).abs() < 1e-4);
                 }
