@@ -430,7 +430,7 @@ fn shoot(
             let (mut first_specular, mut rays) = (0u64, 0u64);
             let map = &maps[light];
             let n = counts[light];
-            let strata = crate::sampling::strata(n.max(1) as u32);
+            let strata = crate::sampling::grid(n.max(1) as u32);
             for j in lo..hi {
                 let domain = hash(&[kind as u64, light as u64]);
                 let mut sampler =

@@ -5,8 +5,9 @@
 //! and seed give the same image on any number of threads.
 //!
 //! Two 2D patterns stratify a pixel's `spp` samples in each dimension pair:
-//! - [`Pattern::Stratified`]: jittered `nx x ny` strata (`nx * ny = spp`, `nx` the largest
-//!   divisor of `spp` not above its square root), visited in a per-pixel random order;
+//! - [`Pattern::Stratified`]: jittered `nx x ny` strata ([`grid`]: `nx * ny = spp` when `spp`
+//!   splits into sides at most 2:1, else a near-square grid of at least `spp` cells, some left
+//!   empty), each sample in its own cell, cells drawn in a per-pixel random order;
 //! - [`Pattern::NRooks`]: N-rooks / Latin hypercube: `x` and `y` strata are independent random
 //!   permutations of `0..spp`, so each row and each column of the `spp x spp` grid holds one
 //!   sample.
@@ -87,7 +88,7 @@ pub struct Sampler {
     index: u32,
     count: u32,
     dim: u32,
-    /// `strata(count)` for the stratified pattern, worked out once.
+    /// `grid(count)` for the stratified pattern, worked out once.
     strata: (u32, u32),
 }
 
@@ -95,13 +96,13 @@ impl Sampler {
     /// Sample `index` of `count` in `domain` (e.g. a pixel's linear index), for run `seed`.
     pub fn new(pattern: Pattern, seed: u64, domain: u64, index: u32, count: u32) -> Self {
         let strata = match pattern {
-            Pattern::Stratified => strata(count.max(1)),
+            Pattern::Stratified => grid(count.max(1)),
             _ => (1, count.max(1)),
         };
         Self::with_strata(pattern, seed, domain, index, count, strata)
     }
 
-    /// [`Self::new`] with `strata(count)` already known (`strata` may take O(sqrt count)
+    /// [`Self::new`] with `grid(count)` already known (`grid` may take O(sqrt count)
     /// steps: photon shooting works it out once per light, not once per photon).
     pub fn with_strata(
         pattern: Pattern,
@@ -111,7 +112,7 @@ impl Sampler {
         count: u32,
         strata: (u32, u32),
     ) -> Self {
-        debug_assert!(pattern != Pattern::Stratified || strata.0 * strata.1 == count.max(1));
+        debug_assert!(pattern != Pattern::Stratified || strata.0 * strata.1 >= count.max(1));
         Sampler {
             pattern,
             domain: hash(&[seed, domain]),
@@ -160,8 +161,16 @@ impl Sampler {
                 ((sx as f32 + jx) / n as f32, (sy as f32 + jy) / n as f32)
             }
             Pattern::Stratified => {
+                // Distinct cells of the grid. With more cells than samples, a random rotation
+                // of the cells makes each sample's cell uniform (the permutations alone are not
+                // uniform enough: 1.4% bias, `a_grid_with_empty_cells_is_unbiased`).
                 let (nx, ny) = self.strata;
-                let s = permute(self.index, n, hash(&[self.domain, d as u64, 4]));
+                let m = nx * ny;
+                let mut s = permute(self.index, m, hash(&[self.domain, d as u64, 4]));
+                if m > n {
+                    let turn = hash(&[self.domain, d as u64, 5]) % m as u64;
+                    s = ((s as u64 + turn) % m as u64) as u32;
+                }
                 (
                     ((s % nx) as f32 + jx) / nx as f32,
                     ((s / nx) as f32 + jy) / ny as f32,
@@ -174,6 +183,20 @@ impl Sampler {
 
 /// The largest float below 1.
 pub const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+
+/// The grid of a stratified 2D pattern of `n` samples: [`strata`] when its sides are at most
+/// 2:1 apart, else the near-square `ceil(sqrt n) x ceil(n / ceil(sqrt n))` with some cells
+/// empty. A prime count split exactly is `1 x n`, strata only along one axis: a time budget's
+/// last pass takes whatever count fits, and at 139 spp (1 x 139) the shared cornell-box's path
+/// tracer had 1.45x the variance per sample of 140 (10 x 14) or 144 (12 x 12).
+pub fn grid(n: u32) -> (u32, u32) {
+    let (nx, ny) = strata(n);
+    if ny <= 2 * nx {
+        return (nx, ny);
+    }
+    let side = (n as f64).sqrt().ceil() as u32;
+    (side, n.div_ceil(side))
+}
 
 /// Splits `n` samples into `nx * ny = n` strata as square as possible (`nx <= ny`).
 pub fn strata(n: u32) -> (u32, u32) {
@@ -220,11 +243,11 @@ mod tests {
     /// stratified set holds exactly one.
     #[test]
     fn patterns_stratify() {
-        for n in [16u32, 12, 7] {
+        for n in [16u32, 12, 7, 139] {
             let mut xs = vec![0; n as usize];
             let mut ys = vec![0; n as usize];
-            let (nx, ny) = strata(n);
-            let mut cells = vec![0; n as usize];
+            let (nx, ny) = grid(n);
+            let mut cells = vec![0; (nx * ny) as usize];
             for i in 0..n {
                 let p = Sampler::new(Pattern::NRooks, 5, 42, i, n).next_2d();
                 xs[(p.x * n as f32) as usize] += 1;
@@ -236,8 +259,32 @@ mod tests {
                 xs.iter().chain(&ys).all(|&c| c == 1),
                 "n-rooks {n}: {xs:?} {ys:?}"
             );
-            assert!(cells.iter().all(|&c| c == 1), "stratified {n}: {cells:?}");
+            assert!(cells.iter().all(|&c| c <= 1), "stratified {n}: {cells:?}");
+            assert_eq!(cells.iter().sum::<u32>(), n);
         }
+        // A prime count gets a near-square grid, not 1 x n.
+        assert_eq!(grid(139), (12, 12));
+        assert_eq!(grid(140), (10, 14));
+        assert_eq!(grid(7), (3, 3));
+    }
+
+    /// With empty cells in the grid every sample is still uniform over the square: the mean of
+    /// `x y^2` over many pixels' 7 samples (a 3 x 3 grid) is its integral, 1/6.
+    #[test]
+    fn a_grid_with_empty_cells_is_unbiased() {
+        let (pixels, n) = (40_000u64, 7u32);
+        let mut sum = 0.0f64;
+        for pixel in 0..pixels {
+            for i in 0..n {
+                let q = Sampler::new(Pattern::Stratified, 3, pixel, i, n).next_2d();
+                sum += (q.x * q.y * q.y) as f64;
+            }
+        }
+        let mean = sum / (pixels * n as u64) as f64;
+        // Per-sample standard deviation of x y^2 is below 0.2; stratification only lowers it.
+        let se = 0.2 / ((pixels * n as u64) as f64).sqrt();
+        println!("mean {mean} (1/6 = 0.16667, se {se:.5})");
+        assert!((mean - 1.0 / 6.0).abs() < 4.0 * se, "mean {mean}");
     }
 
     #[test]
