@@ -259,46 +259,49 @@ impl Component {
 }
 
 /// The per-component radiance of one camera sample (the parts sum to the total), indexed by
-/// [`Component`].
+/// [`Component`]: RGB on the film (`Radiance`), [`Spectrum`]s while a sample's paths are in
+/// flight (`Radiance<Spectrum>`, turned into RGB by [`crate::spectrum::Lambda::to_rgb`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Radiance(pub [Vec3; 4]);
+pub struct Radiance<T = Vec3>(pub [T; 4]);
 
-impl Radiance {
-    pub fn total(&self) -> Vec3 {
+impl<T: Copy + std::ops::Add<Output = T>> Radiance<T> {
+    pub fn total(&self) -> T {
         let [d, s, c, i] = self.0;
         d + s + c + i
     }
 
     /// `f` applied to each component.
-    pub fn map(&self, f: impl Fn(Vec3) -> Vec3) -> Radiance {
+    pub fn map<U>(&self, f: impl Fn(T) -> U) -> Radiance<U> {
         Radiance(self.0.map(f))
     }
 }
 
-impl std::ops::Index<Component> for Radiance {
-    type Output = Vec3;
-    fn index(&self, c: Component) -> &Vec3 {
+impl<T> std::ops::Index<Component> for Radiance<T> {
+    type Output = T;
+    fn index(&self, c: Component) -> &T {
         &self.0[c as usize]
     }
 }
 
-impl std::ops::IndexMut<Component> for Radiance {
-    fn index_mut(&mut self, c: Component) -> &mut Vec3 {
+impl<T> std::ops::IndexMut<Component> for Radiance<T> {
+    fn index_mut(&mut self, c: Component) -> &mut T {
         &mut self.0[c as usize]
     }
 }
 
-impl std::ops::AddAssign for Radiance {
-    fn add_assign(&mut self, o: Radiance) {
+impl<T: Copy + std::ops::AddAssign> std::ops::AddAssign for Radiance<T> {
+    fn add_assign(&mut self, o: Radiance<T>) {
         for (a, b) in self.0.iter_mut().zip(o.0) {
             *a += b;
         }
     }
 }
 
-impl std::ops::Mul<f32> for Radiance {
-    type Output = Radiance;
-    fn mul(self, s: f32) -> Radiance {
+impl<T: Copy + std::ops::Add<Output = T> + std::ops::Mul<f32, Output = T>> std::ops::Mul<f32>
+    for Radiance<T>
+{
+    type Output = Radiance<T>;
+    fn mul(self, s: f32) -> Radiance<T> {
         self.map(|v| v * s)
     }
 }

@@ -4,6 +4,7 @@
 //! sampler may be given. Each model lives in its own file of `bsdf/` and implements [`Bxdf`];
 //! [`super::Bsdf`] is the closed enum that dispatches to them in the hot loops.
 use crate::math::{Vec2, Vec3};
+use crate::spectrum::Spectrum;
 
 /// One scattering model in its local shading frame (z = shading normal; `wo` towards the
 /// viewer or previous vertex, `wi` towards the light or next vertex; unit vectors).
@@ -16,7 +17,7 @@ pub trait Bxdf {
 
     /// The value for the pair `(wo, wi)`; 0 for delta lobes. `mode` matters for refraction
     /// (radiance is scaled by `1 / eta^2`) and for the layered models.
-    fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3;
+    fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Spectrum;
 
     /// An incident direction for `wo` among `lobes`: `uc` (uniform in `[0,1)`) picks the lobe,
     /// `u` (uniform in `[0,1)^2`) the direction within it. May return a sample that is not
@@ -35,11 +36,11 @@ pub trait Bxdf {
     fn pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode, lobes: Lobes) -> f32;
 
     /// A rough albedo for Russian roulette.
-    fn reflectance_estimate(&self) -> Vec3;
+    fn reflectance_estimate(&self) -> Spectrum;
 
     /// The fraction of light arriving along the normal that is reflected back to its side
     /// (Fresnel at normal incidence for interfaces): what a coat over this model passes on.
-    fn normal_reflectance(&self) -> Vec3;
+    fn normal_reflectance(&self) -> Spectrum;
 }
 
 /// What a path carries: radiance (camera paths) or importance (photons). Only refraction
@@ -87,7 +88,7 @@ pub struct BsdfSample {
     /// Sampled unit direction (local frame).
     pub wi: Vec3,
     /// BSDF value for `(wo, wi)` (for a delta lobe: Fresnel / |cos wi|, see the module docs).
-    pub f: Vec3,
+    pub f: Spectrum,
     /// Solid-angle density of `wi`, or the discrete lobe probability for a delta lobe.
     pub pdf: f32,
     /// A delta lobe (mirror reflection or refraction).
@@ -113,7 +114,7 @@ impl BsdfSample {
     /// says so in `transmission`.
     pub(crate) fn new(
         wi: Vec3,
-        f: Vec3,
+        f: Spectrum,
         pdf: f32,
         specular: bool,
         transmission: bool,

@@ -8,14 +8,15 @@ use super::fresnel::{fr_complex, reflect};
 use super::microfacet::TrowbridgeReitz;
 use super::{same_hemisphere, BsdfSample, Bxdf, BxdfFlags, Lobes, TransportMode};
 use crate::math::{Vec2, Vec3};
+use crate::spectrum::Spectrum;
 
 /// A smooth or rough conductor.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Conductor {
     /// Real part of the relative complex index, per channel.
-    pub eta: Vec3,
+    pub eta: Spectrum,
     /// Imaginary part (absorption) of the relative complex index, per channel.
-    pub k: Vec3,
+    pub k: Spectrum,
     /// Microfacet distribution; smooth when both roughnesses are below 1e-3.
     pub distrib: TrowbridgeReitz,
 }
@@ -23,8 +24,8 @@ pub struct Conductor {
 impl Conductor {
     /// A conductor with complex index `eta + i k` and roughness `alpha_u` (local x),
     /// `alpha_v` (local y). Non-finite or negative index components read as 0 (`eta` as 1).
-    pub fn new(eta: Vec3, k: Vec3, alpha_u: f32, alpha_v: f32) -> Self {
-        let clean = |v: Vec3, default: f32| {
+    pub fn new(eta: Spectrum, k: Spectrum, alpha_u: f32, alpha_v: f32) -> Self {
+        let clean = |v: Spectrum, default: f32| {
             let c = |x: f32| {
                 if x.is_finite() && x >= 0.0 {
                     x
@@ -32,7 +33,7 @@ impl Conductor {
                     default
                 }
             };
-            Vec3::new(c(v.x), c(v.y), c(v.z))
+            v.map(c)
         };
         Conductor {
             eta: clean(eta, 1.0),
@@ -47,7 +48,7 @@ impl Conductor {
     }
 
     /// Fresnel reflectance for a microfacet at incident cosine `cos`.
-    fn fresnel(&self, cos: f32) -> Vec3 {
+    fn fresnel(&self, cos: f32) -> Spectrum {
         fr_complex(cos.abs(), self.eta, self.k)
     }
 }
@@ -62,17 +63,17 @@ impl Bxdf for Conductor {
     }
 
     /// The microfacet BRDF value; 0 for the mirror and across the surface.
-    fn f(&self, wo: Vec3, wi: Vec3, _: TransportMode) -> Vec3 {
+    fn f(&self, wo: Vec3, wi: Vec3, _: TransportMode) -> Spectrum {
         if self.is_smooth() || !same_hemisphere(wo, wi) {
-            return Vec3::ZERO;
+            return Spectrum::ZERO;
         }
         let (cos_o, cos_i) = (wo.z.abs(), wi.z.abs());
         if cos_o == 0.0 || cos_i == 0.0 {
-            return Vec3::ZERO;
+            return Spectrum::ZERO;
         }
         let wm = wi + wo;
         if wm.length_squared() == 0.0 {
-            return Vec3::ZERO;
+            return Spectrum::ZERO;
         }
         let wm = wm.normalize();
         let d = &self.distrib;
@@ -153,12 +154,12 @@ impl Bxdf for Conductor {
         })
     }
 
-    fn reflectance_estimate(&self) -> Vec3 {
+    fn reflectance_estimate(&self) -> Spectrum {
         self.normal_reflectance()
     }
 
     /// Fresnel reflectance at normal incidence.
-    fn normal_reflectance(&self) -> Vec3 {
+    fn normal_reflectance(&self) -> Spectrum {
         self.fresnel(1.0)
     }
 }
@@ -177,8 +178,8 @@ mod tests {
         (0.05, 0.3),
         (0.5, 0.1),
     ];
-    const GOLD_ETA: Vec3 = Vec3::new(0.143, 0.374, 1.442);
-    const GOLD_K: Vec3 = Vec3::new(3.983, 2.385, 1.603);
+    const GOLD_ETA: Spectrum = Spectrum(glam::Vec4::new(0.143, 0.374, 1.442, 0.374));
+    const GOLD_K: Spectrum = Spectrum(glam::Vec4::new(3.983, 2.385, 1.603, 2.385));
 
     /// Directional albedo `integral f(wo, wi) cos_i dwi` (green channel) by quadrature over
     /// the half vectors (`dwi = 4 |wo.wm| dwm`), without using the sampler or `pdf`.
@@ -189,7 +190,7 @@ mod tests {
             if wi.z <= 0.0 {
                 return 0.0;
             }
-            let f = c.f(wo, wi.normalize(), TransportMode::Radiance).y as f64;
+            let f = c.f(wo, wi.normalize(), TransportMode::Radiance)[1] as f64;
             f * wi.z as f64 * 4.0 * wo.dot(wm).abs() as f64
         })
     }
@@ -209,7 +210,7 @@ mod tests {
                 assert!((pdf - s.pdf).abs() <= 1e-3 * s.pdf, "{pdf} vs {}", s.pdf);
                 let f = c.f(wo, s.wi, TransportMode::Radiance);
                 assert!((f - s.f).abs().max_element() <= 1e-3 * s.f.max_element());
-                let w = (s.f.y * s.wi.z.abs() / s.pdf) as f64;
+                let w = (s.f[1] * s.wi.z.abs() / s.pdf) as f64;
                 max_weight = max_weight.max(w);
                 w
             })
@@ -242,10 +243,10 @@ mod tests {
     fn perfect_reflector_gains_no_energy() {
         // eta = 1, k huge: F = 1 to within 1e-3 at every angle that matters.
         let mut rng = Rng::new(4);
-        let k = Vec3::splat(1e4);
-        assert!(fr_complex(0.05, Vec3::ONE, k).min_element() > 0.999);
+        let k = Spectrum::splat(1e4);
+        assert!(fr_complex(0.05, Spectrum::ONE, k).min_element() > 0.999);
         for &(ax, ay) in &ALPHAS {
-            let c = Conductor::new(Vec3::ONE, k, ax, ay);
+            let c = Conductor::new(Spectrum::ONE, k, ax, ay);
             for theta in [0.0f32, 0.5, 1.0, 1.4] {
                 let wo = spherical(theta, 0.4);
                 let quad = albedo_quadrature(&c, wo);
@@ -275,7 +276,7 @@ mod tests {
         // for theta_m < pi/4; with u = cos(2 theta_m) the albedo is int_0^1 u / (1 + u) du
         // = 1 - ln 2.
         let want = 1.0 - std::f64::consts::LN_2;
-        let c = Conductor::new(Vec3::ONE, Vec3::splat(1e4), 1.0, 1.0);
+        let c = Conductor::new(Spectrum::ONE, Spectrum::splat(1e4), 1.0, 1.0);
         let quad = albedo_quadrature(&c, Vec3::Z);
         let (mean, se, _) = albedo_sampled(&c, Vec3::Z, 200_000, &mut Rng::new(12));
         println!("alpha 1 furnace: 1 - ln 2 = {want:.5}, quadrature {quad:.5}, sampled {mean:.5} +- {se:.5}");
@@ -326,7 +327,7 @@ mod tests {
                 let wi = rng.sphere();
                 let wi = Vec3::new(wi.x, wi.y, -wi.z.abs());
                 assert_eq!(c.pdf(Vec3::Z, wi, TransportMode::Radiance, Lobes::All), 0.0);
-                assert_eq!(c.f(Vec3::Z, wi, TransportMode::Radiance), Vec3::ZERO);
+                assert_eq!(c.f(Vec3::Z, wi, TransportMode::Radiance), Spectrum::ZERO);
             }
         }
     }
@@ -394,8 +395,8 @@ mod tests {
         for r in rows {
             let num = |k: &str| r[k].as_f64().unwrap();
             let c = Conductor::new(
-                v3(&r["eta"]),
-                v3(&r["k"]),
+                Spectrum::from_rgb(v3(&r["eta"])),
+                Spectrum::from_rgb(v3(&r["k"])),
                 num("alpha_u") as f32,
                 num("alpha_v") as f32,
             );

@@ -24,6 +24,7 @@ use super::fresnel::{fr_dielectric, reflect, refract};
 use super::microfacet::TrowbridgeReitz;
 use super::{same_hemisphere, BsdfSample, Bxdf, BxdfFlags, Lobes, TransportMode};
 use crate::math::{Vec2, Vec3};
+use crate::spectrum::Spectrum;
 
 /// A smooth or rough dielectric interface.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -80,12 +81,19 @@ impl Dielectric {
         let (pr, pt) = lobes.choose(r, t)?;
         if uc < pr {
             let wi = Vec3::new(-wo.x, -wo.y, wo.z);
-            let f = Vec3::splat(r / wi.z.abs());
+            let f = Spectrum::splat(r / wi.z.abs());
             return Some(BsdfSample::new(wi, f, pr, true, false, 1.0));
         }
         let (wi, etap) = refract(wo, Vec3::Z, self.eta)?;
         let ft = t / wi.z.abs() * radiance_scale(mode, etap);
-        Some(BsdfSample::new(wi, Vec3::splat(ft), pt, true, true, etap))
+        Some(BsdfSample::new(
+            wi,
+            Spectrum::splat(ft),
+            pt,
+            true,
+            true,
+            etap,
+        ))
     }
 
     fn sample_rough(
@@ -111,7 +119,9 @@ impl Dielectric {
             let pdf = d.pdf(wo, wm) / (4.0 * wo.dot(wm).abs()) * pr;
             let f = d.d(wm) * d.g(wo, wi) * r / (4.0 * wi.z * wo.z).abs();
             let a = d.alpha_x().min(d.alpha_y());
-            return Some(BsdfSample::new(wi, Vec3::splat(f), pdf, false, false, 1.0).with_alpha(a));
+            return Some(
+                BsdfSample::new(wi, Spectrum::splat(f), pdf, false, false, 1.0).with_alpha(a),
+            );
         }
         let (wi, etap) = refract(wo, wm, self.eta)?;
         if same_hemisphere(wo, wi) || wi.z == 0.0 {
@@ -125,7 +135,7 @@ impl Dielectric {
         let pdf = self.pdf_given(wo, wi, &half, pr, pt);
         let f = self.f_given(wo, wi, &half, mode);
         let a = self.distrib.alpha_x().min(self.distrib.alpha_y());
-        Some(BsdfSample::new(wi, Vec3::splat(f), pdf, false, true, etap).with_alpha(a))
+        Some(BsdfSample::new(wi, Spectrum::splat(f), pdf, false, true, etap).with_alpha(a))
     }
 
     /// The generalized half vector of `(wo, wi)`, or `None` for a grazing direction, a
@@ -192,13 +202,13 @@ impl Bxdf for Dielectric {
     }
 
     /// BSDF value for `(wo, wi)`: 0 for the smooth interface (delta lobes).
-    fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+    fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Spectrum {
         if self.is_smooth() {
-            return Vec3::ZERO;
+            return Spectrum::ZERO;
         }
         match self.half(wo, wi) {
-            Some(h) => Vec3::splat(self.f_given(wo, wi, &h, mode)),
-            None => Vec3::ZERO,
+            Some(h) => Spectrum::splat(self.f_given(wo, wi, &h, mode)),
+            None => Spectrum::ZERO,
         }
     }
 
@@ -241,12 +251,12 @@ impl Bxdf for Dielectric {
         }
     }
 
-    fn reflectance_estimate(&self) -> Vec3 {
-        Vec3::ONE
+    fn reflectance_estimate(&self) -> Spectrum {
+        Spectrum::ONE
     }
 
-    fn normal_reflectance(&self) -> Vec3 {
-        Vec3::splat(fr_dielectric(1.0, self.eta))
+    fn normal_reflectance(&self) -> Spectrum {
+        Spectrum::splat(fr_dielectric(1.0, self.eta))
     }
 }
 
@@ -306,7 +316,7 @@ mod tests {
                     assert!((s.pdf as f64 - want_r).abs() < 1e-5);
                 }
                 // Every lobe has path weight 1 for importance (R/R, T/T).
-                let w = s.f.x * s.wi.z.abs() / s.pdf;
+                let w = s.f[0] * s.wi.z.abs() / s.pdf;
                 assert!((w - 1.0).abs() < 1e-4, "weight {w}");
             }
             let p = reflected as f64 / n as f64;
@@ -340,8 +350,8 @@ mod tests {
             assert!(rad.transmission && imp.transmission);
             assert_eq!(rad.wi, imp.wi);
             assert!((rad.eta - etap).abs() < 1e-6);
-            let w_rad = rad.f.x * rad.wi.z.abs() / rad.pdf;
-            let w_imp = imp.f.x * imp.wi.z.abs() / imp.pdf;
+            let w_rad = rad.f[0] * rad.wi.z.abs() / rad.pdf;
+            let w_imp = imp.f[0] * imp.wi.z.abs() / imp.pdf;
             assert!((w_imp - 1.0).abs() < 1e-5, "importance weight {w_imp}");
             let want = 1.0 / (etap * etap);
             assert!(
@@ -366,7 +376,7 @@ mod tests {
                 .unwrap();
             assert!(!s.transmission && s.pdf == 1.0);
             assert!((s.wi - Vec3::new(-wo.x, -wo.y, wo.z)).length() < 1e-7);
-            assert!((s.f.x * s.wi.z.abs() - 1.0).abs() < 1e-6);
+            assert!((s.f[0] * s.wi.z.abs() - 1.0).abs() < 1e-6);
         }
     }
 
@@ -451,10 +461,10 @@ mod tests {
                         };
                         n += 1;
                         assert!(!s.specular && s.transmission == (s.wi.z * wo.z < 0.0));
-                        let f = b.f(wo, s.wi, mode).x;
+                        let f = b.f(wo, s.wi, mode)[0];
                         let pdf = b.pdf(wo, s.wi, TransportMode::Radiance, Lobes::All);
                         let close = |a: f32, b: f32| (a - b).abs() <= 2e-3 * b.abs().max(1e-3);
-                        if !close(f, s.f.x) || !close(pdf, s.pdf) {
+                        if !close(f, s.f[0]) || !close(pdf, s.pdf) {
                             bad += 1;
                         }
                     }
@@ -511,8 +521,8 @@ mod tests {
             let b = Dielectric::rough(1.33, ax, ay);
             for _ in 0..20_000 {
                 let (wo, wi) = (rng.sphere(), rng.sphere());
-                let a = b.f(wo, wi, TransportMode::Radiance).x;
-                let r = b.f(wi, wo, TransportMode::Importance).x;
+                let a = b.f(wo, wi, TransportMode::Radiance)[0];
+                let r = b.f(wi, wo, TransportMode::Importance)[0];
                 let rel = (a - r).abs() / a.max(r).max(1e-6);
                 if rel > 1e-3 {
                     // Only where the inside direction meets the microfacet at the critical
@@ -531,7 +541,7 @@ mod tests {
                     "{a} vs {r} at {wo:?} {wi:?}"
                 );
                 if wo.z * wi.z > 0.0 {
-                    assert_eq!(a, b.f(wo, wi, TransportMode::Importance).x);
+                    assert_eq!(a, b.f(wo, wi, TransportMode::Importance)[0]);
                 }
             }
         }
@@ -570,7 +580,7 @@ mod tests {
         }
         assert_eq!(
             b.f(wo, Vec3::new(-0.6, 0.0, 0.8), TransportMode::Radiance),
-            Vec3::ZERO
+            Spectrum::ZERO
         );
     }
 
@@ -635,7 +645,7 @@ mod tests {
             } else {
                 num("f_cos") // a back-facing microfacet: 0
             };
-            let got = (b.f(wo, wi, mode).x * wi.z.abs()) as f64;
+            let got = (b.f(wo, wi, mode)[0] * wi.z.abs()) as f64;
             let pdf = b.pdf(wo, wi, TransportMode::Radiance, Lobes::All) as f64;
             let rel = |a: f64, b: f64| (a - b).abs() / b.abs().max(1e-4);
             worst_f = worst_f.max(rel(got, want));

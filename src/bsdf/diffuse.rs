@@ -3,21 +3,22 @@
 use super::{same_hemisphere, BsdfSample, Bxdf, BxdfFlags, Lobes, TransportMode};
 use crate::math::{Vec2, Vec3};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
+use crate::spectrum::Spectrum;
 use std::f32::consts::FRAC_1_PI;
 
 /// A Lambertian reflector.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Diffuse {
     /// Directional-hemispherical reflectance per channel, in `[0, 1]`.
-    pub reflectance: Vec3,
+    pub reflectance: Spectrum,
 }
 
 impl Diffuse {
     /// A Lambertian BRDF with reflectance `r` (clamped to `[0, 1]`; NaN reads as 0).
-    pub fn new(r: Vec3) -> Self {
+    pub fn new(r: Spectrum) -> Self {
         let clean = |x: f32| if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
         Diffuse {
-            reflectance: Vec3::new(clean(r.x), clean(r.y), clean(r.z)),
+            reflectance: r.map(clean),
         }
     }
 }
@@ -28,11 +29,11 @@ impl Bxdf for Diffuse {
     }
 
     /// `R / pi` when `wo` and `wi` are on the same side, else 0.
-    fn f(&self, wo: Vec3, wi: Vec3, _: TransportMode) -> Vec3 {
+    fn f(&self, wo: Vec3, wi: Vec3, _: TransportMode) -> Spectrum {
         if same_hemisphere(wo, wi) {
             self.reflectance * FRAC_1_PI
         } else {
-            Vec3::ZERO
+            Spectrum::ZERO
         }
     }
 
@@ -46,7 +47,7 @@ impl Bxdf for Diffuse {
         _: TransportMode,
         lobes: Lobes,
     ) -> Option<BsdfSample> {
-        if self.reflectance == Vec3::ZERO || lobes == Lobes::Transmission {
+        if self.reflectance.is_black() || lobes == Lobes::Transmission {
             return None;
         }
         let mut wi = square_to_cosine_hemisphere(u);
@@ -74,11 +75,11 @@ impl Bxdf for Diffuse {
         }
     }
 
-    fn reflectance_estimate(&self) -> Vec3 {
+    fn reflectance_estimate(&self) -> Spectrum {
         self.reflectance
     }
 
-    fn normal_reflectance(&self) -> Vec3 {
+    fn normal_reflectance(&self) -> Spectrum {
         self.reflectance
     }
 }
@@ -93,7 +94,7 @@ mod tests {
 
     #[test]
     fn sampled_pdf_matches_pdf_and_cosine_law() {
-        let b = Diffuse::new(R);
+        let b = Diffuse::new(Spectrum::from_rgb(R));
         let mut rng = Rng::new(11);
         let n = 200_000;
         for wo in [
@@ -134,14 +135,14 @@ mod tests {
     #[test]
     fn hemispherical_integral_is_the_reflectance() {
         // Uniform hemisphere sampling, independent of the BSDF's own sampler.
-        let b = Diffuse::new(R);
+        let b = Diffuse::new(Spectrum::from_rgb(R));
         let mut rng = Rng::new(5);
         let wo = Vec3::new(-0.4, 0.2, 0.5).normalize();
         let xs: Vec<[f64; 3]> = (0..400_000)
             .map(|_| {
                 let wi = rng.hemisphere();
                 let v = b.f(wo, wi, TransportMode::Radiance) * wi.z * (2.0 * PI);
-                [v.x as f64, v.y as f64, v.z as f64]
+                [v[0] as f64, v[1] as f64, v[2] as f64]
             })
             .collect();
         for c in 0..3 {
@@ -158,13 +159,13 @@ mod tests {
             );
         }
         // Opposite sides never connect.
-        assert_eq!(b.f(wo, -wo, TransportMode::Radiance), Vec3::ZERO);
+        assert_eq!(b.f(wo, -wo, TransportMode::Radiance), Spectrum::ZERO);
         assert_eq!(b.pdf(wo, -wo, TransportMode::Radiance, Lobes::All), 0.0);
     }
 
     #[test]
     fn black_and_bad_reflectance() {
-        assert!(Diffuse::new(Vec3::ZERO)
+        assert!(Diffuse::new(Spectrum::ZERO)
             .sample(
                 Vec3::Z,
                 0.0,
@@ -173,7 +174,7 @@ mod tests {
                 Lobes::All
             )
             .is_none());
-        let d = Diffuse::new(Vec3::new(f32::NAN, 2.0, -1.0));
-        assert_eq!(d.reflectance, Vec3::new(0.0, 1.0, 0.0));
+        let d = Diffuse::new(Spectrum::from_rgb(Vec3::new(f32::NAN, 2.0, -1.0)));
+        assert_eq!(d.reflectance, Spectrum::from_rgb(Vec3::new(0.0, 1.0, 0.0)));
     }
 }

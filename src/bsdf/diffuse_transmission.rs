@@ -10,22 +10,23 @@
 use super::{same_hemisphere, BsdfSample, Bxdf, BxdfFlags, Lobes, TransportMode};
 use crate::math::{Vec2, Vec3};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
+use crate::spectrum::Spectrum;
 use std::f32::consts::FRAC_1_PI;
 
 /// Lambertian reflection `reflectance` plus Lambertian transmission `transmittance`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DiffuseTransmission {
-    pub reflectance: Vec3,
-    pub transmittance: Vec3,
+    pub reflectance: Spectrum,
+    pub transmittance: Spectrum,
 }
 
 impl DiffuseTransmission {
     /// Both colours clamped to `[0, 1]` (NaN reads as 0), as pbrt-v4 does. Like pbrt-v4,
     /// nothing stops `R + T` from exceeding 1 (the albedo is `R + T`).
-    pub fn new(r: Vec3, t: Vec3) -> Self {
-        let clean = |v: Vec3| {
+    pub fn new(r: Spectrum, t: Spectrum) -> Self {
+        let clean = |v: Spectrum| {
             let c = |x: f32| if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
-            Vec3::new(c(v.x), c(v.y), c(v.z))
+            v.map(c)
         };
         DiffuseTransmission {
             reflectance: clean(r),
@@ -54,13 +55,13 @@ impl Bxdf for DiffuseTransmission {
     }
 
     /// `R / pi` on the side of `wo`, `T / pi` on the other side.
-    fn f(&self, wo: Vec3, wi: Vec3, _: TransportMode) -> Vec3 {
+    fn f(&self, wo: Vec3, wi: Vec3, _: TransportMode) -> Spectrum {
         if same_hemisphere(wo, wi) {
             self.reflectance * FRAC_1_PI
         } else if wo.z * wi.z < 0.0 {
             self.transmittance * FRAC_1_PI
         } else {
-            Vec3::ZERO
+            Spectrum::ZERO
         }
     }
 
@@ -100,11 +101,11 @@ impl Bxdf for DiffuseTransmission {
         side * cosine_hemisphere_pdf(wi.z.abs())
     }
 
-    fn reflectance_estimate(&self) -> Vec3 {
+    fn reflectance_estimate(&self) -> Spectrum {
         self.reflectance + self.transmittance
     }
 
-    fn normal_reflectance(&self) -> Vec3 {
+    fn normal_reflectance(&self) -> Spectrum {
         self.reflectance
     }
 }
@@ -124,7 +125,7 @@ mod tests {
     fn white_furnace_gives_r_plus_t() {
         let mut rng = Rng::new(41);
         let (r, t) = (Vec3::new(0.2, 0.5, 0.7), Vec3::new(0.8, 0.3, 0.0));
-        let b = DiffuseTransmission::new(r, t);
+        let b = DiffuseTransmission::new(Spectrum::from_rgb(r), Spectrum::from_rgb(t));
         for wo in wos() {
             for c in 0..3 {
                 let (m, se, _) = sampled_albedo(
@@ -146,7 +147,7 @@ mod tests {
             }
         }
         // A lossless one: R + T = 1 in every channel gives albedo 1, sample by sample.
-        let lossless = DiffuseTransmission::new(Vec3::splat(0.3), Vec3::splat(0.7));
+        let lossless = DiffuseTransmission::new(Spectrum::splat(0.3), Spectrum::splat(0.7));
         for _ in 0..1000 {
             let s = lossless
                 .sample(
@@ -157,14 +158,17 @@ mod tests {
                     Lobes::All,
                 )
                 .unwrap();
-            assert!((s.f.x * s.wi.z.abs() / s.pdf - 1.0).abs() < 1e-5);
+            assert!((s.f[0] * s.wi.z.abs() / s.pdf - 1.0).abs() < 1e-5);
         }
     }
 
     #[test]
     fn chi_square_reciprocity_and_consistency() {
         let mut rng = Rng::new(42);
-        let b = DiffuseTransmission::new(Vec3::new(0.2, 0.6, 0.1), Vec3::new(0.5, 0.1, 0.3));
+        let b = DiffuseTransmission::new(
+            Spectrum::from_rgb(Vec3::new(0.2, 0.6, 0.1)),
+            Spectrum::from_rgb(Vec3::new(0.5, 0.1, 0.3)),
+        );
         let bins = SphereBins { n_z: 20, n_phi: 40 };
         for wo in wos() {
             println!("diffuse transmission wo {wo:?}:");
@@ -214,7 +218,7 @@ mod tests {
         );
         let f = b.flags();
         assert!(f.has_diffuse() && f.contains(BxdfFlags::REFLECTION | BxdfFlags::TRANSMISSION));
-        let t_only = DiffuseTransmission::new(Vec3::ZERO, Vec3::ONE).flags();
+        let t_only = DiffuseTransmission::new(Spectrum::ZERO, Spectrum::ONE).flags();
         assert!(!t_only.contains(BxdfFlags::REFLECTION) && t_only.has_diffuse());
     }
 }

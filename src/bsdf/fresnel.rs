@@ -6,6 +6,7 @@
 //! - a negative `cos_theta_i` means the ray arrives from the interior, and the functions flip
 //!   `eta` themselves.
 use crate::math::Vec3;
+use crate::spectrum::Spectrum;
 
 /// Exact unpolarised Fresnel reflectance of a smooth dielectric interface.
 ///
@@ -75,30 +76,24 @@ fn cos_transmitted(cos_i: f32, eta: f32, inside: bool) -> Option<f32> {
 /// - `cos_theta_i`: incident cosine, clamped to `[0, 1]` (conductors are opaque: the ray is
 ///   always on the exterior side);
 /// - `eta`, `k`: real and imaginary parts of the relative index, per channel.
-pub fn fr_complex(cos_theta_i: f32, eta: Vec3, k: Vec3) -> Vec3 {
+pub fn fr_complex(cos_theta_i: f32, eta: Spectrum, k: Spectrum) -> Spectrum {
     let cos = cos_theta_i.clamp(0.0, 1.0);
     let cos2 = cos * cos;
     let sin2 = 1.0 - cos2;
     let (eta2, k2) = (eta * eta, k * k);
-    let t0 = eta2 - k2 - Vec3::splat(sin2);
+    let t0 = eta2 - k2 - Spectrum::splat(sin2);
     // a^2 + b^2 = |(eta + i k)^2 - sin^2|, a = Re sqrt((eta + i k)^2 - sin^2).
-    let a2b2 = (t0 * t0 + 4.0 * eta2 * k2).max(Vec3::ZERO);
-    let a2b2 = Vec3::new(a2b2.x.sqrt(), a2b2.y.sqrt(), a2b2.z.sqrt());
-    let a2 = (0.5 * (a2b2 + t0)).max(Vec3::ZERO);
-    let a = Vec3::new(a2.x.sqrt(), a2.y.sqrt(), a2.z.sqrt());
-    let t1 = a2b2 + Vec3::splat(cos2);
+    let a2b2 = (t0 * t0 + 4.0 * eta2 * k2).max(Spectrum::ZERO).sqrt();
+    let a = (0.5 * (a2b2 + t0)).max(Spectrum::ZERO).sqrt();
+    let t1 = a2b2 + Spectrum::splat(cos2);
     let t2 = 2.0 * cos * a;
     let rs = (t1 - t2) / (t1 + t2);
-    let t3 = cos2 * a2b2 + Vec3::splat(sin2 * sin2);
+    let t3 = cos2 * a2b2 + Spectrum::splat(sin2 * sin2);
     let t4 = t2 * sin2;
     let rp = rs * (t3 - t4) / (t3 + t4);
     let r = 0.5 * (rp + rs);
     // 0/0 only for cos = 0 with a = 0 (eta = 1, k = 0 at grazing): total reflection.
-    Vec3::new(
-        if r.x.is_nan() { 1.0 } else { r.x },
-        if r.y.is_nan() { 1.0 } else { r.y },
-        if r.z.is_nan() { 1.0 } else { r.z },
-    )
+    r.map(|x| if x.is_nan() { 1.0 } else { x })
 }
 
 /// Schlick's approximation `r0 + (1 - r0) (1 - cos)^5` of the Fresnel reflectance.
@@ -231,7 +226,7 @@ mod tests {
         ] {
             for i in 0..=1000 {
                 let c = i as f32 / 1000.0;
-                let got = fr_complex(c, Vec3::splat(eta), Vec3::splat(k)).x;
+                let got = fr_complex(c, Spectrum::splat(eta), Spectrum::splat(k))[0];
                 let want = fr_complex_reference(c, eta, k);
                 if k == 0.0 && eta < 1.0 && (c * c - (1.0 - eta * eta)).abs() < 1e-3 {
                     continue; // the critical angle's infinite slope
@@ -414,9 +409,9 @@ mod tests {
                     continue;
                 }
                 let want = fr_dielectric(c, eta);
-                let got = fr_complex(c, Vec3::splat(eta), Vec3::ZERO);
+                let got = fr_complex(c, Spectrum::splat(eta), Spectrum::ZERO);
                 assert!(
-                    (got - Vec3::splat(want)).abs().max_element() < 1e-5,
+                    (got - Spectrum::splat(want)).abs().max_element() < 1e-5,
                     "eta {eta} cos {c}: {got:?} vs {want}"
                 );
             }
@@ -428,16 +423,16 @@ mod tests {
         // Gold-ish, copper-ish and silver-ish indices per channel.
         let eta = Vec3::new(0.143, 0.374, 1.442);
         let k = Vec3::new(3.983, 2.385, 1.603);
-        let got = fr_complex(1.0, eta, k);
+        let got = fr_complex(1.0, Spectrum::from_rgb(eta), Spectrum::from_rgb(k));
         let want = ((eta - 1.0) * (eta - 1.0) + k * k) / ((eta + 1.0) * (eta + 1.0) + k * k);
         assert!(
-            (got - want).abs().max_element() < 1e-5,
+            (got - Spectrum::from_rgb(want)).abs().max_element() < 1e-5,
             "{got:?} vs {want:?}"
         );
         let mut worst = 0.0f64;
         for i in 1..=100 {
             let c = i as f32 / 100.0;
-            let f = fr_complex(c, eta, k);
+            let f = fr_complex(c, Spectrum::from_rgb(eta), Spectrum::from_rgb(k));
             for ch in 0..3 {
                 let w = fr_conductor_v3(c as f64, eta[ch] as f64, k[ch] as f64);
                 worst = worst.max((f[ch] as f64 - w).abs());

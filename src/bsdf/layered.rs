@@ -43,6 +43,7 @@ use super::{BsdfSample, Bxdf, BxdfFlags, Conductor, Dielectric, Diffuse, Lobes, 
 use crate::math::{Frame, Vec2, Vec3};
 use crate::sampling::power_heuristic;
 use crate::sampling::{hash, mix64, to_unit};
+use crate::spectrum::Spectrum;
 use std::f32::consts::PI;
 
 /// A sample of `bxdf`, only if it is usable ([`BsdfSample::is_valid`]).
@@ -128,7 +129,7 @@ pub struct Layered<Top, Bottom> {
     /// Slab thickness in units of the mean free path (> 0).
     pub thickness: f32,
     /// Single-scattering albedo of the slab medium, per channel in `[0, 1]`.
-    pub albedo: Vec3,
+    pub albedo: Spectrum,
     /// Henyey-Greenstein asymmetry in `[-1, 1]`.
     pub g: f32,
     pub max_depth: u32,
@@ -143,7 +144,7 @@ pub type CoatedConductor = Layered<Dielectric, Conductor>;
 /// The state of one random walk in `sample`: path throughput and density, direction, height
 /// and whether every event so far was a delta one.
 struct PathWalk {
-    f: Vec3,
+    f: Spectrum,
     pdf: f32,
     w: Vec3,
     z: f32,
@@ -152,7 +153,7 @@ struct PathWalk {
 
 /// The state of one random walk in `f`.
 struct Walk {
-    beta: Vec3,
+    beta: Spectrum,
     w: Vec3,
     z: f32,
 }
@@ -165,7 +166,7 @@ impl<Top: Bxdf + Copy, Bottom: Bxdf + Copy> Layered<Top, Bottom> {
         top: Top,
         bottom: Bottom,
         thickness: f32,
-        albedo: Vec3,
+        albedo: Spectrum,
         g: f32,
         max_depth: u32,
         n_samples: u32,
@@ -176,7 +177,7 @@ impl<Top: Bxdf + Copy, Bottom: Bxdf + Copy> Layered<Top, Bottom> {
             top,
             bottom,
             thickness: finite_or(thickness, 0.01).max(f32::MIN_POSITIVE),
-            albedo: Vec3::new(a(albedo.x), a(albedo.y), a(albedo.z)),
+            albedo: albedo.map(a),
             g: finite_or(g, 0.0).clamp(-1.0, 1.0),
             max_depth,
             n_samples: n_samples.max(1),
@@ -193,24 +194,24 @@ impl<Top: Bxdf + Copy, Bottom: Bxdf + Copy> Layered<Top, Bottom> {
 
     /// The coat's own reflection, the first term of [`Self::f`] (exact, deterministic):
     /// what the photon mapper traces. `f = f_coat + f_body`.
-    pub fn f_coat(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+    pub fn f_coat(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Spectrum {
         let (wo, wi) = if wo.z < 0.0 { (-wo, -wi) } else { (wo, wi) };
         if wi.z <= 0.0 {
-            return Vec3::ZERO;
+            return Spectrum::ZERO;
         }
         self.top.f(wo, wi, mode)
     }
 
     /// Everything that went through the coat (the random walks of [`Self::f`], with the same
     /// random numbers): what the photon mapper estimates from photons and gathers.
-    pub fn f_body(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+    pub fn f_body(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Spectrum {
         let (wo, wi) = if wo.z < 0.0 { (-wo, -wi) } else { (wo, wi) };
         if wi.z <= 0.0 {
-            return Vec3::ZERO;
+            return Spectrum::ZERO;
         }
         let n = self.n_samples;
         let mut rng = WalkRng::new(wo, wi, 0.0, 0x4C41_5945_5246);
-        let mut f = Vec3::ZERO;
+        let mut f = Spectrum::ZERO;
         for _ in 0..n {
             f += self.f_walk(wo, wi, mode, &mut rng);
         }
@@ -248,21 +249,21 @@ impl<Top: Bxdf + Copy, Bottom: Bxdf + Copy> Layered<Top, Bottom> {
 
     /// One random walk of `f`: enter through the coat along `wo`, leave along `wi`, with
     /// next-event estimation towards the direction `wis` presampled from `wi`.
-    fn f_walk(&self, wo: Vec3, wi: Vec3, mode: TransportMode, rng: &mut WalkRng) -> Vec3 {
+    fn f_walk(&self, wo: Vec3, wi: Vec3, mode: TransportMode, rng: &mut WalkRng) -> Spectrum {
         let top = &self.top;
         let t = Lobes::Transmission;
         let Some(wos) = valid(top.sample(wo, rng.next(), rng.next2(), mode, t)) else {
-            return Vec3::ZERO;
+            return Spectrum::ZERO;
         };
         let Some(wis) = valid(top.sample(wi, rng.next(), rng.next2(), mode.flip(), t)) else {
-            return Vec3::ZERO;
+            return Spectrum::ZERO;
         };
         let mut walk = Walk {
             beta: wos.f * wos.wi.z.abs() / wos.pdf,
             w: wos.wi,
             z: self.thickness,
         };
-        let mut f = Vec3::ZERO;
+        let mut f = Spectrum::ZERO;
         for depth in 0..self.max_depth {
             if depth > 3 && walk.beta.max_element() < 0.25 {
                 let q = (1.0 - walk.beta.max_element()).max(0.0);
@@ -306,7 +307,7 @@ impl<Top: Bxdf + Copy, Bottom: Bxdf + Copy> Layered<Top, Bottom> {
         wi: Vec3,
         mode: TransportMode,
         rng: &mut WalkRng,
-        f: &mut Vec3,
+        f: &mut Spectrum,
     ) -> Step {
         let exit_z = self.thickness;
         let w = walk.w;
@@ -366,7 +367,7 @@ impl<Top: Bxdf + Copy, Bottom: Bxdf + Copy> Layered<Top, Bottom> {
         wi: Vec3,
         mode: TransportMode,
         rng: &mut WalkRng,
-        f: &mut Vec3,
+        f: &mut Spectrum,
     ) -> bool {
         let (top, bottom) = (&self.top, &self.bottom);
         let top_rough = !top.flags().has_specular();
@@ -471,10 +472,10 @@ impl<Top: Bxdf + Copy, Bottom: Bxdf + Copy> Bxdf for Layered<Top, Bottom> {
     }
 
     /// Stochastic estimate of the BSDF for `(wo, wi)` (deterministic for a given pair).
-    fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+    fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Spectrum {
         let (wo, wi) = if wo.z < 0.0 { (-wo, -wi) } else { (wo, wi) };
         if wi.z <= 0.0 {
-            return Vec3::ZERO; // the base is opaque: no transmission
+            return Spectrum::ZERO; // the base is opaque: no transmission
         }
         let n = self.n_samples;
         let mut f = self.top.f(wo, wi, mode) * n as f32;
@@ -581,14 +582,14 @@ impl<Top: Bxdf + Copy, Bottom: Bxdf + Copy> Bxdf for Layered<Top, Bottom> {
         0.1 / (4.0 * PI) + 0.9 * sum / n
     }
 
-    fn reflectance_estimate(&self) -> Vec3 {
+    fn reflectance_estimate(&self) -> Spectrum {
         self.normal_reflectance()
     }
 
     /// The coat's normal-incidence reflectance plus what it transmits times the base's.
-    fn normal_reflectance(&self) -> Vec3 {
+    fn normal_reflectance(&self) -> Spectrum {
         let r0 = self.top.normal_reflectance();
-        r0 + (Vec3::ONE - r0) * self.bottom.normal_reflectance()
+        r0 + (Spectrum::ONE - r0) * self.bottom.normal_reflectance()
     }
 }
 
@@ -615,9 +616,9 @@ mod tests {
         let top = Dielectric::rough(1.5, alpha, alpha);
         Layered::new(
             top,
-            Diffuse::new(Vec3::splat(r)),
+            Diffuse::new(Spectrum::splat(r)),
             thickness,
-            Vec3::splat(albedo),
+            Spectrum::splat(albedo),
             g,
             10,
             1,
@@ -626,7 +627,7 @@ mod tests {
 
     /// A perfect reflector (eta 1, k huge: F = 1 within 1e-3) of roughness `alpha`.
     fn mirror(alpha: f32) -> Conductor {
-        Conductor::new(Vec3::ONE, Vec3::splat(1e4), alpha, alpha)
+        Conductor::new(Spectrum::ONE, Spectrum::splat(1e4), alpha, alpha)
     }
 
     #[test]
@@ -638,7 +639,7 @@ mod tests {
         assert_eq!(rough.flags(), F::REFLECTION | F::DIFFUSE);
         let top = Dielectric::new(1.5);
         let cc = |base: Conductor, albedo: f32| {
-            Layered::new(top, base, 0.01, Vec3::splat(albedo), 0.0, 10, 1).flags()
+            Layered::new(top, base, 0.01, Spectrum::splat(albedo), 0.0, 10, 1).flags()
         };
         assert_eq!(cc(mirror(0.0), 0.0), F::REFLECTION | F::SPECULAR);
         assert_eq!(
@@ -665,7 +666,7 @@ mod tests {
         let s = b.sample(wo, 0.7, Vec2::new(0.2, 0.9), RAD, Lobes::All);
         assert_eq!(s, b.sample(wo, 0.7, Vec2::new(0.2, 0.9), RAD, Lobes::All));
         // Opaque: nothing through the surface; two-sided.
-        assert_eq!(b.f(wo, -wi, RAD), Vec3::ZERO);
+        assert_eq!(b.f(wo, -wi, RAD), Spectrum::ZERO);
         assert_eq!(b.f(-wo, -wi, RAD), b.f(wo, wi, RAD));
     }
 
@@ -680,7 +681,7 @@ mod tests {
         let xs: Vec<f64> = (0..n)
             .map(|_| {
                 let wi = square_to_cosine_hemisphere(rng.vec2());
-                (b.f(wo, wi, RAD).y * std::f32::consts::PI) as f64
+                (b.f(wo, wi, RAD)[1] * std::f32::consts::PI) as f64
             })
             .collect();
         mean_and_stderr(&xs)
@@ -708,7 +709,7 @@ mod tests {
                     Dielectric::new(1.5),
                     mirror(0.0),
                     1e-6,
-                    Vec3::ZERO,
+                    Spectrum::ZERO,
                     0.0,
                     100,
                     1,
@@ -755,7 +756,7 @@ mod tests {
                     Dielectric::new(1.5),
                     mirror(0.3),
                     1e-6,
-                    Vec3::ZERO,
+                    Spectrum::ZERO,
                     0.0,
                     10,
                     1,
@@ -766,13 +767,13 @@ mod tests {
                 Bsdf::CoatedConductor(Layered::new(
                     Dielectric::rough(1.5, 0.2, 0.2),
                     Conductor::new(
-                        Vec3::new(0.143, 0.374, 1.442),
-                        Vec3::new(3.983, 2.385, 1.603),
+                        Spectrum::from_rgb(Vec3::new(0.143, 0.374, 1.442)),
+                        Spectrum::from_rgb(Vec3::new(3.983, 2.385, 1.603)),
                         0.2,
                         0.2,
                     ),
                     0.1,
-                    Vec3::splat(0.8),
+                    Spectrum::splat(0.8),
                     0.3,
                     10,
                     1,
@@ -838,7 +839,7 @@ mod tests {
                 let cos_area = bins.integrate(4, |w| w.z.max(0.0) as f64);
                 let f_cos = bins.integrate(4, |w| {
                     if w.z > 0.0 {
-                        (b64.f(wo, w, RAD).y * w.z) as f64
+                        (b64.f(wo, w, RAD)[1] * w.z) as f64
                     } else {
                         0.0
                     }
@@ -862,8 +863,8 @@ mod tests {
     /// The three rough cases of the distribution tests.
     fn rough_cases() -> Vec<(&'static str, Bsdf)> {
         let gold = Conductor::new(
-            Vec3::new(0.143, 0.374, 1.442),
-            Vec3::new(3.983, 2.385, 1.603),
+            Spectrum::from_rgb(Vec3::new(0.143, 0.374, 1.442)),
+            Spectrum::from_rgb(Vec3::new(3.983, 2.385, 1.603)),
             0.4,
             0.4,
         );
@@ -886,7 +887,7 @@ mod tests {
                     Dielectric::rough(1.5, 0.3, 0.3),
                     gold,
                     0.01,
-                    Vec3::ZERO,
+                    Spectrum::ZERO,
                     0.0,
                     10,
                     1,
@@ -941,7 +942,7 @@ mod tests {
                     if s.specular {
                         continue;
                     }
-                    let w = (s.f.y * s.wi.z.abs() / s.pdf) as f64;
+                    let w = (s.f[1] * s.wi.z.abs() / s.pdf) as f64;
                     let k = bins.index(s.wi);
                     sum[k] += w;
                     sum2[k] += w * w;
@@ -960,8 +961,8 @@ mod tests {
                     let w2 = Vec3::new(w.x + 1e-6, w.y, w.z).normalize();
                     let (v1, v2) = if w.z > 0.0 {
                         (
-                            (b8.f(wo, w, RAD).y * w.z) as f64,
-                            (b8.f(wo, w2, RAD).y * w2.z) as f64,
+                            (b8.f(wo, w, RAD)[1] * w.z) as f64,
+                            (b8.f(wo, w2, RAD)[1] * w2.z) as f64,
                         )
                     } else {
                         (0.0, 0.0)
@@ -1048,14 +1049,14 @@ mod tests {
             let mut worst = 0.0f64;
             for _ in 0..12 {
                 let (wo, wi) = (rng.hemisphere(), rng.hemisphere());
-                let a = b.f(wo, wi, RAD).y as f64;
-                let r = b.f(wi, wo, TransportMode::Importance).y as f64;
+                let a = b.f(wo, wi, RAD)[1] as f64;
+                let r = b.f(wi, wo, TransportMode::Importance)[1] as f64;
                 // Noise of a 512-walk mean: from 8 further 64-walk estimates at nearby pairs.
                 let b64 = with_walks(&b, 64);
                 let xs: Vec<f64> = (1..=8)
                     .map(|i| {
                         let d = Vec3::new(1e-6 * i as f32, 0.0, 0.0);
-                        b64.f((wo + d).normalize(), wi, RAD).y as f64
+                        b64.f((wo + d).normalize(), wi, RAD)[1] as f64
                     })
                     .collect();
                 let (_, se64) = mean_and_stderr(&xs);
@@ -1085,12 +1086,17 @@ mod tests {
         );
         let eta = 1.5f32;
         let thickness = 0.05f32;
-        let base = Conductor::new(eta_c / eta, k_c / eta, 0.0, 0.0);
+        let base = Conductor::new(
+            Spectrum::from_rgb(eta_c / eta),
+            Spectrum::from_rgb(k_c / eta),
+            0.0,
+            0.0,
+        );
         let b = Bsdf::CoatedConductor(Layered::new(
             Dielectric::new(eta),
             base,
             thickness,
-            Vec3::ZERO,
+            Spectrum::ZERO,
             0.0,
             100,
             1,
@@ -1102,7 +1108,11 @@ mod tests {
             let sin_in = (1.0 - cos_o * cos_o).sqrt() / eta as f64;
             let cos_in = (1.0 - sin_in * sin_in).sqrt();
             let tr2 = (-2.0 * thickness as f64 / cos_in).exp();
-            let fc = super::super::fresnel::fr_complex(cos_in as f32, eta_c / eta, k_c / eta);
+            let fc = super::super::fresnel::fr_complex(
+                cos_in as f32,
+                Spectrum::from_rgb(eta_c / eta),
+                Spectrum::from_rgb(k_c / eta),
+            );
             for c in 0..3 {
                 let f = fc[c] as f64 * tr2;
                 let want = r + (1.0 - r) * (1.0 - r) * f / (1.0 - r * f);

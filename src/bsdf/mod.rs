@@ -2,7 +2,7 @@
 //!
 //! Everything works in the local shading frame (z = shading normal). `wo` points away from
 //! the surface towards the viewer (or the previous path vertex), `wi` towards the light (or
-//! the next vertex); both are unit vectors. Colours are linear RGB [`Vec3`]s.
+//! the next vertex); both are unit vectors. Values are [`Spectrum`]s (RGB or four wavelengths).
 //!
 //! Each model is one file implementing the [`Bxdf`] interface (`bxdf.rs`); [`Bsdf`] is the
 //! closed enum over them that integrators call (one dispatch per method). The materials of
@@ -48,16 +48,17 @@ pub use microfacet::TrowbridgeReitz;
 pub use thin_dielectric::ThinDielectric;
 
 use crate::math::{Vec2, Vec3};
+use crate::spectrum::Spectrum;
 
 /// pbrt-v4's conductor from reflectance: k = 2 sqrt(r) / sqrt(1 - r), with r at most 1 - 1e-7
 /// (so that k stays finite): its normal-incidence reflectance with eta = 1 is r.
-pub fn k_from_reflectance(r: Vec3) -> Vec3 {
+pub fn k_from_reflectance(r: Spectrum) -> Spectrum {
     // In f64: 1 - 1e-7 is not representable in f32 (it would round to 1 - 1.19e-7).
     let f = |r: f32| {
         let r = (r as f64).clamp(0.0, 1.0 - 1e-7);
         (2.0 * r.sqrt() / (1.0 - r).sqrt()) as f32
     };
-    Vec3::new(f(r.x), f(r.y), f(r.z))
+    r.map(f)
 }
 
 /// Calls `$call` on the model inside a [`Bsdf`] (one closed-enum dispatch per method).
@@ -96,9 +97,9 @@ impl Bsdf {
     /// BSDF value for the pair `(wo, wi)`; 0 for delta lobes. `mode` matters for refraction
     /// through a rough dielectric (radiance is scaled by `1 / eta'^2`) and for the layered
     /// BSDFs; the coated BSDFs' value is a deterministic Monte Carlo estimate.
-    pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+    pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Spectrum {
         if wo.z == 0.0 {
-            return Vec3::ZERO;
+            return Spectrum::ZERO;
         }
         dispatch!(self, b => b.f(wo, wi, mode))
     }
@@ -188,19 +189,19 @@ impl Bsdf {
     }
 
     /// The coat's reflection (exact): 0 without a coat ([`Self::has_coat`]).
-    pub fn f_coat(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+    pub fn f_coat(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Spectrum {
         match self {
             Bsdf::CoatedDiffuse(b) => b.f_coat(wo, wi, mode),
             Bsdf::CoatedConductor(b) if self.has_coat() => b.f_coat(wo, wi, mode),
-            _ => Vec3::ZERO,
+            _ => Spectrum::ZERO,
         }
     }
 
     /// What is below the coat (a stochastic estimate, the rest of [`Self::f`]); the whole
     /// BSDF without a coat.
-    pub fn f_body(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+    pub fn f_body(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Spectrum {
         if wo.z == 0.0 {
-            return Vec3::ZERO;
+            return Spectrum::ZERO;
         }
         match self {
             Bsdf::CoatedDiffuse(b) => b.f_body(wo, wi, mode),
@@ -241,7 +242,7 @@ impl Bsdf {
     /// the normal-incidence Fresnel reflectance for a conductor, `R + T` for diffuse
     /// transmission, and for a coat its normal-incidence reflectance plus the rest times the
     /// base's estimate.
-    pub fn reflectance_estimate(&self) -> Vec3 {
+    pub fn reflectance_estimate(&self) -> Spectrum {
         dispatch!(self, b => b.reflectance_estimate())
     }
 }
@@ -254,7 +255,12 @@ mod tests {
     fn smooth_conductor_mirror_sample() {
         let eta = Vec3::new(0.2, 0.9, 1.1);
         let k = Vec3::new(3.9, 2.4, 2.0);
-        let b = Bsdf::Conductor(Conductor::new(eta, k, 0.0, 0.0));
+        let b = Bsdf::Conductor(Conductor::new(
+            Spectrum::from_rgb(eta),
+            Spectrum::from_rgb(k),
+            0.0,
+            0.0,
+        ));
         for wo in [Vec3::new(0.6, 0.0, 0.8), Vec3::new(0.0, 0.28, -0.96)] {
             let s = b
                 .sample(wo, 0.3, Vec2::splat(0.4), TransportMode::Radiance)
@@ -262,9 +268,10 @@ mod tests {
             assert!(s.specular && !s.transmission && s.pdf == 1.0 && s.eta == 1.0);
             assert!((s.wi - Vec3::new(-wo.x, -wo.y, wo.z)).length() < 1e-7);
             let weight = s.f * s.wi.z.abs() / s.pdf;
-            let want = fresnel::fr_complex(wo.z.abs(), eta, k);
+            let want =
+                fresnel::fr_complex(wo.z.abs(), Spectrum::from_rgb(eta), Spectrum::from_rgb(k));
             assert!((weight - want).abs().max_element() < 1e-6);
-            assert_eq!(b.f(wo, s.wi, TransportMode::Radiance), Vec3::ZERO);
+            assert_eq!(b.f(wo, s.wi, TransportMode::Radiance), Spectrum::ZERO);
             assert_eq!(b.pdf(wo, s.wi), 0.0);
         }
     }
@@ -272,17 +279,30 @@ mod tests {
     #[test]
     fn degenerate_inputs_give_no_sample() {
         let all = [
-            Bsdf::Diffuse(Diffuse::new(Vec3::splat(0.5))),
+            Bsdf::Diffuse(Diffuse::new(Spectrum::splat(0.5))),
             Bsdf::Dielectric(Dielectric::new(1.5)),
-            Bsdf::Conductor(Conductor::new(Vec3::ONE, Vec3::splat(3.0), 0.0, 0.0)),
-            Bsdf::Conductor(Conductor::new(Vec3::ONE, Vec3::splat(3.0), 0.3, 0.3)),
+            Bsdf::Conductor(Conductor::new(
+                Spectrum::ONE,
+                Spectrum::splat(3.0),
+                0.0,
+                0.0,
+            )),
+            Bsdf::Conductor(Conductor::new(
+                Spectrum::ONE,
+                Spectrum::splat(3.0),
+                0.3,
+                0.3,
+            )),
         ];
         for b in all {
             let grazing = Vec3::X;
             assert!(b
                 .sample(grazing, 0.5, Vec2::splat(0.5), TransportMode::Radiance)
                 .is_none());
-            assert_eq!(b.f(grazing, Vec3::Z, TransportMode::Radiance), Vec3::ZERO);
+            assert_eq!(
+                b.f(grazing, Vec3::Z, TransportMode::Radiance),
+                Spectrum::ZERO
+            );
             let nan = Vec3::new(f32::NAN, 0.0, 1.0);
             assert!(b
                 .sample(nan, 0.5, Vec2::splat(0.5), TransportMode::Radiance)
@@ -299,9 +319,9 @@ mod tests {
         let coat = |eta: f32, a: f32, thick: f32, albedo: f32, g: f32| {
             layered::Layered::new(
                 Dielectric::rough(eta, a, a),
-                Diffuse::new(Vec3::splat(0.7)),
+                Diffuse::new(Spectrum::splat(0.7)),
                 thick,
-                Vec3::splat(albedo),
+                Spectrum::splat(albedo),
                 g,
                 10,
                 1,
@@ -314,9 +334,9 @@ mod tests {
                 all.push(Bsdf::CoatedDiffuse(coat(eta, a, 0.01, 0.5, 0.3)));
                 all.push(Bsdf::CoatedConductor(layered::Layered::new(
                     Dielectric::rough(eta, a, a),
-                    Conductor::new(Vec3::splat(0.2), Vec3::splat(3.0), a, 0.3),
+                    Conductor::new(Spectrum::splat(0.2), Spectrum::splat(3.0), a, 0.3),
                     1e-3,
-                    Vec3::ZERO,
+                    Spectrum::ZERO,
                     0.0,
                     10,
                     1,
@@ -327,12 +347,12 @@ mod tests {
         all.push(Bsdf::CoatedDiffuse(coat(1.5, 0.1, 0.0, 1.0, 0.99)));
         all.push(Bsdf::CoatedDiffuse(coat(1.5, 0.1, 1e6, 1.0, -0.99)));
         all.push(Bsdf::DiffuseTransmission(DiffuseTransmission::new(
-            Vec3::ONE,
-            Vec3::ZERO,
+            Spectrum::ONE,
+            Spectrum::ZERO,
         )));
         all.push(Bsdf::DiffuseTransmission(DiffuseTransmission::new(
-            Vec3::ZERO,
-            Vec3::ZERO,
+            Spectrum::ZERO,
+            Spectrum::ZERO,
         )));
         let grazing = [
             Vec3::new(1.0, 0.0, 1e-7).normalize(),

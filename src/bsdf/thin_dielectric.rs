@@ -11,6 +11,7 @@
 use super::fresnel::fr_dielectric;
 use super::{BsdfSample, Bxdf, BxdfFlags, Lobes, TransportMode};
 use crate::math::{Vec2, Vec3};
+use crate::spectrum::Spectrum;
 
 /// A thin dielectric sheet of relative index `eta`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -61,7 +62,7 @@ impl Bxdf for ThinDielectric {
             let wi = Vec3::new(-wo.x, -wo.y, wo.z);
             return Some(BsdfSample::new(
                 wi,
-                Vec3::splat(r / wi.z.abs()),
+                Spectrum::splat(r / wi.z.abs()),
                 pr,
                 true,
                 false,
@@ -71,7 +72,7 @@ impl Bxdf for ThinDielectric {
         let wi = -wo;
         Some(BsdfSample::new(
             wi,
-            Vec3::splat(t / wi.z.abs()),
+            Spectrum::splat(t / wi.z.abs()),
             pt,
             true,
             true,
@@ -80,8 +81,8 @@ impl Bxdf for ThinDielectric {
     }
 
     /// Both lobes are deltas: 0.
-    fn f(&self, _: Vec3, _: Vec3, _: TransportMode) -> Vec3 {
-        Vec3::ZERO
+    fn f(&self, _: Vec3, _: Vec3, _: TransportMode) -> Spectrum {
+        Spectrum::ZERO
     }
 
     fn pdf(&self, _: Vec3, _: Vec3, _: TransportMode, _: Lobes) -> f32 {
@@ -92,12 +93,12 @@ impl Bxdf for ThinDielectric {
         BxdfFlags::REFLECTION | BxdfFlags::TRANSMISSION | BxdfFlags::SPECULAR
     }
 
-    fn reflectance_estimate(&self) -> Vec3 {
-        Vec3::ONE
+    fn reflectance_estimate(&self) -> Spectrum {
+        Spectrum::ONE
     }
 
-    fn normal_reflectance(&self) -> Vec3 {
-        Vec3::splat(self.reflect_transmit(1.0).0)
+    fn normal_reflectance(&self) -> Spectrum {
+        Spectrum::splat(self.reflect_transmit(1.0).0)
     }
 }
 
@@ -154,7 +155,7 @@ mod tests {
                 let mode = TransportMode::Radiance;
                 let s = b.sample(wo, rng.f32(), Vec2::ZERO, mode).unwrap();
                 assert!(s.specular && s.eta == 1.0);
-                assert!((s.f.x * s.wi.z.abs() / s.pdf - 1.0).abs() < 1e-5);
+                assert!((s.f[0] * s.wi.z.abs() / s.pdf - 1.0).abs() < 1e-5);
                 if s.transmission {
                     assert_eq!(s.wi, -wo);
                 } else {
@@ -165,7 +166,7 @@ mod tests {
             let freq = reflected as f64 / n as f64;
             let sigma = (r as f64 * (1.0 - r as f64) / n as f64).sqrt();
             assert!((freq - r as f64).abs() < 4.0 * sigma, "{freq} vs {r}");
-            assert_eq!(b.f(wo, -wo, TransportMode::Radiance), Vec3::ZERO);
+            assert_eq!(b.f(wo, -wo, TransportMode::Radiance), Spectrum::ZERO);
             assert_eq!(b.pdf(wo, -wo), 0.0);
         }
         assert!(b.flags().is_specular_only());
@@ -205,7 +206,7 @@ mod tests {
                 let wi = v3(&row[format!("{key}_wi")]);
                 assert!((s.wi - wi).length() < 1e-6, "{row}: {key} {:?}", s.wi);
                 let weight = row[format!("{key}_weight")].as_f64().unwrap();
-                assert!((s.f.x * s.wi.z.abs() / s.pdf - weight as f32).abs() < 1e-5);
+                assert!((s.f[0] * s.wi.z.abs() / s.pdf - weight as f32).abs() < 1e-5);
             }
         }
         println!(

@@ -232,7 +232,7 @@ fn first_hit(
     let uc = sampler.next_1d();
     let u = sampler.next_2d();
     let rho = match bsdf.sample(si.wo, uc, u, TransportMode::Radiance) {
-        Some(bs) if bs.pdf > 0.0 => bs.f * (bs.wi.z.abs() / bs.pdf),
+        Some(bs) if bs.pdf > 0.0 => bs.f.rgb() * (bs.wi.z.abs() / bs.pdf),
         _ => Vec3::ZERO,
     };
     let rho = if rho.is_finite() { rho } else { Vec3::ZERO };
@@ -282,7 +282,7 @@ fn guide_through(
         if bs.pdf <= 0.0 {
             return (Vec3::ZERO, Vec3::ZERO);
         }
-        beta *= bs.f * (bs.wi.z.abs() / bs.pdf);
+        beta *= bs.f.rgb() * (bs.wi.z.abs() / bs.pdf);
         let ray = p.spawn_ray(frame.to_world(bs.wi));
         let Some(hit) = ctx.accel.intersect(RayKind::Bounce, &ray) else {
             return (beta * environment_albedo(ctx, &ray), Vec3::ZERO);
@@ -297,7 +297,7 @@ fn guide_through(
             let uc = sampler.next_1d();
             let u = sampler.next_2d();
             let rho = match bsdf.sample(next.wo, uc, u, TransportMode::Radiance) {
-                Some(bs) if bs.pdf > 0.0 => bs.f * (bs.wi.z.abs() / bs.pdf),
+                Some(bs) if bs.pdf > 0.0 => bs.f.rgb() * (bs.wi.z.abs() / bs.pdf),
                 _ => Vec3::ZERO,
             };
             let albedo = beta * rho;

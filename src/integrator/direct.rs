@@ -32,6 +32,7 @@ use crate::interaction::SurfaceInteraction;
 use crate::light::Receiver;
 use crate::math::Vec3;
 use crate::sampling::power_heuristic;
+use crate::spectrum::Spectrum;
 
 /// Sampler dimensions one vertex uses with `light_samples` shadow rays.
 pub(super) fn dims_per_vertex(light_samples: u32) -> u32 {
@@ -181,7 +182,7 @@ pub(super) fn emission<T>(
     ctx: &RenderContext,
     path: &PathState<T>,
     si: &SurfaceInteraction,
-    acc: &mut [Radiance],
+    acc: &mut [wavefront::Sums],
 ) {
     let Some(li) = si.area_light() else {
         return;
@@ -276,7 +277,7 @@ pub(super) fn shadow_rays<T>(
                 bsdf.f_coat(wo, wi, rad) * wi.z.abs(),
             )
         } else {
-            (bsdf.f(wo, wi, rad) * wi.z.abs(), Vec3::ZERO)
+            (bsdf.f(wo, wi, rad) * wi.z.abs(), Spectrum::ZERO)
         };
         if f.max_element() <= 0.0 && f_coat.max_element() <= 0.0 {
             continue;

@@ -54,9 +54,10 @@ use crate::bsdf::{Bsdf, TransportMode};
 use crate::film::Radiance;
 use crate::interaction::{shadow_ray_from, SurfaceInteraction};
 use crate::light::Receiver;
-use crate::math::{max_component, Ray, Vec3};
+use crate::math::{Ray, Vec3};
 use crate::medium::{henyey_greenstein, sample_henyey_greenstein};
 use crate::sampling::power_heuristic;
+use crate::spectrum::Spectrum;
 
 /// Dimensions each vertex reads: light choice (1), light point (2), BSDF lobe (1), BSDF
 /// direction (2), Russian roulette (1).
@@ -122,9 +123,9 @@ impl Shade for PathTracer {
         shade_medium(ctx, path, p, wave)
     }
 
-    fn escaped(&self, ctx: &RenderContext, path: &Path) -> Vec3 {
+    fn escaped(&self, ctx: &RenderContext, path: &Path) -> Spectrum {
         if path.data == Chain::Covered {
-            return Vec3::ZERO;
+            return Spectrum::ZERO;
         }
         wavefront::escaped(ctx, path)
     }
@@ -208,12 +209,12 @@ fn shade(
 
 /// Radiance emitted by area light `li` at `p` (geometric normal `ng`) towards the path's
 /// previous vertex, times the throughput and the MIS weight.
-fn emitted(ctx: &RenderContext, path: &Path, li: usize, p: Vec3, ng: Vec3) -> Vec3 {
+fn emitted(ctx: &RenderContext, path: &Path, li: usize, p: Vec3, ng: Vec3) -> Spectrum {
     let le = path
         .lambda
         .illuminant(ctx.lights.le(li, ng, -path.ray.d.normalize()));
     if le.max_element() <= 0.0 {
-        return Vec3::ZERO;
+        return Spectrum::ZERO;
     }
     let w = if path.prev_pdf > 0.0 {
         let light_pdf = ctx.lights.pdf_area(li, path.prev, p, ng);
@@ -306,9 +307,9 @@ fn continue_path(
 /// Russian roulette for a path reaching bounce `depth` (from bounce `RR_MIN_BOUNCES + 1` on:
 /// survive with `min(1, max_component(beta * eta_scale))`, dividing `beta` by it); false when
 /// the path ends (killed, or a throughput that is zero or not finite).
-fn roulette(beta: &mut Vec3, eta_scale: f32, depth: u32, u_rr: f32) -> bool {
+fn roulette(beta: &mut Spectrum, eta_scale: f32, depth: u32, u_rr: f32) -> bool {
     if depth > RR_MIN_BOUNCES {
-        let survive = max_component(*beta * eta_scale);
+        let survive = (*beta * eta_scale).max_element();
         if survive < 1.0 {
             if u_rr >= survive {
                 return false;

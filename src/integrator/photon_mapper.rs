@@ -13,7 +13,7 @@
 //! bounces `specular`.
 use super::direct::{self, continuation, emission, shadow_rays, Vertex};
 use super::photonmap::{self, Gather};
-use super::wavefront::{self, add, Component, PathState, Shade, Wave};
+use super::wavefront::{self, add, Component, PathState, Shade, Sums, Wave};
 use super::{charge, RenderContext};
 use crate::accel::{Hit, RayKind};
 use crate::bsdf::TransportMode;
@@ -23,6 +23,7 @@ use crate::math::{Ray, Vec3};
 use crate::photon::guide::GuideSlot;
 use crate::photon::trace;
 use crate::photon::KnnResult;
+use crate::spectrum::Spectrum;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
@@ -93,9 +94,9 @@ impl Shade for PhotonMapper {
         direct::emitted_component(path)
     }
 
-    fn escaped(&self, ctx: &RenderContext, path: &PathState<Covered>) -> Vec3 {
+    fn escaped(&self, ctx: &RenderContext, path: &PathState<Covered>) -> Spectrum {
         if path.data == Covered::Specular {
-            return Vec3::ZERO; // an L S+ G path: the glossy surface's caustic photons have it
+            return Spectrum::ZERO; // an L S+ G path: the glossy surface's caustic photons have it
         }
         wavefront::escaped(ctx, path)
     }
@@ -104,7 +105,7 @@ impl Shade for PhotonMapper {
         g.pending.len()
     }
 
-    fn flush(&self, ctx: &RenderContext, g: &mut Gathers, acc: &mut [Radiance]) {
+    fn flush(&self, ctx: &RenderContext, g: &mut Gathers, acc: &mut [Sums]) {
         trace_gathers(ctx, g, acc)
     }
 }
@@ -252,7 +253,7 @@ fn shade(
 }
 
 /// Traces the pending gather rays as one batch and adds their radiance.
-fn trace_gathers(ctx: &RenderContext, g: &mut Gathers, acc: &mut [Radiance]) {
+fn trace_gathers(ctx: &RenderContext, g: &mut Gathers, acc: &mut [Sums]) {
     let Some(pass) = &ctx.photons else { return };
     if g.pending.is_empty() {
         return;

@@ -43,6 +43,7 @@ use crate::photon::{Kernel, KnnResult, Photon, PhotonMap};
 use crate::sampling::{strata, Pattern, Sampler};
 use crate::scene::{ParamSet, Scene, SceneError};
 use crate::spectrum::Lambda;
+use crate::spectrum::Spectrum;
 use std::sync::atomic::AtomicU64;
 use std::time::Instant;
 
@@ -449,9 +450,9 @@ impl PhotonPass {
         max_bounce: u8,
         lambda: Lambda,
         buf: &mut KnnResult,
-    ) -> Vec3 {
+    ) -> Spectrum {
         let Some(map) = &self.maps.caustic else {
-            return Vec3::ZERO;
+            return Spectrum::ZERO;
         };
         let params = EstimateParams {
             max_bounce: max_bounce.min(self.caustic_params.max_bounce),
@@ -465,7 +466,7 @@ impl PhotonPass {
         );
         let mut l = f_d * lambda.illuminant(irradiance_with(map, si.p, n, &params, buf).0);
         let f_t = far_side_value(bsdf, wo);
-        if f_t != Vec3::ZERO {
+        if f_t != Spectrum::ZERO {
             l += f_t * lambda.illuminant(irradiance_with(map, si.p, -n, &params, buf).0);
         }
         l
@@ -530,7 +531,7 @@ pub fn gather_count(pass: &PhotonPass) -> u32 {
 pub struct Gather {
     pub pixel: usize,
     pub ray: Ray,
-    pub weight: Vec3,
+    pub weight: Spectrum,
     /// Solid-angle density of the ray's direction (for MIS with shadow rays).
     pub pdf: f32,
     /// Shadow rays taken at the gather's origin (for MIS), and that origin as their receiver.
@@ -550,8 +551,8 @@ pub struct Gather {
 /// What a visible diffuse point gets from the photon maps now (caustic, and indirect when not
 /// gathering), plus the gather rays it asks for.
 pub struct DiffusePhotons {
-    pub caustic: Vec3,
-    pub indirect: Vec3,
+    pub caustic: Spectrum,
+    pub indirect: Spectrum,
 }
 
 /// Photons whose direction the body of a coated surface is evaluated at, per estimate.
@@ -592,9 +593,9 @@ fn gather_frame(si: &SurfaceInteraction) -> Frame {
 /// The value of a diffuse point's BSDF (local `wo`) from the far side of its surface towards
 /// `wo`: a diffuse transmitter's `T / pi`, zero for a reflector and for a coated surface.
 /// Photon estimates weigh the irradiance arriving on the far side by it.
-pub fn far_side_value(bsdf: &Bsdf, wo: Vec3) -> Vec3 {
+pub fn far_side_value(bsdf: &Bsdf, wo: Vec3) -> Spectrum {
     if bsdf.has_coat() || !bsdf.flags().has_transmission() {
-        return Vec3::ZERO;
+        return Spectrum::ZERO;
     }
     bsdf.f(
         wo,
@@ -658,8 +659,8 @@ pub fn at_diffuse(
     guide: Option<&GatherGuide>,
     si: &SurfaceInteraction,
     bsdf: &Bsdf,
-    f_d: Vec3,
-    beta: Vec3,
+    f_d: Spectrum,
+    beta: Spectrum,
     pixel: usize,
     depth: u32,
     lambda: Lambda,
@@ -669,8 +670,8 @@ pub fn at_diffuse(
 ) -> DiffusePhotons {
     let (p, n) = (si.p, si.facing_normal());
     let mut out = DiffusePhotons {
-        caustic: Vec3::ZERO,
-        indirect: Vec3::ZERO,
+        caustic: Spectrum::ZERO,
+        indirect: Spectrum::ZERO,
     };
     let Some(last) = read_limit(&pass.settings.trace, depth + 1) else {
         return out;
@@ -692,7 +693,7 @@ pub fn at_diffuse(
         } else {
             let e = irradiance_with(map, p, n, params, buf).0;
             let mut l = f_d * lambda.illuminant(e);
-            if f_t != Vec3::ZERO {
+            if f_t != Spectrum::ZERO {
                 let e = irradiance_with(map, p, -n, params, buf).0;
                 l += f_t * lambda.illuminant(e);
             }
@@ -794,9 +795,9 @@ pub fn gather_radiance(
     g: &mut Gather,
     hit: Option<Hit>,
     buf: &mut KnnResult,
-) -> (Vec3, Vec3) {
+) -> (Spectrum, Spectrum) {
     let Some(global) = &pass.maps.global else {
-        return (Vec3::ZERO, Vec3::ZERO);
+        return (Spectrum::ZERO, Spectrum::ZERO);
     };
     let n_g = pass.settings.gather_samples.max(1) as f32;
     // The gather's weight holds 1/n_g; the heuristic's sample counts do the rest.
@@ -804,7 +805,7 @@ pub fn gather_radiance(
         crate::sampling::power_heuristic(n_g * g.pdf, g.light_samples as f32 * light_pdf)
     };
     // The gather ray's own segment (a medium it crosses) weighs both.
-    let tr = crate::accel::transmittance(ctx.scene, hit.as_ref(), &g.ray);
+    let tr = Spectrum::from_rgb(crate::accel::transmittance(ctx.scene, hit.as_ref(), &g.ray));
     let direct = emitted(ctx, &g.ray, g.from, hit.as_ref(), g.lambda, mis);
     (tr * direct, tr * reflected(ctx, pass, global, g, hit, buf))
 }
@@ -829,16 +830,16 @@ pub fn at_glossy(
     bsdf: &Bsdf,
     lambda: Lambda,
     buf: &mut KnnResult,
-) -> Option<Vec3> {
+) -> Option<Spectrum> {
     if !trace::is_receiver(bsdf, caustic_alpha(pass)?) {
         return None;
     }
     let Some(last) = read_limit(&pass.settings.trace, depth + 1) else {
-        return Some(Vec3::ZERO);
+        return Some(Spectrum::ZERO);
     };
     let params = pass.receiver_params.up_to(last);
     let Some(map) = &pass.maps.caustic_glossy else {
-        return Some(Vec3::ZERO); // photons were shot and none arrived on a glossy surface
+        return Some(Spectrum::ZERO); // photons were shot and none arrived on a glossy surface
     };
     let t = Instant::now();
     let wo = si.wo;
@@ -859,18 +860,18 @@ fn reflected(
     g: &mut Gather,
     hit: Option<Hit>,
     buf: &mut KnnResult,
-) -> Vec3 {
+) -> Spectrum {
     if pass.traced_gather {
         return traced(ctx, pass, g, hit, buf);
     }
     let scene = ctx.scene;
     let mut hit = hit;
     let mut ray = g.ray;
-    let mut throughput = Vec3::ONE;
+    let mut throughput = Spectrum::ONE;
     // Light taken at thin points passed on (see below), and how many; the specular and coat
     // bounces followed. With the camera path's depth they make the read point later
     // ([`bounce_limit`]).
-    let (mut out, mut continued, mut followed) = (Vec3::ZERO, 0, 0);
+    let (mut out, mut continued, mut followed) = (Spectrum::ZERO, 0, 0);
     // The density of the direction just drawn at a thin point: an emitter it reaches
     // counts, weighed against that point's shadow ray by the power heuristic.
     let mut from_thin: Option<(f32, Receiver)> = None;
@@ -930,7 +931,7 @@ fn reflected(
             if cached.fill < pass.settings.thin_fill
                 && continued < THIN_CONTINUATIONS
                 && bounce_limit(&pass.settings.trace, extra + 1).is_some()
-                && f_t == Vec3::ZERO
+                && f_t == Spectrum::ZERO
             {
                 // Thin geometry: the estimate's photons fill a strip of its disc (a tube, an
                 // edge) and divide by the whole disc. Take this point's light by a shadow ray
@@ -965,7 +966,7 @@ fn reflected(
                 continue;
             }
             let mut e = f_d * g.lambda.illuminant(cached.irradiance);
-            if f_t != Vec3::ZERO {
+            if f_t != Spectrum::ZERO {
                 let far = cached_irradiance(pass, global, si.p, -n, extra, buf).irradiance;
                 e += f_t * g.lambda.illuminant(far);
             }
@@ -1021,12 +1022,12 @@ fn traced(
     g: &mut Gather,
     hit: Option<Hit>,
     buf: &mut KnnResult,
-) -> Vec3 {
+) -> Spectrum {
     let scene = ctx.scene;
     let sharp_alpha = caustic_alpha(pass);
     let caustic = pass.maps.caustic.as_ref();
     let (mut hit, mut ray) = (hit, g.ray);
-    let (mut throughput, mut out) = (Vec3::ONE, Vec3::ZERO);
+    let (mut throughput, mut out) = (Spectrum::ONE, Spectrum::ZERO);
     let mut weight = EmitterWeight::Zero;
     // Sharp bounces only since the last point that read the caustic map (the gather's origin
     // read it).
@@ -1057,7 +1058,9 @@ fn traced(
         let body = coated && g.sampler.next_1d() >= p_coat;
         let wi;
         if body
-            || (!coated && bsdf.flags().has_diffuse() && far_side_value(&bsdf, wo) == Vec3::ZERO)
+            || (!coated
+                && bsdf.flags().has_diffuse()
+                && far_side_value(&bsdf, wo) == Spectrum::ZERO)
         {
             // A diffuse point: shadow ray, caustic estimate, cosine-sampled bounce.
             let choice = if coated { 1.0 - p_coat } else { 1.0 };
@@ -1089,7 +1092,7 @@ fn traced(
                     // photons lie near it. Zero, not a full search (which there walks every
                     // photon of the other side of a thin panel: car 2.6 s -> 1.7 s at 16 spp;
                     // the image's mean moved 0.03%, its 4x4 blocks at most 0.1%).
-                    Vec3::ZERO
+                    Spectrum::ZERO
                 } else if coated {
                     let u = g.sampler.next_1d();
                     let fw =
@@ -1152,13 +1155,13 @@ fn traced(
 
 /// The next hit of a gather path along `ray` (counted as a secondary ray) and the
 /// transmittance of the media the segment crosses.
-fn gather_segment(ctx: &RenderContext, ray: &Ray) -> (Option<Hit>, Vec3) {
+fn gather_segment(ctx: &RenderContext, ray: &Ray) -> (Option<Hit>, Spectrum) {
     let hit = ctx.accel.intersect(RayKind::Gather, ray);
     ctx.counters
         .secondary_rays
         .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let tr = crate::accel::transmittance(ctx.scene, hit.as_ref(), ray);
-    (hit, tr)
+    (hit, Spectrum::from_rgb(tr))
 }
 
 /// Most thin points a gather ray passes on.
@@ -1178,8 +1181,8 @@ fn direct_mis(
     si: &SurfaceInteraction,
     sampler: &mut Sampler,
     lambda: Lambda,
-    f: impl Fn(Vec3) -> Vec3,
-) -> Vec3 {
+    f: impl Fn(Vec3) -> Spectrum,
+) -> Spectrum {
     let u_sel = sampler.next_1d();
     let u = sampler.next_2d();
     let s = ctx
@@ -1200,13 +1203,13 @@ fn emitted(
     hit: Option<&Hit>,
     lambda: Lambda,
     weight: impl Fn(f32) -> f32,
-) -> Vec3 {
+) -> Spectrum {
     let Some(h) = hit else {
         return lambda.illuminant(ctx.lights.escaped(ray.o, ray.d, Pick::At(from), weight));
     };
     let mesh = &ctx.scene.meshes[h.mesh as usize];
     let Some(li) = mesh.area_light else {
-        return Vec3::ZERO;
+        return Spectrum::ZERO;
     };
     let p = mesh.point(h.prim, h.u, h.v);
     let ng = mesh.geometric_normal(h.prim, h.u, h.v);
@@ -1226,10 +1229,10 @@ fn direct_at_gather(
     si: &SurfaceInteraction,
     sampler: &mut Sampler,
     lambda: Lambda,
-    f: impl Fn(Vec3) -> Vec3,
-) -> Vec3 {
+    f: impl Fn(Vec3) -> Spectrum,
+) -> Spectrum {
     if !ctx.lights.has_surfaceless() {
-        return Vec3::ZERO;
+        return Spectrum::ZERO;
     }
     let u_sel = sampler.next_1d();
     let u = sampler.next_2d();
@@ -1245,16 +1248,16 @@ fn shadow_ray_value(
     si: &SurfaceInteraction,
     s: Option<LightSample>,
     lambda: Lambda,
-    f: impl Fn(Vec3) -> Vec3,
+    f: impl Fn(Vec3) -> Spectrum,
     cosine_mis: bool,
-) -> Vec3 {
+) -> Spectrum {
     let Some(s) = s else {
-        return Vec3::ZERO;
+        return Spectrum::ZERO;
     };
     let wi = si.frame.to_local(s.wi);
     let mut value = f(wi) * (wi.z.abs() / s.pdf);
     if value.max_element() <= 0.0 || !value.is_finite() {
-        return Vec3::ZERO;
+        return Spectrum::ZERO;
     }
     if cosine_mis && !s.delta {
         let cos_pdf = wi.z.abs() / std::f32::consts::PI;
@@ -1264,7 +1267,7 @@ fn shadow_ray_value(
         .shadow_rays
         .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     if ctx.accel.occluded(RayKind::Shadow, &si.shadow_ray(&s)) {
-        return Vec3::ZERO;
+        return Spectrum::ZERO;
     }
     value * lambda.illuminant(s.li)
 }

@@ -258,7 +258,7 @@ impl Vertex {
 
     fn eval(&self, wi_world: Vec3, mode: TransportMode) -> Option<Eval> {
         let wi = self.frame.to_local(wi_world);
-        let mut f = self.bsdf.f(self.wo, wi, mode);
+        let mut f = self.bsdf.f(self.wo, wi, mode).rgb();
         if mode == TransportMode::Importance {
             f *= shading_correction(self.wo_world, wi_world, self.frame.n, self.ng);
         }
@@ -645,7 +645,7 @@ fn scatter(
     }
     let wi_world = v.frame.to_world(s.wi);
     let cos_out = s.wi.z.abs();
-    let mut f = s.f;
+    let mut f = s.f.rgb();
     if mode == TransportMode::Importance {
         f *= shading_correction(v.wo_world, wi_world, v.frame.n, v.ng);
     }

@@ -15,7 +15,7 @@ use crate::light::{Pick, Receiver};
 use crate::limits::BATCH;
 use crate::math::{Ray, Vec3};
 use crate::sampling::Sampler;
-use crate::spectrum::Lambda;
+use crate::spectrum::{Lambda, Spectrum};
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
@@ -37,7 +37,7 @@ pub struct PathState<T = ()> {
     pub pixel: usize,
     pub ray: Ray,
     /// Throughput: product of `f |cos| / pdf` (and roulette compensation) so far.
-    pub beta: Vec3,
+    pub beta: Spectrum,
     /// Number of scattering events so far.
     pub depth: u32,
     /// Solid-angle BSDF density of the last bounce if it was non-delta, else 0 (camera or
@@ -69,7 +69,7 @@ impl<T: Default> PathState<T> {
         PathState {
             pixel,
             ray,
-            beta: Vec3::ONE,
+            beta: Spectrum::ONE,
             depth: 0,
             prev_pdf: 0.0,
             prev: Receiver::in_medium(ray.o),
@@ -84,9 +84,12 @@ impl<T: Default> PathState<T> {
     }
 }
 
+/// A pixel's sums of one sample index while its paths are in flight.
+pub type Sums = Radiance<Spectrum>;
+
 /// Adds `value` to a pixel's component; a non-finite value is dropped (one bad sample must not
 /// poison a pixel).
-pub fn add(acc: &mut [Radiance], pixel: usize, c: Component, value: Vec3) {
+pub fn add(acc: &mut [Sums], pixel: usize, c: Component, value: Spectrum) {
     if !value.is_finite() {
         return;
     }
@@ -98,7 +101,7 @@ pub fn add(acc: &mut [Radiance], pixel: usize, c: Component, value: Vec3) {
 pub struct Shadow {
     pub pixel: usize,
     pub ray: Ray,
-    pub contrib: Vec3,
+    pub contrib: Spectrum,
     pub component: Component,
     /// The medium the ray starts in (read only by integrators that track media).
     pub medium: Option<u32>,
@@ -107,7 +110,7 @@ pub struct Shadow {
 /// Where a shading step puts its results.
 pub struct Wave<'a, X, T = ()> {
     /// The tile's per-pixel sums.
-    pub acc: &'a mut [Radiance],
+    pub acc: &'a mut [Sums],
     pub shadows: &'a mut Vec<Shadow>,
     /// Paths continuing into the next wave.
     pub next: &'a mut Vec<PathState<T>>,
@@ -151,7 +154,7 @@ pub trait Shade: Sync {
     ) {
     }
     /// What `path` sees of the infinite lights when it leaves the scene (see [`escaped`]).
-    fn escaped(&self, ctx: &RenderContext, path: &PathState<Self::PathData>) -> Vec3 {
+    fn escaped(&self, ctx: &RenderContext, path: &PathState<Self::PathData>) -> Spectrum {
         escaped(ctx, path)
     }
     /// Entries waiting in `extra` (flushed at [`BATCH`] and at the end of each wave).
@@ -159,7 +162,7 @@ pub trait Shade: Sync {
         0
     }
     /// Traces and resolves what `extra` holds.
-    fn flush(&self, _ctx: &RenderContext, _extra: &mut Self::Extra, _acc: &mut [Radiance]) {}
+    fn flush(&self, _ctx: &RenderContext, _extra: &mut Self::Extra, _acc: &mut [Sums]) {}
 }
 
 /// Closest hits of a batch of rays of `kind`, timed into `ray_ns`.
@@ -195,7 +198,7 @@ struct ShadowQueue {
 
 impl ShadowQueue {
     /// Traces the waiting shadow rays, adds what gets through, and empties the queue.
-    fn resolve(&mut self, ctx: &RenderContext, tracks: bool, acc: &mut [Radiance]) {
+    fn resolve(&mut self, ctx: &RenderContext, tracks: bool, acc: &mut [Sums]) {
         let (rays, occluded) = (&mut self.rays, &mut self.occluded);
         resolve_shadows(ctx, tracks, &self.shadows, rays, occluded, acc);
         self.shadows.clear();
@@ -227,24 +230,18 @@ pub fn render_tile<S: Shade>(
     let spp = ctx.settings.spp.max(1);
     let n = ((x1 - x0) * (y1 - y0)) as usize;
     let mut acc = vec![Radiance::default(); n];
-    // With `maxcomponentvalue`, each sample index gathers into its own buffer and is clamped
-    // when all its waves are done (a sample's light arrives over several waves); without it,
-    // straight into `acc` (the sums, and so the image, stay what they always were).
+    // Each sample index gathers into its own buffer (a sample's light arrives over several
+    // waves): once all its waves are done it is turned into RGB at the sample's wavelengths
+    // (a spectral render), clamped (`maxcomponentvalue`) and added to `acc`.
     let clamp = ctx.settings.max_component / ctx.settings.imaging_ratio;
-    // Per-pixel sample statistics (the gbuffer's variance channels) need each sample alone too.
+    // Per-pixel sample statistics (the gbuffer's variance channels).
     let mut stats = match ctx.variance {
         Some(_) => vec![Welford::default(); n],
         None => Vec::new(),
     };
-    // A spectral render turns each sample's values into RGB at the sample's wavelengths once
-    // all its waves are done, so it gathers each sample apart too.
     let spectral = ctx.settings.spectral;
     let mut lambdas = Vec::new();
-    let mut one = if clamp.is_finite() || !stats.is_empty() || spectral {
-        vec![Radiance::default(); n]
-    } else {
-        Vec::new()
-    };
+    let mut one = vec![Sums::default(); n];
     let mut b = Buffers::<S::PathData>::default();
     let mut extra = S::Extra::default();
     for sample in 0..spp {
@@ -267,16 +264,14 @@ pub fn render_tile<S: Shade>(
             .fetch_add(b.paths.len() as u64, Ordering::Relaxed);
         // The first wave is the camera rays, every later one their bounces.
         let mut kind = RayKind::Camera;
-        let sums = if one.is_empty() { &mut acc } else { &mut one };
         while !b.paths.is_empty() {
-            wave(ctx, shader, kind, &mut b, &mut extra, sums);
+            wave(ctx, shader, kind, &mut b, &mut extra, &mut one);
             kind = RayKind::Bounce;
         }
         for (i, (a, r)) in acc.iter_mut().zip(one.iter_mut()).enumerate() {
-            let mut r = std::mem::take(r);
-            if let Some(l) = lambdas.get(i) {
-                r = r.map(|v| l.to_rgb(v));
-            }
+            let r = std::mem::take(r);
+            let l = lambdas.get(i).unwrap_or(&Lambda::Rgb);
+            let r = r.map(|v| l.to_rgb(v));
             let r = crate::film::clamp_sample(r, clamp);
             if let Some(w) = stats.get_mut(i) {
                 w.add(ctx.settings.film_rgb(r.total()));
@@ -351,7 +346,7 @@ fn wave<S: Shade>(
     kind: RayKind,
     b: &mut Buffers<S::PathData>,
     extra: &mut S::Extra,
-    acc: &mut [Radiance],
+    acc: &mut [Sums],
 ) {
     b.rays.clear();
     b.rays.extend(b.paths.iter().map(|p| p.ray));
@@ -413,7 +408,7 @@ fn shade_one<S: Shade>(
                     w.acc,
                     path.pixel,
                     shader.emitted_component(&path),
-                    path.beta * e,
+                    path.beta * Spectrum::from_rgb(e),
                 );
             }
             // Camera segments and those after delta bounces only: later ones sample their
@@ -434,8 +429,13 @@ fn shade_one<S: Shade>(
                 ctx.counters
                     .beam_photons
                     .fetch_add(n as u64, Ordering::Relaxed);
-                add(w.acc, path.pixel, Component::Indirect, path.beta * beam);
-                path.beta *= tr.at(dist);
+                add(
+                    w.acc,
+                    path.pixel,
+                    Component::Indirect,
+                    path.beta * Spectrum::from_rgb(beam),
+                );
+                path.beta *= Spectrum::from_rgb(tr.at(dist));
             } else if let Some(t) = medium_segment(medium, &mut path, dist) {
                 let p = path.ray.o + path.ray.d * (t / len);
                 shader.shade_medium(ctx, path, p, w);
@@ -446,7 +446,8 @@ fn shade_one<S: Shade>(
             }
         }
     } else if let Some(hit) = hit {
-        path.beta *= crate::accel::transmittance(ctx.scene, Some(hit), &path.ray);
+        path.beta *=
+            Spectrum::from_rgb(crate::accel::transmittance(ctx.scene, Some(hit), &path.ray));
     }
     if let Some(hit) = hit {
         shader.shade(ctx, path, hit, w);
@@ -473,7 +474,7 @@ fn medium_segment<T>(
     let len = path.ray.d.length();
     let (o, d) = (path.ray.o, path.ray.d / len);
     if medium.is_homogeneous() && !medium.scatters() {
-        path.beta *= medium.transmittance(dist);
+        path.beta *= Spectrum::from_rgb(medium.transmittance(dist));
         return None;
     }
     path.sampler
@@ -482,16 +483,16 @@ fn medium_segment<T>(
     if !medium.scatters() {
         let key = crate::sampling::hash(&[uc.to_bits() as u64, u.to_bits() as u64]);
         let mut rng = crate::medium::grid::Rng::new(key);
-        path.beta *= medium.transmittance_along(o, d, dist, &mut rng);
+        path.beta *= Spectrum::from_rgb(medium.transmittance_along(o, d, dist, &mut rng));
         return None;
     }
-    match medium.sample_interaction(o, d, dist, uc, u, path.beta) {
+    match medium.sample_interaction(o, d, dist, uc, u, path.beta.rgb()) {
         crate::medium::MediumEvent::Scatter { t, weight } => {
-            path.beta *= weight;
+            path.beta *= Spectrum::from_rgb(weight);
             Some(t)
         }
         crate::medium::MediumEvent::Pass { weight } => {
-            path.beta *= weight;
+            path.beta *= Spectrum::from_rgb(weight);
             None
         }
     }
@@ -564,7 +565,7 @@ pub const MAX_CROSSINGS: u32 = 64;
 /// What a path that leaves the scene sees of the infinite lights, times its throughput: with
 /// full weight after the camera or a delta bounce, else power-heuristic-weighted against light
 /// sampling (the BSDF density of the last bounce against the lights' density of the direction).
-pub fn escaped<T>(ctx: &RenderContext, path: &PathState<T>) -> Vec3 {
+pub fn escaped<T>(ctx: &RenderContext, path: &PathState<T>) -> Spectrum {
     let d = path.ray.d.normalize_or_zero();
     let le = ctx
         .lights
@@ -586,7 +587,7 @@ fn resolve_shadows(
     shadows: &[Shadow],
     rays: &mut Vec<Ray>,
     occluded: &mut Vec<bool>,
-    acc: &mut [Radiance],
+    acc: &mut [Sums],
 ) {
     if shadows.is_empty() {
         return;
@@ -595,7 +596,12 @@ fn resolve_shadows(
         let t = Instant::now();
         for s in shadows {
             let tr = shadow_transmittance(ctx, s);
-            add(acc, s.pixel, s.component, s.contrib * tr);
+            add(
+                acc,
+                s.pixel,
+                s.component,
+                s.contrib * Spectrum::from_rgb(tr),
+            );
         }
         charge(&ctx.counters.ray_ns, t);
         ctx.counters

@@ -11,8 +11,8 @@
 use super::parts::tex;
 use super::{Material, MaterialContext, MaterialKind, MaterialModel, MAX_MIX_DEPTH};
 use crate::bsdf::{Bsdf, BxdfFlags, Diffuse};
-use crate::math::Vec3;
 use crate::params::{Loc, ParamSet, SceneError};
+use crate::spectrum::Spectrum;
 use crate::texture::{Tex, TexCoord};
 use std::collections::HashMap;
 
@@ -75,7 +75,7 @@ impl MaterialModel for MixMaterial {
     /// A mix is resolved to one of its materials before a BSDF is made; one that reaches here
     /// reflects nothing.
     fn bsdf(&self, _: &TexCoord) -> Bsdf {
-        Bsdf::Diffuse(Diffuse::new(Vec3::ZERO))
+        Bsdf::Diffuse(Diffuse::new(Spectrum::ZERO))
     }
 
     fn for_each_texture(&self, f: &mut dyn FnMut(&Tex)) {

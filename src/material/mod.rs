@@ -292,6 +292,7 @@ mod tests {
     use super::*;
     use crate::bsdf::TransportMode;
     use crate::math::Vec3;
+    use crate::spectrum::Spectrum;
 
     #[test]
     fn material_mapping_and_flags() {
@@ -303,7 +304,10 @@ mod tests {
         let f = diffuse.flags();
         assert!(f.has_diffuse() && !f.has_specular() && !f.has_glossy() && f.has_non_specular());
         assert!(f.contains(BxdfFlags::REFLECTION) && !f.contains(BxdfFlags::TRANSMISSION));
-        assert_eq!(diffuse.reflectance_estimate(), Vec3::new(0.1, 0.2, 0.3));
+        assert_eq!(
+            diffuse.reflectance_estimate(),
+            Spectrum::from_rgb(Vec3::new(0.1, 0.2, 0.3))
+        );
 
         let glass = MaterialKind::Dielectric(DielectricMaterial {
             eta: 1.5,
@@ -313,11 +317,11 @@ mod tests {
         let f = glass.flags();
         assert!(f.is_specular_only() && !f.has_diffuse() && !f.has_glossy());
         assert!(f.contains(BxdfFlags::REFLECTION | BxdfFlags::TRANSMISSION));
-        assert_eq!(glass.reflectance_estimate(), Vec3::ONE);
+        assert_eq!(glass.reflectance_estimate(), Spectrum::ONE);
         let wo = Vec3::new(0.6, 0.0, 0.8);
         assert_eq!(
             glass.f(wo, Vec3::new(-0.6, 0.0, 0.8), TransportMode::Radiance),
-            Vec3::ZERO
+            Spectrum::ZERO
         );
         assert_eq!(glass.pdf(wo, Vec3::new(-0.6, 0.0, 0.8)), 0.0);
 
@@ -349,12 +353,22 @@ mod tests {
                 },
             });
             let b2 = by_r.bsdf(&tc);
-            assert!((b2.reflectance_estimate() - r).abs().max_element() < 1e-5);
+            assert!(
+                (b2.reflectance_estimate() - Spectrum::from_rgb(r))
+                    .abs()
+                    .max_element()
+                    < 1e-5
+            );
             assert_eq!(b2.flags(), b.flags());
             assert_eq!(b.flags().is_specular_only(), smooth);
             assert_eq!(b.flags().has_glossy(), !smooth);
             assert!(!b.flags().has_diffuse());
-            assert!((b.reflectance_estimate() - r).abs().max_element() < 1e-5);
+            assert!(
+                (b.reflectance_estimate() - Spectrum::from_rgb(r))
+                    .abs()
+                    .max_element()
+                    < 1e-5
+            );
         }
     }
 }

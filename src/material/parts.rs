@@ -22,10 +22,11 @@ use crate::bsdf::{
 };
 use crate::math::Vec3;
 use crate::params::{ParamSet, ParamType, SceneError};
+use crate::spectrum::Spectrum;
 use crate::texture::{texture_param, Tex, TexCoord, Textures};
 
 /// A reflectance texture at `tc`, clamped to [0, 1] as pbrt-v4 does, at the lookup's wavelengths.
-pub fn unit(t: &Tex, tc: &TexCoord) -> Vec3 {
+pub fn unit(t: &Tex, tc: &TexCoord) -> Spectrum {
     tc.lambda.albedo(t.eval(tc).clamp(Vec3::ZERO, Vec3::ONE))
 }
 
@@ -150,7 +151,7 @@ pub fn conductor_bxdf(
             tc.lambda.unbounded(eta.eval(tc)),
             tc.lambda.unbounded(k.eval(tc)),
         ),
-        Metal::Reflectance(r) => (Vec3::ONE, k_from_reflectance(unit(r, tc))),
+        Metal::Reflectance(r) => (Spectrum::ONE, k_from_reflectance(unit(r, tc))),
     };
     let e = if outside > 0.0 { outside } else { 1.0 };
     let (au, av) = roughness.eval(tc);

@@ -20,6 +20,20 @@ use super::kdtree::KnnResult;
 use super::map::PhotonMap;
 use super::stored::Photon;
 use crate::math::Vec3;
+use crate::spectrum::Spectrum;
+
+/// What an estimate sums: photon powers (RGB) or a BSDF's value times them ([`Spectrum`]).
+pub trait Value: Copy + std::ops::Add<Output = Self> + std::ops::Mul<f32, Output = Self> {
+    const ZERO: Self;
+}
+
+impl Value for Vec3 {
+    const ZERO: Vec3 = Vec3::ZERO;
+}
+
+impl Value for Spectrum {
+    const ZERO: Spectrum = Spectrum::ZERO;
+}
 use std::f32::consts::PI;
 
 /// A density-estimation kernel over a disc of radius `r`, normalised so that
@@ -175,14 +189,14 @@ pub fn irradiance_with(
 /// over the disc). `f_power(photon)` returns `f(wo, -photon.dir) * photon.power`. Photons
 /// from both sides take part (the BSDF decides: zero across a reflector, transmission through
 /// a rough dielectric); the disc and count guards are those of [`irradiance_with`].
-pub fn radiance_with(
+pub fn radiance_with<V: Value>(
     map: &PhotonMap,
     p: Vec3,
     n: Vec3,
     params: &EstimateParams,
     buf: &mut KnnResult,
-    f_power: impl Fn(&Photon) -> Vec3,
-) -> (Vec3, usize, f32) {
+    f_power: impl Fn(&Photon) -> V,
+) -> (V, usize, f32) {
     estimate_by(map, p, n, params, buf, false, f_power)
 }
 
@@ -203,12 +217,12 @@ pub fn radiance_sampled(
     params: &EstimateParams,
     buf: &mut KnnResult,
     draws: (usize, f32),
-    mut f_dir: impl FnMut(Vec3, Vec3) -> Vec3,
-) -> (Vec3, usize, f32) {
+    mut f_dir: impl FnMut(Vec3, Vec3) -> Spectrum,
+) -> (Spectrum, usize, f32) {
     let (m, u) = draws;
     let (e, used, r2) = estimate_by(map, p, n, params, buf, true, |ph| ph.power());
     if used == 0 || e.max_element() <= 0.0 {
-        return (Vec3::ZERO, used, r2);
+        return (Spectrum::ZERO, used, r2);
     }
     // The photons estimate_by summed, with their weights w_i c_i (the same filter).
     let skip = usize::from(buf.is_full());
@@ -224,10 +238,10 @@ pub fn radiance_sampled(
     let neighbors = &buf.neighbors()[skip..];
     let total: f32 = neighbors.iter().map(weight).sum();
     if !(total > 0.0 && total.is_finite()) {
-        return (Vec3::ZERO, used, r2);
+        return (Spectrum::ZERO, used, r2);
     }
     let m = m.max(1);
-    let mut out = Vec3::ZERO;
+    let mut out = Spectrum::ZERO;
     let (mut acc, mut j) = (0.0f32, 0usize);
     let mut last = None;
     for nb in neighbors {
@@ -440,15 +454,15 @@ pub const SPARSE_MIN_FILL: f32 = 0.25;
 /// put a firefly on veach-bidir: relMSE 0.266 where 0.028 without).
 pub const WEIGH_MIN_FILL: f32 = 0.15;
 
-fn estimate_by(
+fn estimate_by<V: Value>(
     map: &PhotonMap,
     p: Vec3,
     n: Vec3,
     params: &EstimateParams,
     buf: &mut KnnResult,
     side: bool,
-    value: impl Fn(&Photon) -> Vec3,
-) -> (Vec3, usize, f32) {
+    value: impl Fn(&Photon) -> V,
+) -> (V, usize, f32) {
     search(map, p, n, params, buf, side);
     kernel_sum(map, p, n, params, buf, value)
 }
@@ -476,20 +490,20 @@ fn search(
 
 /// The kernel-weighted sum of `value(photon)` over the photons of the last [`search`] in
 /// `buf`: (sum, photons used, squared radius of the kernel's disc).
-fn kernel_sum(
+fn kernel_sum<V: Value>(
     map: &PhotonMap,
     p: Vec3,
     n: Vec3,
     params: &EstimateParams,
     buf: &KnnResult,
-    value: impl Fn(&Photon) -> Vec3,
-) -> (Vec3, usize, f32) {
+    value: impl Fn(&Photon) -> V,
+) -> (V, usize, f32) {
     let r2 = buf.r2();
     // When full, the farthest photon (the heap top) only defines the radius.
     let skip = usize::from(buf.is_full());
     let used = buf.len() - skip;
     if used < params.min_photons.max(1) || !(r2 > 0.0 && r2.is_finite()) {
-        return (Vec3::ZERO, 0, r2);
+        return (V::ZERO, 0, r2);
     }
     let neighbors = &buf.neighbors()[skip..];
     if params.shrink2 < 1.0 {
@@ -500,7 +514,7 @@ fn kernel_sum(
             neighbors
                 .iter()
                 .filter(|nb| nb.d2 <= r2s)
-                .fold((Vec3::ZERO, 0), |(acc, n), nb| {
+                .fold((V::ZERO, 0), |(acc, n), nb| {
                     (
                         acc + value(map.photon(nb.idx)) * params.kernel.weight(nb.d2, r2s),
                         n + 1,
@@ -509,7 +523,7 @@ fn kernel_sum(
         return (sum, n, r2s);
     }
     let weigh = Weigh::new(map, p, n, params, buf, r2);
-    let sum = neighbors.iter().fold(Vec3::ZERO, |acc, nb| {
+    let sum = neighbors.iter().fold(V::ZERO, |acc, nb| {
         acc + value(map.photon(nb.idx)) * weigh.weight(nb.d2)
     });
     (sum, used, r2)
@@ -849,8 +863,8 @@ mod tests {
         // (computed here by brute-force quadrature of f cos). A layer of photons from below,
         // 100 times brighter, must count zero (no transmission).
         let metal = crate::bsdf::Conductor::new(
-            Vec3::new(0.2, 0.9, 1.1),
-            Vec3::new(3.9, 2.4, 2.2),
+            Spectrum::from_rgb(Vec3::new(0.2, 0.9, 1.1)),
+            Spectrum::from_rgb(Vec3::new(3.9, 2.4, 2.2)),
             0.3,
             0.3,
         );
@@ -884,7 +898,7 @@ mod tests {
                 for j in 0..np {
                     let phi = 2.0 * PI * (j as f32 + 0.5) / np as f32;
                     let wi = Vec3::new(sin * phi.cos(), sin * phi.sin(), c);
-                    albedo += metal.f(wo, wi, TransportMode::Radiance) * c;
+                    albedo += metal.f(wo, wi, TransportMode::Radiance).rgb() * c;
                 }
             }
             let albedo = albedo * (2.0 * PI / (nt * np) as f32);
@@ -894,7 +908,7 @@ mod tests {
             for _ in 0..queries {
                 let p = Vec3::new(0.1 + 0.8 * rng(&mut s), 0.1 + 0.8 * rng(&mut s), 0.0);
                 let (l, used, _) = radiance_with(&map, p, Vec3::Z, &params, &mut buf, |ph| {
-                    metal.f(wo, -ph.dir(), TransportMode::Radiance) * ph.power()
+                    metal.f(wo, -ph.dir(), TransportMode::Radiance).rgb() * ph.power()
                 });
                 assert!(used >= 199, "both layers take part in the search: {used}");
                 sum += l;

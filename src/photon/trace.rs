@@ -603,7 +603,7 @@ pub fn scatter(si: &SurfaceInteraction, bsdf: &Bsdf, sampler: &mut Sampler) -> O
     let u2 = sampler.next_2d();
     let u_rr = sampler.next_1d();
     let bs = bsdf.sample(wo, uc, u2, TransportMode::Importance)?;
-    let w = bs.f * (bs.wi.z.abs() / bs.pdf);
+    let w = bs.f.rgb() * (bs.wi.z.abs() / bs.pdf);
     let q = ((w.x + w.y + w.z) / 3.0).min(1.0);
     if q.is_nan() || q <= 0.0 || u_rr >= q {
         return None;

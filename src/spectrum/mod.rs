@@ -1,4 +1,4 @@
-//! Spectral rendering as pbrt-v4 does it (`--spectral`): each camera sample carries three
+//! Spectral rendering as pbrt-v4 does it (`--spectral`): each camera sample carries four
 //! wavelengths, every RGB value of the scene is uplifted to a spectrum where it is used, and
 //! the film turns each sample's values back into linear sRGB through the CIE 1931 observer.
 //!
@@ -7,7 +7,7 @@
 //! between the two (the Cornell box's red wall is 7-11% brighter in RGB than in pbrt-v4).
 //!
 //! - Wavelengths ([`Lambda::sample`]): pbrt-v4's visible-wavelength density over 360-830 nm,
-//!   three stratified samples per camera sample (pbrt-v4 takes four).
+//!   four stratified samples per camera sample, as pbrt-v4 takes ([`Spectrum`]'s lanes).
 //! - Uplifting (pbrt-v4's `RGBAlbedoSpectrum`, `RGBUnboundedSpectrum`,
 //!   `RGBIlluminantSpectrum`): reflectances by the sigmoid-polynomial fit ([`fit`]);
 //!   unbounded values (a conductor's `eta` and `k`) as `2 m` times the fit of `rgb / 2m`
@@ -21,6 +21,9 @@
 pub mod blackbody;
 pub mod cie;
 pub mod fit;
+mod value;
+
+pub use value::Spectrum;
 
 use crate::math::Vec3;
 use std::sync::OnceLock;
@@ -30,9 +33,9 @@ pub const LAMBDA_MIN: f32 = 360.0;
 pub const LAMBDA_MAX: f32 = 830.0;
 
 /// Wavelengths per camera sample.
-pub const N_LAMBDA: usize = 3;
+pub const N_LAMBDA: usize = 4;
 
-/// What a camera sample's values mean: linear sRGB channels, or radiance at three sampled
+/// What a camera sample's values mean: linear sRGB channels, or radiance at four sampled
 /// wavelengths (nm) with their densities.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum Lambda {
@@ -59,7 +62,8 @@ pub fn sample_visible(u: f32) -> f32 {
 }
 
 impl Lambda {
-    /// Three wavelengths stratified from `u` in `[0, 1)` (`u`, `u + 1/3`, `u + 2/3`, wrapped).
+    /// Four wavelengths stratified from `u` in `[0, 1)` (`u`, `u + 1/4`, `u + 1/2`, `u + 3/4`,
+    /// wrapped).
     pub fn sample(u: f32) -> Lambda {
         let nm: [f32; N_LAMBDA] = std::array::from_fn(|i| {
             let v = u + i as f32 / N_LAMBDA as f32;
@@ -73,49 +77,50 @@ impl Lambda {
     }
 
     /// A reflectance in `[0, 1]` per channel at these wavelengths.
-    pub fn albedo(&self, rgb: Vec3) -> Vec3 {
+    pub fn albedo(&self, rgb: Vec3) -> Spectrum {
         match self {
-            Lambda::Rgb => rgb,
+            Lambda::Rgb => Spectrum::from_rgb(rgb),
             Lambda::Sampled { nm, .. } => {
                 let c = coeffs(rgb.to_array());
-                Vec3::from_array(nm.map(|l| fit::eval(c, l)))
+                Spectrum::from_array(nm.map(|l| fit::eval(c, l)))
             }
         }
     }
 
     /// A non-negative value without upper bound (a conductor's index) at these wavelengths.
-    pub fn unbounded(&self, rgb: Vec3) -> Vec3 {
+    pub fn unbounded(&self, rgb: Vec3) -> Spectrum {
         match self {
-            Lambda::Rgb => rgb,
+            Lambda::Rgb => Spectrum::from_rgb(rgb),
             Lambda::Sampled { nm, .. } => {
                 let rgb = rgb.max(Vec3::ZERO);
                 let m = rgb.max_element();
                 if m <= 0.0 || !m.is_finite() {
-                    return Vec3::ZERO;
+                    return Spectrum::ZERO;
                 }
                 let c = coeffs((rgb / (2.0 * m)).to_array());
-                Vec3::from_array(nm.map(|l| 2.0 * m * fit::eval(c, l)))
+                Spectrum::from_array(nm.map(|l| 2.0 * m * fit::eval(c, l)))
             }
         }
     }
 
     /// Emitted radiance (a light's RGB) at these wavelengths: [`Self::unbounded`] times the
     /// illuminant D65 of luminance 1.
-    pub fn illuminant(&self, rgb: Vec3) -> Vec3 {
+    pub fn illuminant(&self, rgb: Vec3) -> Spectrum {
         match self {
-            Lambda::Rgb => rgb,
+            Lambda::Rgb => Spectrum::from_rgb(rgb),
             Lambda::Sampled { nm, .. } => {
                 let t = tables();
-                self.unbounded(rgb) * Vec3::from_array(nm.map(|l| t.d65(l)))
+                self.unbounded(rgb) * Spectrum::from_array(nm.map(|l| t.d65(l)))
             }
         }
     }
 
     /// Linear sRGB of one sample's values `v` at these wavelengths (the film's sensor).
-    pub fn to_rgb(&self, v: Vec3) -> Vec3 {
+    pub fn to_rgb(&self, v: Spectrum) -> Vec3 {
         match self {
-            Lambda::Rgb => v,
+            Lambda::Rgb => v.rgb(),
             Lambda::Sampled { nm, pdf } => {
+                let v = v.to_array();
                 let mut xyz = Vec3::ZERO;
                 for i in 0..N_LAMBDA {
                     if pdf[i] > 0.0 {
@@ -323,7 +328,7 @@ mod tests {
     }
 
     /// Expected film RGB of `f(lambda)` over many stratified wavelength samples.
-    fn film_mean(f: impl Fn(&Lambda) -> Vec3) -> Vec3 {
+    fn film_mean(f: impl Fn(&Lambda) -> Spectrum) -> Vec3 {
         let n = 20_000;
         let mut sum = Vec3::ZERO;
         for i in 0..n {
@@ -380,12 +385,15 @@ mod tests {
                 );
             }
             let g = l.albedo(Vec3::splat(0.25));
-            assert!((g - Vec3::splat(0.25)).abs().max_element() < 1e-6, "{g}");
+            assert!(
+                (g - Spectrum::splat(0.25)).abs().max_element() < 1e-6,
+                "{g}"
+            );
         }
         let rgb = Vec3::new(0.3, 0.2, 0.1);
-        assert_eq!(Lambda::Rgb.albedo(rgb), rgb);
-        assert_eq!(Lambda::Rgb.illuminant(rgb), rgb);
-        assert_eq!(Lambda::Rgb.to_rgb(rgb), rgb);
+        assert_eq!(Lambda::Rgb.albedo(rgb), Spectrum::from_rgb(rgb));
+        assert_eq!(Lambda::Rgb.illuminant(rgb), Spectrum::from_rgb(rgb));
+        assert_eq!(Lambda::Rgb.to_rgb(Spectrum::from_rgb(rgb)), rgb);
     }
 }
 

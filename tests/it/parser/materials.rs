@@ -203,7 +203,7 @@ fn coated_rough_and_translucent_materials() {
     };
     assert_eq!(
         (d.reflectance, d.transmittance),
-        (Vec3::splat(0.25), Vec3::splat(0.25))
+        (Spectrum::splat(0.25), Spectrum::splat(0.25))
     );
     let m = material_of(
         r#"Material "diffusetransmission" "rgb reflectance" [0.2 0.4 0.6] "rgb transmittance" [0.5 0.5 0.5] "float scale" 2"#,
@@ -211,8 +211,8 @@ fn coated_rough_and_translucent_materials() {
     let Bsdf::DiffuseTransmission(d) = bsdf(&m) else {
         panic!("{m:?}")
     };
-    assert_eq!(d.reflectance, Vec3::new(0.4, 0.8, 1.0));
-    assert_eq!(d.transmittance, Vec3::ONE);
+    assert_eq!(d.reflectance, Spectrum::from_rgb(Vec3::new(0.4, 0.8, 1.0)));
+    assert_eq!(d.transmittance, Spectrum::ONE);
     assert_eq!(
         bsdf(&m).flags(),
         F::REFLECTION | F::TRANSMISSION | F::DIFFUSE
@@ -251,13 +251,16 @@ fn coated_rough_and_translucent_materials() {
     let Bsdf::CoatedDiffuse(c) = bsdf(&m) else {
         panic!("{m:?}")
     };
-    assert_eq!(c.bottom.reflectance, Vec3::new(0.1, 0.2, 0.3));
+    assert_eq!(
+        c.bottom.reflectance,
+        Spectrum::from_rgb(Vec3::new(0.1, 0.2, 0.3))
+    );
     assert!((c.top.distrib.alpha_x() - 0.3).abs() < 1e-6 && c.top.eta == 1.4);
     assert_eq!(
         (c.thickness, c.g, c.max_depth, c.n_samples),
         (0.2, -0.3, 4, 3)
     );
-    assert_eq!(c.albedo, Vec3::splat(0.5));
+    assert_eq!(c.albedo, Spectrum::splat(0.5));
     assert_eq!(bsdf(&m).flags(), F::REFLECTION | F::DIFFUSE);
 
     // Coated conductor: copper under the coat by default, its index divided by the coat's.
@@ -269,8 +272,8 @@ fn coated_rough_and_translucent_materials() {
     let Bsdf::Conductor(plain) = bsdf(&cu) else {
         panic!()
     };
-    assert_vec(c.bottom.eta, plain.eta / 1.5, 1e-6);
-    assert_vec(c.bottom.k, plain.k / 1.5, 1e-6);
+    assert_vec(c.bottom.eta.rgb(), (plain.eta / 1.5).rgb(), 1e-6);
+    assert_vec(c.bottom.k.rgb(), (plain.k / 1.5).rgb(), 1e-6);
     assert_eq!(bsdf(&m).flags(), F::REFLECTION | F::SPECULAR);
     let m = material_of(
         r#"Material "coatedconductor" "float interface.roughness" 0.01 "float interface.eta" 1.2 "spectrum conductor.eta" "metal-Au-eta" "spectrum conductor.k" "metal-Au-k" "float conductor.uroughness" 0.04 "float conductor.vroughness" 0.16"#,

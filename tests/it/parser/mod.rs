@@ -19,6 +19,7 @@ use photon::material::*;
 use photon::math::{Mat4, Vec2, Vec3};
 use photon::scene::loader::load;
 use photon::scene::{FilterDesc, Light, Material, MaterialKind, Scene, SceneError};
+use photon::spectrum::Spectrum;
 use std::f32::consts::PI;
 use std::path::{Path, PathBuf};
 
@@ -145,7 +146,10 @@ fn conductor(m: &Material) -> Option<(Vec3, Vec3, f32, f32)> {
     };
     let (eta, k) = match metal {
         Metal::EtaK { eta, k } => (eta.constant()?, k.constant()?),
-        Metal::Reflectance(r) => (Vec3::ONE, photon::bsdf::k_from_reflectance(r.constant()?)),
+        Metal::Reflectance(r) => {
+            let k = photon::bsdf::k_from_reflectance(Spectrum::from_rgb(r.constant()?));
+            (Vec3::ONE, k.rgb())
+        }
     };
     let (au, av) = roughness.constant()?;
     Some((eta, k, au, av))
