@@ -113,7 +113,7 @@ pub struct RenderSettings {
     /// gbuffer also keeps each pixel's sample variance ([`RenderOutput::variance`]): the
     /// per-pixel integrators then sum each sample apart before adding it in.
     pub aovs: aov::Request,
-    /// Render spectrally (`--spectral`, [`crate::spectrum`]): each camera sample at three
+    /// Render spectrally (`--spectral`, [`crate::spectrum`]): each camera sample at four
     /// wavelengths, as pbrt-v4 renders; only integrators that [`check_spectral`] accepts.
     pub spectral: bool,
 }

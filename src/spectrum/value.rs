@@ -48,12 +48,6 @@ impl Spectrum {
         self.0.truncate()
     }
 
-    /// Lane `i` (0-3).
-    #[inline]
-    pub fn lane(self, i: usize) -> f32 {
-        self.0[i]
-    }
-
     /// `f` of each lane.
     #[inline]
     pub fn map(self, f: impl Fn(f32) -> f32) -> Spectrum {
@@ -68,13 +62,6 @@ impl Spectrum {
     #[inline]
     pub fn min_element(self) -> f32 {
         self.0.min_element()
-    }
-
-    /// The mean of the four lanes (in RGB, `(r + 2g + b) / 4`): for probabilities that only
-    /// need to follow the value's size.
-    #[inline]
-    pub fn average(self) -> f32 {
-        self.0.element_sum() * 0.25
     }
 
     #[inline]
@@ -126,22 +113,6 @@ impl Spectrum {
     #[inline]
     pub fn powf(self, e: f32) -> Spectrum {
         Spectrum(self.0.powf(e))
-    }
-
-    /// Lanes with `self > o` set, as a mask usable by [`Spectrum::select`].
-    #[inline]
-    pub fn any_gt(self, o: Spectrum) -> bool {
-        self.0.cmpgt(o.0).any()
-    }
-
-    /// Each lane from `a` where `mask(lane of self)`, else from `b`.
-    #[inline]
-    pub fn select(self, mask: impl Fn(f32) -> bool, a: Spectrum, b: Spectrum) -> Spectrum {
-        let m = self.0.to_array();
-        let (a, b) = (a.0.to_array(), b.0.to_array());
-        Spectrum::from_array(std::array::from_fn(
-            |i| if mask(m[i]) { a[i] } else { b[i] },
-        ))
     }
 }
 
@@ -275,11 +246,10 @@ mod tests {
         let a = Spectrum::from_rgb(Vec3::new(0.2, 0.5, 0.9));
         let b = Spectrum::from_rgb(Vec3::new(0.0, 2.0, 0.1));
         let c = (a * b + a / 2.0 - b.exp()) / (a + Spectrum::ONE);
-        assert_eq!(c.lane(3), c.lane(1));
-        assert_eq!(c.rgb(), Vec3::from_array([0, 1, 2].map(|i| c.lane(i))));
+        assert_eq!(c[3], c[1]);
+        assert_eq!(c.rgb(), Vec3::from_array([0, 1, 2].map(|i| c[i])));
         assert_eq!(a.max_element(), 0.9);
         assert_eq!(b.min_element(), 0.0);
-        assert!((a.average() - 0.525).abs() < 1e-6);
         assert!((b / b).is_nan());
         assert!(!(a / a).is_nan());
     }

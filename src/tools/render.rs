@@ -119,7 +119,7 @@ pub struct RenderOptions {
     /// `Film "gbuffer"` adds pbrt-v4's channels.
     #[arg(long, value_enum, value_delimiter = ',', value_name = "NAME,...")]
     pub aov: Vec<Aov>,
-    /// Render spectrally as pbrt-v4 does: each camera sample at three wavelengths, the
+    /// Render spectrally as pbrt-v4 does: each camera sample at four wavelengths, the
     /// scene's RGB colours uplifted to spectra (Jakob-Hanika), the film through the CIE 1931
     /// observer. Saturated colours after several bounces then match pbrt-v4 (RGB rendering
     /// is several percent off there), at the price of colour noise (2-3x the error where RGB
@@ -620,7 +620,7 @@ fn banner(opts: &RenderOptions, job: &Job, build_s: f64, threads: usize) {
         if opts.robust { " (robust)" } else { "" }
     );
     if let Some(why) = &job.spectral_reason {
-        say!("color: spectral, three wavelengths per sample ({why}; --no-spectral renders RGB)");
+        say!("color: spectral, four wavelengths per sample ({why}; --no-spectral renders RGB)");
     } else if let Some(why) = integrator::spectral_auto(opts.integrator, scene) {
         say!("note: RGB rendering; {why}: colours may be several percent off pbrt-v4's (spectral) image here: --spectral renders as it does");
     }
