@@ -40,6 +40,8 @@ pub struct Overrides {
     pub alpha: Option<f32>,
     /// VCM's initial merge radius.
     pub merge_radius: Option<crate::integrator::vcm::MergeRadius>,
+    /// VCM merges at every non-delta vertex.
+    pub all_merges: bool,
     /// Progressive photon mapping (also switched on by the file).
     pub progressive: bool,
     /// Samples per pixel of each pass.
@@ -151,6 +153,7 @@ impl<'a> Job<'a> {
         if let Some(r) = o.merge_radius {
             s.vcm.radius = r;
         }
+        s.vcm.all_merges |= o.all_merges;
         s.photon.progressive |= o.progressive;
         if let Some(n) = o.pass_spp {
             s.pass_spp = n.max(1);

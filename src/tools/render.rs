@@ -113,6 +113,10 @@ pub struct RenderOptions {
     /// `--alpha` (default 0.75 for VCM).
     #[arg(long, allow_hyphen_values = true, value_parser = crate::integrator::vcm::MergeRadius::parse)]
     pub merge_radius: Option<crate::integrator::vcm::MergeRadius>,
+    /// VCM merges at every non-delta vertex, as Georgiev et al. do; by default only at
+    /// vertices seen through a purely specular surface (paths no connection samples).
+    #[arg(long)]
+    pub all_merges: bool,
     /// Data channels to write beside the image (EXR only), comma-separated or repeated:
     /// `alpha` (A), `albedo` and `normal` (the denoiser's guides, at the first surface that is
     /// not a mirror or smooth glass), `depth` (Z, camera space), `position` (P, world space).
@@ -226,6 +230,7 @@ impl RenderOptions {
             photon: self.photon.clone(),
             alpha: self.passes.alpha,
             merge_radius: self.merge_radius,
+            all_merges: self.all_merges,
             progressive: self.passes.progressive,
             pass_spp: self.passes.pass_spp,
             crop: self.pixelbounds.or(self.cropwindow),

@@ -38,22 +38,26 @@ fn block_means(pixels: &[[f32; 3]], w: usize, h: usize) -> Vec<f64> {
     sums.iter().map(|s| s / per).collect()
 }
 
+/// The merge radius of these tests: 0.003 of the scene's radius (half a pixel here), small
+/// enough that VCM's bias (VCM is consistent, not unbiased) stays below these tests' noise:
+/// at the default of one pixel footprint, 48x48 pixels are so large that a block next to the
+/// light is 4.6% too bright at 4 spp.
+const RADIUS: f32 = 0.003;
+
 /// Renders `scene` with `kind` at `w x h`, `spp` samples, seed `seed`; VCM with a merge
-/// radius of 0.003 of the scene's radius (half a pixel here), small enough that its bias
-/// (VCM is consistent, not unbiased) stays below these tests' noise: at the default of one
-/// pixel footprint, 48x48 pixels are so large that a block next to the light is 4.6% too
-/// bright at 4 spp.
+/// radius of `radius` of the scene's radius.
 fn render_small(
     scene: &Scene,
     kind: IntegratorKind,
     (w, h, spp): (u32, u32, u32),
     seed: u64,
+    radius: f32,
 ) -> RgbImage {
     let overrides = photon::tools::job::Overrides {
         res: Some((w, h)),
         spp: Some(spp),
         seed,
-        merge_radius: Some(MergeRadius::Scene(0.003)),
+        merge_radius: Some(MergeRadius::Scene(radius)),
         ..Default::default()
     };
     let job = common::job(scene, kind, BackendKind::Embree).with(&overrides);
@@ -69,10 +73,11 @@ fn blocks(
     kind: IntegratorKind,
     (w, h, spp): (u32, u32, u32),
     seeds: u64,
+    radius: f32,
 ) -> Vec<(f64, f64)> {
     let runs: Vec<Vec<f64>> = (0..seeds)
         .map(|seed| {
-            let image = render_small(scene, kind, (w, h, spp), 1000 + seed);
+            let image = render_small(scene, kind, (w, h, spp), 1000 + seed, radius);
             block_means(&image.pixels, w as usize, h as usize)
         })
         .collect();
@@ -98,11 +103,22 @@ fn worst_sigma(a: &[(f64, f64)], b: &[(f64, f64)], scale: f64) -> f64 {
 }
 
 fn agree_with_path(file: &str, kinds: &[(IntegratorKind, u32)], path_spp: u32) {
+    agree_with_path_at(file, kinds, path_spp, RADIUS)
+}
+
+/// [`agree_with_path`] with VCM's merge radius `radius` (of the scene's radius).
+fn agree_with_path_at(file: &str, kinds: &[(IntegratorKind, u32)], path_spp: u32, radius: f32) {
     let scene = loader::load(std::path::Path::new(file)).expect("scene loads");
     let (w, h) = (48, 48);
-    let path = blocks(&scene, IntegratorKind::Path, (w, h, path_spp), SEEDS);
+    let path = blocks(
+        &scene,
+        IntegratorKind::Path,
+        (w, h, path_spp),
+        SEEDS,
+        radius,
+    );
     for &(kind, spp) in kinds {
-        let got = blocks(&scene, kind, (w, h, spp), SEEDS);
+        let got = blocks(&scene, kind, (w, h, spp), SEEDS, radius);
         let worst = worst_sigma(&got, &path, 1.0);
         let rel: Vec<String> = got
             .iter()
@@ -140,6 +156,88 @@ fn bidirectional_agree_with_path_on_the_cornell_box() {
         ],
         32,
     );
+}
+
+/// A floor lit and seen through a glass slab, the light reaching it through the glass too
+/// (L S S D S S E): every merge VCM can make here is at the floor seen through the glass,
+/// so its default rule (merges only at vertices whose neighbour towards the camera is purely
+/// specular, `vcm::merges_at`) must give the image of `--all-merges` (to rounding: the
+/// light subpaths add a merge's terms once their next surface is known). Weights that drop
+/// the pending terms of a light vertex followed by the glass differ by far more.
+#[test]
+fn vcm_merges_through_glass_as_all_merges_do() {
+    let text = format!(
+        r#"LookAt 0 1.5 0  0 0 0  0 0 1
+Camera "perspective" "float fov" [ 40 ]
+Film "rgb" "integer xresolution" [ 32 ] "integer yresolution" [ 32 ]
+Integrator "path" "integer maxdepth" [ 8 ]
+WorldBegin
+AttributeBegin
+  AreaLightSource "diffuse" "rgb L" [ 6 6 6 ]
+  Shape "trianglemesh" "point3 P" [ -0.8 2.2 -0.8  0.8 2.2 -0.8  0.8 2.2 0.8  -0.8 2.2 0.8 ]
+    "integer indices" [ 0 1 2 0 2 3 ]
+AttributeEnd
+AttributeBegin
+  Material "diffuse" "rgb reflectance" [ 0.6 0.5 0.4 ]
+  Shape "trianglemesh" "point3 P" [ -3 0 -3  3 0 -3  3 0 3  -3 0 3 ]
+    "integer indices" [ 0 2 1 0 3 2 ]
+AttributeEnd
+AttributeBegin
+  Material "dielectric" "float eta" [ 1.5 ]
+  Translate 0 0.4 0
+  Scale 2.5 0.1 2.5
+  {cube}
+AttributeEnd
+"#,
+        cube = common::CUBE
+    );
+    let file = common::write_scene("bidirectional", "glass-slab", &text);
+    let scene = loader::load(&file).expect("scene loads");
+    let render = |all_merges: bool| {
+        let overrides = photon::tools::job::Overrides {
+            spp: Some(8),
+            seed: 3,
+            merge_radius: Some(MergeRadius::Scene(0.03)),
+            all_merges,
+            ..Default::default()
+        };
+        let job = common::job(&scene, IntegratorKind::Vcm, BackendKind::Embree).with(&overrides);
+        let pool = job.pool().expect("thread pool");
+        let (accel, _) = job.build(&pool).expect("accel builds");
+        job.render(&accel, &pool, &|_, _| {}).image
+    };
+    let (sds, all) = (render(false), render(true));
+    let (mut worst, mut sum) = (0.0f64, 0.0f64);
+    for (a, b) in sds.pixels.iter().zip(&all.pixels) {
+        for c in 0..3 {
+            let d = (a[c] - b[c]).abs() as f64 / (b[c].abs() as f64).max(1e-3);
+            worst = worst.max(d);
+        }
+        sum += b.iter().map(|&v| v as f64).sum::<f64>();
+    }
+    println!("SDS rule against all merges: worst relative pixel difference {worst:.2e}");
+    assert!(sum > 0.0, "the floor is lit");
+    assert!(
+        worst < 1e-4,
+        "SDS merges differ from all merges by {worst:.2e}"
+    );
+}
+
+/// Without a purely specular surface VCM makes no merge by default, and its weights count
+/// none: its image is bdpt's (Cornell box, 32x32, 4 spp; to rounding).
+#[test]
+fn vcm_without_specular_surfaces_is_bdpt() {
+    let scene = loader::load(std::path::Path::new(CORNELL)).expect("scene loads");
+    let vcm = render_small(&scene, IntegratorKind::Vcm, (32, 32, 4), 5, RADIUS);
+    let bdpt = render_small(&scene, IntegratorKind::Bdpt, (32, 32, 4), 5, RADIUS);
+    let mut worst = 0.0f64;
+    for (a, b) in vcm.pixels.iter().zip(&bdpt.pixels) {
+        for c in 0..3 {
+            worst = worst.max((a[c] - b[c]).abs() as f64 / (b[c].abs() as f64).max(1e-3));
+        }
+    }
+    println!("vcm against bdpt on the Cornell box: worst relative pixel difference {worst:.2e}");
+    assert!(worst < 1e-5, "vcm differs from bdpt by {worst:.2e}");
 }
 
 /// Glass and mirror spheres: caustics (light tracing and merging find them, connections
