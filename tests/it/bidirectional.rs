@@ -207,20 +207,25 @@ AttributeEnd
         job.render(&accel, &pool, &|_, _| {}).image
     };
     let (sds, all) = (render(false), render(true));
-    let (mut worst, mut sum) = (0.0f64, 0.0f64);
-    for (a, b) in sds.pixels.iter().zip(&all.pixels) {
-        for c in 0..3 {
-            let d = (a[c] - b[c]).abs() as f64 / (b[c].abs() as f64).max(1e-3);
-            worst = worst.max(d);
-        }
-        sum += b.iter().map(|&v| v as f64).sum::<f64>();
-    }
+    let worst = worst_relative(&sds, &all);
+    let sum: f64 = all.pixels.iter().flatten().map(|&v| v as f64).sum();
     println!("SDS rule against all merges: worst relative pixel difference {worst:.2e}");
     assert!(sum > 0.0, "the floor is lit");
     assert!(
         worst < 1e-4,
         "SDS merges differ from all merges by {worst:.2e}"
     );
+}
+
+/// The largest difference of a channel between `a` and `b`, relative to `b`'s (at least
+/// 1e-3).
+fn worst_relative(a: &RgbImage, b: &RgbImage) -> f64 {
+    a.pixels
+        .iter()
+        .flatten()
+        .zip(b.pixels.iter().flatten())
+        .map(|(&x, &y)| (x - y).abs() as f64 / (y.abs() as f64).max(1e-3))
+        .fold(0.0, f64::max)
 }
 
 /// Without a purely specular surface VCM makes no merge by default, and its weights count
@@ -230,12 +235,7 @@ fn vcm_without_specular_surfaces_is_bdpt() {
     let scene = loader::load(std::path::Path::new(CORNELL)).expect("scene loads");
     let vcm = render_small(&scene, IntegratorKind::Vcm, (32, 32, 4), 5, RADIUS);
     let bdpt = render_small(&scene, IntegratorKind::Bdpt, (32, 32, 4), 5, RADIUS);
-    let mut worst = 0.0f64;
-    for (a, b) in vcm.pixels.iter().zip(&bdpt.pixels) {
-        for c in 0..3 {
-            worst = worst.max((a[c] - b[c]).abs() as f64 / (b[c].abs() as f64).max(1e-3));
-        }
-    }
+    let worst = worst_relative(&vcm, &bdpt);
     println!("vcm against bdpt on the Cornell box: worst relative pixel difference {worst:.2e}");
     assert!(worst < 1e-5, "vcm differs from bdpt by {worst:.2e}");
 }
