@@ -86,16 +86,6 @@ impl Spectrum {
     }
 
     #[inline]
-    pub fn min(self, o: Spectrum) -> Spectrum {
-        Spectrum(self.0.min(o.0))
-    }
-
-    #[inline]
-    pub fn clamp(self, lo: Spectrum, hi: Spectrum) -> Spectrum {
-        Spectrum(self.0.clamp(lo.0, hi.0))
-    }
-
-    #[inline]
     pub fn abs(self) -> Spectrum {
         Spectrum(self.0.abs())
     }
@@ -108,11 +98,6 @@ impl Spectrum {
     #[inline]
     pub fn sqrt(self) -> Spectrum {
         self.map(f32::sqrt)
-    }
-
-    #[inline]
-    pub fn powf(self, e: f32) -> Spectrum {
-        Spectrum(self.0.powf(e))
     }
 }
 
