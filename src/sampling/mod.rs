@@ -49,33 +49,53 @@ pub fn to_unit(h: u64) -> f32 {
     (h >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
 }
 
-/// A pseudo-random permutation of `0..n` evaluated at `i` (a bijective hash on the next power
-/// of two, cycle-walked into range). Stateless, so sample `i` needs no table.
+/// A pseudo-random permutation of `0..n` evaluated at `i`: Kensler's hash (Correlated
+/// Multi-Jittered Sampling, 2013), a bijection on the next power of two cycle-walked into
+/// range and then rotated by the seed. Stateless, so sample `i` needs no table.
+///
+/// Every element is uniform over the seeds, so two dimensions of one sample, permuted with
+/// independent seeds, fall in independent strata. The hash used before reached few
+/// permutations of a small `n` (6 of the 24 for `n = 4`, with 0 sent to 0 with probability
+/// 0.37): a floor seen and lit through a glass slab came out 15-26% bright from the path
+/// tracer at 4 spp with `--pattern n-rooks`, and bpm's light subpaths 1-7% bright with the
+/// stratified pattern.
 pub fn permute(i: u32, n: u32, seed: u64) -> u32 {
     debug_assert!(i < n);
     if n <= 1 {
         return 0;
     }
-    let bits = 32 - (n - 1).leading_zeros();
-    let mask = if bits == 32 {
-        u32::MAX
-    } else {
-        (1u32 << bits) - 1
-    };
-    let (s0, s1) = ((seed as u32) & mask, ((seed >> 32) as u32) | 1);
+    let p = (seed ^ (seed >> 32)) as u32;
+    let w = u32::MAX >> (n - 1).leading_zeros();
     let mut x = i;
     loop {
-        // Each step is a bijection on `bits`-bit integers.
-        x ^= s0;
-        x = x.wrapping_mul(s1) & mask;
-        x ^= (x & mask) >> (bits / 2).max(1);
-        x = x.wrapping_mul(0x2C1B_3C6D | 1) & mask;
-        x ^= (x & mask) >> (bits / 3).max(1);
-        x = x.wrapping_add(s0 >> 1) & mask;
+        x = kensler_round(x, p, w);
         if x < n {
-            return x;
+            return ((x as u64 + p as u64) % n as u64) as u32;
         }
     }
+}
+
+/// One pass of Kensler's bijective hash on the integers under mask `w` (all ones), keyed by
+/// `p`: xor-shifts and odd multiplies, each invertible modulo `w + 1`.
+fn kensler_round(mut x: u32, p: u32, w: u32) -> u32 {
+    x ^= p;
+    x = x.wrapping_mul(0xe170_893d);
+    x ^= p >> 16;
+    x ^= (x & w) >> 4;
+    x ^= p >> 8;
+    x = x.wrapping_mul(0x0929_eb3f);
+    x ^= p >> 23;
+    x ^= (x & w) >> 1;
+    x = x.wrapping_mul(1 | p >> 27);
+    x = x.wrapping_mul(0x6935_fa69);
+    x ^= (x & w) >> 11;
+    x = x.wrapping_mul(0x74dc_b303);
+    x ^= (x & w) >> 2;
+    x = x.wrapping_mul(0x9e50_1cc3);
+    x ^= (x & w) >> 2;
+    x = x.wrapping_mul(0xc860_a3df);
+    x &= w;
+    x ^ (x >> 5)
 }
 
 /// The sample stream of one (pixel or photon) sample: dimension-indexed uniform numbers,
@@ -223,6 +243,34 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
 
 #[cfg(test)]
 mod tests {
+    /// Each element of a permutation is uniform over the seeds (so that two dimensions of one
+    /// sample, permuted with independent seeds, fall in independent strata), and each seed
+    /// gives a permutation. The hash used before sent 0 to 0 with probability 0.37 for
+    /// `n = 4` (and was off uniform by 0.21 for `n = 3`).
+    #[test]
+    fn permutation_elements_are_uniform() {
+        let seeds = 40_000u64;
+        for n in [2u32, 3, 4, 5, 7, 8, 16, 33] {
+            let mut counts = vec![vec![0u32; n as usize]; n as usize];
+            for k in 0..seeds {
+                let seed = hash(&[k, n as u64]);
+                let mut seen = vec![false; n as usize];
+                for i in 0..n {
+                    let p = permute(i, n, seed) as usize;
+                    assert!(!seen[p], "n {n}: not a permutation");
+                    seen[p] = true;
+                    counts[i as usize][p] += 1;
+                }
+            }
+            let worst = counts
+                .iter()
+                .flatten()
+                .map(|&c| (c as f64 / seeds as f64 - 1.0 / n as f64).abs())
+                .fold(0.0, f64::max);
+            assert!(worst < 0.01, "n {n}: an element is off uniform by {worst}");
+        }
+    }
+
     use super::*;
 
     #[test]

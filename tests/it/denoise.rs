@@ -71,6 +71,7 @@ fn without_the_feature_every_way_in_says_how_to_get_it() {
 mod with_oidn {
     use super::{assert_one_line, photon};
     use crate::support::{relmse, TempDir};
+    use photon::imageio::metrics::{compare, MaskOptions};
     use photon::imageio::{
         read_exr, read_exr_channel_list, read_exr_layer, write_exr, ExrPixel, RgbImage,
     };
@@ -81,7 +82,8 @@ mod with_oidn {
 
     /// Renders cornell-spheres at 64x64, 4 spp, with `--denoise` and returns the relMSE of the
     /// noisy beauty (kept as layer `noisy`) and of the denoised image against the reference
-    /// box-filtered down 4x; checks the noisy layer is the plain render's image bit for bit
+    /// box-filtered down 4x, leaving out the pixels within one pixel of a reference pixel above
+    /// 2 (the light and its mirror images: 115 of 4096); checks the noisy layer is the plain render's image bit for bit
     /// and that `photon denoise` of the plain render gives the same denoised image.
     fn before_after(integrator: &str, dir: &TempDir) -> (f64, f64) {
         let (den, plain, again) = (
@@ -141,16 +143,26 @@ mod with_oidn {
             .unwrap()
             .downsample_box(4)
             .unwrap();
-        (relmse(&noisy, &reference), relmse(&denoised, &reference))
+        let mask = MaskOptions {
+            mask_above: Some(2.0),
+        };
+        let (before, after) = (
+            compare(&noisy, &reference, mask).expect("sizes"),
+            compare(&denoised, &reference, mask).expect("sizes"),
+        );
+        assert!(after.masked_emitter < 150, "{after:?}");
+        (before.overall.relmse, after.overall.relmse)
     }
 
-    /// Measured (64x64, 4 spp, 2026-12-05, with the render's albedo and normal guides):
-    /// photonmap 0.0332 -> 0.0140 (2.4x); path 1.17 -> 0.052 (23x); without guides 0.0129 and
-    /// 0.047. The margins are 1.8x and 10x.
+    /// Measured (64x64, 4 spp, 2026-12-07, with the render's albedo and normal guides, seeds
+    /// 1-4, light's neighbourhood left out): photonmap 0.027-0.032 -> 0.0043-0.0046 (6.0-7.0x);
+    /// path 1.00-1.66 -> 0.0091-0.0122 (86-167x). With the light's edge counted, one edge
+    /// pixel the denoiser smears over its neighbour below (reference 0.19, denoised 2.0) swung
+    /// the photonmap ratio between 0.9x and 3.1x by seed. The margins are 1.5x and 2x.
     #[test]
     fn denoised_relmse_is_below_the_noisy_one_on_cornell_spheres() {
         let dir = TempDir::new("denoise-spheres");
-        for (integrator, factor) in [("photonmap", 1.8), ("path", 10.0)] {
+        for (integrator, factor) in [("photonmap", 4.0), ("path", 40.0)] {
             let (before, after) = before_after(integrator, &dir);
             eprintln!("{integrator}: relMSE {before:.5} noisy, {after:.5} denoised");
             assert!(

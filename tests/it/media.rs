@@ -770,7 +770,9 @@ AttributeBegin
     let dir = TempDir::new("photon-media");
     let scene = loader::load(&dir.write("grid.pbrt", text)).expect("loads");
     for kind in [IntegratorKind::Path, IntegratorKind::Photonmap] {
-        let out = common::render_with(&scene, kind, BackendKind::Embree, (16, 16, 128), 2, 7);
+        // 32x32 at 512 spp: ratio tracking's blue mean has a standard deviation of 1.3% at
+        // 16x16 and 128 spp (ten seeds, -2.7% .. +1.0%), 0.15% here (four seeds).
+        let out = common::render_with(&scene, kind, BackendKind::Embree, (32, 32, 512), 2, 7);
         let got = channel_means(&out.image);
         let err = ((got - want) / want).abs().max_element();
         assert!(err < 0.01, "{kind:?}: {got} against {want}");

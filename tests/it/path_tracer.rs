@@ -277,13 +277,24 @@ fn cornell_direct_component_matches_direct_integrator() {
         img.clone()
     };
     let (pd, pi) = (layer(&path, "direct"), layer(&path, "indirect"));
-    let m = compare(&pd, &layer(&direct, "direct"), MaskOptions::default()).expect("sizes");
+    // The pixels next to the visible light are left out: there the fraction of samples that
+    // hit the light swings both images (over six seeds relMSE 1.3e-4 .. 3.3e-3 with them, and
+    // 8.3e-5 .. 9.5e-5 without the 64 pixels within a pixel of the light).
+    let mask = MaskOptions {
+        mask_above: Some(2.0),
+    };
+    let m = compare(&pd, &layer(&direct, "direct"), mask).expect("sizes");
     println!(
-        "cornell 64x64 64 spp: path 'direct' vs direct integrator relMSE {:.2e}",
-        m.overall.relmse
+        "cornell 64x64 64 spp: path 'direct' vs direct integrator relMSE {:.2e} ({} pixels by the light left out)",
+        m.overall.relmse, m.masked_emitter
     );
-    // Measured 6.1e-4 (noise of both); 1.6x margin.
-    assert!(m.overall.relmse < 1e-3, "direct components differ: {m:?}");
+    // Noise of both; 1.6x margin over the worst of six seeds.
+    assert!(
+        m.masked_emitter < 100,
+        "{} pixels left out",
+        m.masked_emitter
+    );
+    assert!(m.overall.relmse < 1.5e-4, "direct components differ: {m:?}");
     for ((img, d), i) in path.image.pixels.iter().zip(&pd.pixels).zip(&pi.pixels) {
         for c in 0..3 {
             assert!((img[c] - d[c] - i[c]).abs() <= 1e-5 * img[c].abs().max(1.0));
