@@ -30,6 +30,13 @@ resolve, named `_oracle-<res>.pbrt`; nothing is written into this repository):
           off by more than 10%); DIFF.png: log2(x / r) per pixel, blue -1 .. red +1 stop;
           SIDE.png: image, reference and diff side by side (sRGB, same exposure).
 
+  patch   REF.exr CROP.exr... --bounds X0,X1,Y0,Y1 -o OUT.exr [--full 1024]
+          a reference with the window [X0,X1) x [Y0,Y1) replaced by the mean of CROP renders of
+          that window (pbrt-v4 `--pixelbounds`), where the reference is not converged (a
+          caustic seen through glass that only emission hits sample); --full N first
+          box-filters REF down to N/(its width); prints each pixel's standard error from the
+          spread of the crops
+
 Example:
   scripts/oracle.py pbrt   ~/bitterli/ph/classroom/pbrt/scene-v4.pbrt --spp 4096 -o ref.exr
   scripts/oracle.py photon ~/bitterli/ph/classroom/pbrt/scene-v4.pbrt --time 30s -o ours.exr
@@ -316,6 +323,28 @@ def cmd_table(a):
         log.flush()
 
 
+def cmd_patch(a):
+    x0, x1, y0, y1 = (int(v) for v in a.bounds.split(","))
+    ref = read_exr(a.reference)
+    if a.full and ref.shape[1] != a.full:
+        k = ref.shape[1] // a.full
+        h, w, c = ref.shape
+        ref = ref.reshape(h // k, k, w // k, k, c).mean(axis=(1, 3))
+    crops = np.stack([read_exr(c) for c in a.crops])
+    if crops.shape[1:3] != (y1 - y0, x1 - x0):
+        raise SystemExit(f"crops are {crops.shape[2]}x{crops.shape[1]}, bounds {x1 - x0}x{y1 - y0}")
+    mean = crops.mean(axis=0)
+    lum = lambda im: im.mean(axis=-1)
+    se = lum(crops).std(axis=0, ddof=1) / np.sqrt(len(crops)) if len(crops) > 1 else None
+    old = ref[y0:y1, x0:x1].copy()
+    ref[y0:y1, x0:x1] = mean
+    for y in range(y1 - y0):
+        print(f"{y0 + y:4d} " + " ".join(
+            f"{lum(old)[y, x]:.3f}->{lum(mean)[y, x]:.3f}" + (f"+-{se[y, x]:.3f}" if se is not None else "")
+            for x in range(x1 - x0)))
+    write_exr(a.o, ref)
+
+
 def relmse_map(x, r):
     return ((x - r) ** 2 / (r ** 2 + 0.01)).mean(axis=2)
 
@@ -417,6 +446,9 @@ def main():
     p.add_argument("--seeds", type=int, default=2); p.add_argument("--out", default="oracle-table")
     p.add_argument("--integrators", default="path,bdpt,sppm"); p.add_argument("--flags", default="")
     p.add_argument("--pbrt", default=DEFAULT_PBRT); p.add_argument("--photon", default=DEFAULT_PHOTON)
+    p = sub.add_parser("patch"); p.add_argument("reference"); p.add_argument("crops", nargs="+")
+    p.add_argument("--bounds", required=True); p.add_argument("-o", required=True)
+    p.add_argument("--full", type=int)
     p = sub.add_parser("compare"); p.add_argument("image"); p.add_argument("reference")
     p.add_argument("--blocks", type=int, default=8); p.add_argument("--diff"); p.add_argument("--side")
     p.add_argument("--scale", type=float); p.add_argument("--json", action="store_true")
@@ -425,7 +457,7 @@ def main():
         print(variant(a.scene, a.res))
     else:
         {"pbrt": cmd_pbrt, "photon": cmd_photon, "compare": cmd_compare, "refs": cmd_refs,
-         "table": cmd_table}[a.cmd](a)
+         "table": cmd_table, "patch": cmd_patch}[a.cmd](a)
 
 
 if __name__ == "__main__":
