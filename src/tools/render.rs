@@ -108,7 +108,7 @@ pub struct RenderOptions {
     /// or passes are added (pbrt-v4's flag); the render never waits for the viewer.
     #[arg(long, value_name = "HOST:PORT", value_parser = super::display::parse_server)]
     pub display_server: Option<String>,
-    /// VCM's initial merge radius: `Npx` pixel footprints (default 1px), or a fraction of
+    /// VCM's initial merge radius: `Npx` pixel footprints (default 2px), or a fraction of
     /// the radius of the scene's bounding sphere (`0.003`); it shrinks with the samples by
     /// `--alpha` (default 0.75 for VCM).
     #[arg(long, allow_hyphen_values = true, value_parser = crate::integrator::vcm::MergeRadius::parse)]

@@ -40,7 +40,7 @@ fn block_means(pixels: &[[f32; 3]], w: usize, h: usize) -> Vec<f64> {
 
 /// The merge radius of these tests: 0.003 of the scene's radius (half a pixel here), small
 /// enough that VCM's bias (VCM is consistent, not unbiased) stays below these tests' noise:
-/// at the default of one pixel footprint, 48x48 pixels are so large that a block next to the
+/// at one pixel footprint (the default is two), 48x48 pixels are so large that a block next to the
 /// light is 4.6% too bright at 4 spp.
 const RADIUS: f32 = 0.003;
 
