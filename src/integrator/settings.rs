@@ -356,7 +356,8 @@ settings! {
     sparse_map: f32 = sparse_map, "sparsemap", "sparse-map", Some(Range::closed(0.0, f64::INFINITY));
     /// Caustic projection maps on or off.
     projection_maps: bool = trace.projection_maps, "projectionmaps", "projection-maps", None;
-    /// Distant and infinite lights aim most global photons at what the camera sees.
+    /// Distant and infinite lights aim most global photons (and the light subpaths of vcm,
+    /// bdpt, bpm and lighttracer) at what the camera sees.
     aimed_photons: bool = trace.aimed, "aimedphotons", "aimed-photons", None;
     /// GGX alpha up to which a rough glossy surface receives caustic photons (inf: none).
     glossy_alpha: f32 = trace.receiver_alpha, "glossyalpha", "glossy-alpha",

@@ -28,6 +28,13 @@
 //! to the camera with weight 1, so paths the camera sees only through delta bounces are
 //! missing from it (as from pbrt-v4's `lighttracer`).
 //!
+//! Distant and infinite lights draw a light subpath's origin as the photon tracer does
+//! ([`crate::photon::aim`]): three quarters on the disc that the sphere around what the camera
+//! sees casts, the rest on the disc over the whole scene, where the camera sees a small part
+//! of a large scene (a room lit through its windows inside a wide ground); every emission
+//! density of the weights, the camera side's included, is that mixture's at the origin (the
+//! projection of the vertex onto the emission plane). `--aimed-photons false` turns it off.
+//!
 //! Conventions: path lengths count segments (a camera ray that hits an emitter is a path of
 //! length 1), so `maxdepth` bounces allow `maxdepth + 1` segments. Russian roulette continues
 //! a subpath with probability `min(1, max reflectance)` of the BSDF, folded into both pdfs as
@@ -171,6 +178,10 @@ struct Weights {
     /// Merging only at vertices whose camera-side neighbour is a purely specular surface
     /// (see [`merges_at`]); false: at every non-delta vertex.
     sds: bool,
+    /// Where distant and infinite lights aim their light subpaths (the photon tracer's
+    /// mixture, [`crate::photon::aim`]); every emission density of such a light is the
+    /// mixture's.
+    aim: Option<crate::light::Aim>,
 }
 
 impl Weights {
@@ -194,6 +205,7 @@ impl Weights {
             n_light: n_light as f32,
             max_len: max_depth + 1,
             sds: use_vc && use_vm && !all,
+            aim: None,
         }
     }
 }
@@ -380,6 +392,7 @@ pub fn render(
     let iterations = s.spp.max(1);
     let mut sum = vec![Radiance::default(); n];
     let r0 = initial_radius(ctx).max(1e-7);
+    let aim = light_aim(ctx);
     let mut tally = Tally::default();
     let (mut light_s, mut camera_s, mut stored, mut radii) = (0.0, 0.0, 0u64, (0.0f32, 0.0f32));
     let mut done = 0u32;
@@ -389,13 +402,16 @@ pub fn render(
         }
         let k = s.vcm.first.saturating_add(it + 1) as f32;
         let radius = r0 / k.powf(0.5 * (1.0 - s.vcm.alpha));
-        let wt = Weights::new(
-            technique,
-            radius.max(1e-7),
-            n,
-            s.max_depth,
-            s.vcm.all_merges,
-        );
+        let wt = Weights {
+            aim,
+            ..Weights::new(
+                technique,
+                radius.max(1e-7),
+                n,
+                s.max_depth,
+                s.vcm.all_merges,
+            )
+        };
         radii = (if it == 0 { radius } else { radii.0 }, radius);
         let t0 = std::time::Instant::now();
         // Light subpaths, chunk by chunk in parallel; assembled in chunk order.
@@ -486,6 +502,17 @@ pub fn render(
         tally.rays[2] as f64 / paths,
         tally.rays[4] as f64 / paths
     ));
+    if let Some(a) = aim {
+        notes.push(format!(
+            "{technique:?}: distant and infinite lights aim {:.0}% of their light subpaths at the \
+             sphere of radius {:.3} around ({:.3}, {:.3}, {:.3}) that the camera sees",
+            100.0 * a.share,
+            a.radius,
+            a.center.x,
+            a.center.y,
+            a.center.z
+        ));
+    }
     if technique == Technique::Vcm {
         notes.push(format!(
             "Vcm: merge radius {:.4} -> {:.4} (scene units), {:.2} light vertices merged per \
@@ -537,6 +564,17 @@ fn pixel_footprint(ctx: &RenderContext) -> Option<f32> {
 /// Light subpaths a pilot trace follows to measure the vertices kept per subpath.
 pub const PILOT_SUBPATHS: usize = 8192;
 
+/// Where the distant and infinite lights aim their light subpaths: the photon tracer's
+/// sphere around what the camera sees ([`crate::photon::aim::region_of_interest`]; off with
+/// `--aimed-photons false`), `None` without such lights or when the camera sees most of the
+/// scene.
+fn light_aim(ctx: &RenderContext) -> Option<crate::light::Aim> {
+    if !ctx.settings.photon.trace.aimed || !ctx.lights.has_distant_or_infinite() {
+        return None;
+    }
+    crate::photon::aim::region_of_interest(ctx.scene, ctx.accel, ctx.lights.scene_sphere())
+}
+
 /// The light vertices `technique` keeps per light subpath, measured on [`PILOT_SUBPATHS`]
 /// subpaths of their own seed (what the memory model multiplies the image's pixels by).
 /// Runs on the current rayon pool.
@@ -562,13 +600,16 @@ pub fn pilot(
     };
     let (_, radius) = lights.scene_sphere();
     let all = settings.vcm.all_merges;
-    let wt = Weights::new(
-        technique,
-        radius * 1e-3,
-        PILOT_SUBPATHS,
-        settings.max_depth,
-        all,
-    );
+    let wt = Weights {
+        aim: light_aim(&ctx),
+        ..Weights::new(
+            technique,
+            radius * 1e-3,
+            PILOT_SUBPATHS,
+            settings.max_depth,
+            all,
+        )
+    };
     let kept: usize = (0..PILOT_SUBPATHS.div_ceil(CHUNK))
         .into_par_iter()
         .map(|c| {
@@ -752,10 +793,10 @@ fn trace_light(ctx: &RenderContext, wt: &Weights, k: u64, it: u32, out: &mut Chu
     let Some((i, pmf)) = lights.pick(u_sel) else {
         return;
     };
-    let Some(e) = lights.emit(&ctx.scene.meshes, i, u_pos, u_dir) else {
+    let Some(e) = lights.emit_aimed(&ctx.scene.meshes, i, u_pos, u_dir, wt.aim.as_ref()) else {
         return;
     };
-    let (pdf_pos, pdf_dir) = lights.emit_pdfs(i, e.n, e.dir);
+    let (pdf_pos, pdf_dir) = lights.emit_pdfs(i, e.p, e.n, e.dir, wt.aim.as_ref());
     if pdf_pos <= 0.0 || pdf_dir <= 0.0 {
         return;
     }
@@ -1039,7 +1080,7 @@ fn emitted(
         return if path.specular { le } else { Vec3::ZERO };
     }
     let pmf = ctx.lights.selection_pmf(li);
-    let (pdf_pos, pdf_dir) = ctx.lights.emit_pdfs(li, si.ng, si.wo_world);
+    let (pdf_pos, pdf_dir) = ctx.lights.emit_pdfs(li, si.p, si.ng, si.wo_world, None);
     let direct_pdf = pmf * pdf_pos;
     let emission_pdf = direct_pdf * pdf_dir;
     let w_camera = direct_pdf * path.dvcm + emission_pdf * path.dvc;
@@ -1052,8 +1093,8 @@ fn escaped(ctx: &RenderContext, wt: &Weights, path: &SubPath) -> Vec3 {
     if !ctx.lights.has_infinite() {
         return Vec3::ZERO;
     }
-    let disc = ctx.lights.disc_area();
     let d = path.ray.d.normalize();
+    let disc_pdf = ctx.lights.disc_pdf(-d, path.ray.o, wt.aim.as_ref());
     ctx.lights
         .escaped(path.ray.o, d, Pick::Power, |direct_pdf| {
             if path.len == 1 {
@@ -1065,7 +1106,7 @@ fn escaped(ctx: &RenderContext, wt: &Weights, path: &SubPath) -> Vec3 {
                     0.0
                 }
             } else {
-                let emission_pdf = direct_pdf / disc;
+                let emission_pdf = direct_pdf * disc_pdf;
                 1.0 / (1.0 + direct_pdf * path.dvcm + emission_pdf * path.dvc)
             }
         })
@@ -1106,7 +1147,8 @@ fn light_sample(
         (s.pdf / pmf, s.n.dot(s.wi).abs())
     };
     let w_light = if s.delta { 0.0 } else { ev.pdf / s.pdf };
-    let (pdf_pos, pdf_dir) = lights.emit_pdfs(i, s.n, -s.wi);
+    // A light without a surface: the light subpath's origin is this vertex's projection.
+    let (pdf_pos, pdf_dir) = lights.emit_pdfs(i, si.p, s.n, -s.wi, wt.aim.as_ref());
     let w_camera = (pdf_pos * pdf_dir * ev.cos / (direct_pdf_w * cos_at_light))
         * (camera_vm(wt, path) + path.dvcm + path.dvc * ev.pdf_rev);
     let w = 1.0 / (w_light + 1.0 + w_camera);

@@ -374,7 +374,14 @@ impl Lights {
     /// origin's area density, 1 for a point-like light; the direction's solid-angle density,
     /// 1 for a distant light). pbrt-v4's `PDF_Le`; distant and infinite lights start on the
     /// disc of [`Self::disc_origin`] (no aim).
-    pub fn emit_pdfs(&self, i: usize, n: Vec3, dir: Vec3) -> (f32, f32) {
+    pub fn emit_pdfs(
+        &self,
+        i: usize,
+        p: Vec3,
+        n: Vec3,
+        dir: Vec3,
+        aim: Option<&Aim>,
+    ) -> (f32, f32) {
         match &self.emitters[i] {
             Emitter::Area(a) => {
                 let cos = n.dot(dir);
@@ -392,8 +399,8 @@ impl Lights {
                 }
                 (1.0, 1.0 / (2.0 * PI * (1.0 - cos_end)))
             }
-            Emitter::Distant(_) => (1.0 / self.disc_area(), 1.0),
-            Emitter::Infinite(map) => (1.0 / self.disc_area(), map.pdf(-dir)),
+            Emitter::Distant(_) => (self.disc_pdf(dir, p, aim), 1.0),
+            Emitter::Infinite(map) => (self.disc_pdf(dir, p, aim), map.pdf(-dir)),
         }
     }
 
@@ -579,6 +586,31 @@ impl Lights {
             );
             square_to_disk_concentric(v) * big
         };
+        let pdf = self.mixture_pdf(d, a, aim);
+        (pdf > 0.0 && pdf.is_finite()).then(|| (at(d), 1.0 / pdf))
+    }
+
+    /// The density on the emission plane of [`Self::disc_origin`]'s origin for a photon
+    /// travelling along unit `dir` whose line passes through `p` (any point of the ray: the
+    /// origin is `p`'s projection), so that a camera subpath's vertex can ask how likely a
+    /// light subpath was to reach it.
+    pub fn disc_pdf(&self, dir: Vec3, p: Vec3, aim: Option<&Aim>) -> f32 {
+        let frame = Frame::from_normal(dir);
+        let lateral = |q: Vec3| {
+            let v = q - self.center;
+            Vec2::new(v.dot(frame.s), v.dot(frame.t))
+        };
+        match aim.filter(|a| a.share > 0.0 && a.share < 1.0 && a.radius > 0.0) {
+            Some(aim) => self.mixture_pdf(lateral(p), lateral(aim.center), aim),
+            // Every point of the scene projects inside the scene's disc.
+            None => 1.0 / self.disc_area(),
+        }
+    }
+
+    /// The aimed mixture's density at `d` on the emission plane (offsets from the scene's
+    /// centre), the aimed disc centred at `a`.
+    fn mixture_pdf(&self, d: Vec2, a: Vec2, aim: &Aim) -> f32 {
+        let (big, small) = (self.radius, aim.radius);
         // A hair of slack for points drawn on a disc's rim.
         let inside = |q: Vec2, r: f32| q.length_squared() <= r * r * (1.0 + 1e-5);
         let mut pdf = 0.0;
@@ -588,7 +620,7 @@ impl Lights {
         if inside(d - a, small) {
             pdf += aim.share / (PI * small * small);
         }
-        (pdf > 0.0 && pdf.is_finite()).then(|| (at(d), 1.0 / pdf))
+        pdf
     }
 
     /// A photon from an infinite light (pbrt-v4's `SampleLe`): a direction from the map's
