@@ -33,7 +33,7 @@
 //! sees casts, the rest on the disc over the whole scene, where the camera sees a small part
 //! of a large scene (a room lit through its windows inside a wide ground); every emission
 //! density of the weights, the camera side's included, is that mixture's at the origin (the
-//! projection of the vertex onto the emission plane). `--aimed-photons false` turns it off.
+//! projection of the vertex onto the emission plane). `--aimed-photons=false` turns it off.
 //!
 //! Conventions: path lengths count segments (a camera ray that hits an emitter is a path of
 //! length 1), so `maxdepth` bounces allow `maxdepth + 1` segments. Russian roulette continues
@@ -566,7 +566,7 @@ pub const PILOT_SUBPATHS: usize = 8192;
 
 /// Where the distant and infinite lights aim their light subpaths: the photon tracer's
 /// sphere around what the camera sees ([`crate::photon::aim::region_of_interest`]; off with
-/// `--aimed-photons false`), `None` without such lights or when the camera sees most of the
+/// `--aimed-photons=false`), `None` without such lights or when the camera sees most of the
 /// scene.
 fn light_aim(ctx: &RenderContext) -> Option<crate::light::Aim> {
     if !ctx.settings.photon.trace.aimed || !ctx.lights.has_distant_or_infinite() {
