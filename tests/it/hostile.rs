@@ -180,7 +180,7 @@ fn case_06_resolutions_are_checked_against_the_budget() {
     let r = render_text(&d, &small_scene(""), &["--res", "32768x32768"], 2 * GIB);
     assert_error(
         &r,
-        &["--res", "needs ~116 GB", "film 116 GB", "over the limit of"],
+        &["--res", "needs ~125 GB", "film 125 GB", "over the limit of"],
     );
     let r = render_text(&d, &small_scene(""), &["--res", "40000x10"], GIB);
     assert_error(&r, &["--res"]);
