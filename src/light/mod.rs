@@ -373,7 +373,7 @@ impl Lights {
     /// a point with geometric normal `n` (zero for point-like lights) along unit `dir`: (the
     /// origin's area density, 1 for a point-like light; the direction's solid-angle density,
     /// 1 for a distant light). pbrt-v4's `PDF_Le`; distant and infinite lights start on the
-    /// disc of [`Self::disc_origin`] (no aim).
+    /// disc of [`Self::disc_origin`], their density at `p`'s projection ([`Self::disc_pdf`]).
     pub fn emit_pdfs(
         &self,
         i: usize,
