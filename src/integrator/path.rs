@@ -15,9 +15,11 @@
 //!   and MIS-weighted (power heuristic, [`Lights::pdf_area`](crate::light::Lights::pdf_area)
 //!   against the BSDF density) after a non-delta bounce; a ray that leaves the scene sees the
 //!   infinite lights the same way ([`wavefront::escaped`]);
-//! - on a non-delta BSDF (diffuse, rough conductor), one light sample chosen in proportion to
-//!   power (next-event estimation), power-heuristic-weighted against BSDF sampling (full weight
-//!   for delta lights);
+//! - on a non-delta BSDF (diffuse, rough conductor), one light sample chosen by its importance
+//!   at the vertex (next-event estimation), power-heuristic-weighted against BSDF sampling (full
+//!   weight for delta lights); a uniform sky gets no light samples and is left to the BSDF
+//!   sample, with full weight when it escapes, as in pbrt-v4 ([`Receiver::sky_by_bsdf`]: on
+//!   spaceship half the variance per sample);
 //! - a BSDF-sampled continuation; after [`RR_MIN_BOUNCES`] bounces, Russian roulette on the
 //!   throughput times the refraction scale `eta_scale` (pbrt-v4: survive with probability
 //!   `min(1, max_component(beta * eta_scale))`, dividing `beta` by it, so it stays unbiased).
@@ -239,7 +241,7 @@ fn light_sample(
     let u = sampler.next_2d();
     let s = ctx
         .lights
-        .sample(&ctx.scene.meshes, v.receiver(), u_sel, u)?;
+        .sample(&ctx.scene.meshes, v.receiver().sky_by_bsdf(), u_sel, u)?;
     let wi = v.frame.to_local(s.wi);
     let f = bsdf.f(v.wo, wi, TransportMode::Radiance) * wi.z.abs();
     if f.max_element() <= 0.0 {
@@ -291,7 +293,7 @@ fn continue_path(
     path.beta = beta;
     path.depth = depth;
     path.prev_pdf = bsdf.mis_pdf(v.wo, &bs);
-    path.prev = v.receiver();
+    path.prev = v.receiver().sky_by_bsdf();
     path.prev_delta &= bs.specular;
     path.eta_scale = eta_scale;
     // Delta bounces after a receiver lead to light its caustic photons hold (the photons'
@@ -364,10 +366,12 @@ fn shade_medium(
     let mut sampler = path.sampler.clone();
     let u_sel = sampler.next_1d();
     let u = sampler.next_2d();
-    if let Some(s) = ctx
-        .lights
-        .sample(&ctx.scene.meshes, Receiver::in_medium(p), u_sel, u)
-    {
+    if let Some(s) = ctx.lights.sample(
+        &ctx.scene.meshes,
+        Receiver::in_medium(p).sky_by_bsdf(),
+        u_sel,
+        u,
+    ) {
         let f = henyey_greenstein(wo.dot(s.wi), g);
         let w = if s.delta {
             1.0
@@ -396,7 +400,7 @@ fn shade_medium(
     path.ray = Ray::new(p, wi);
     path.depth = depth;
     path.prev_pdf = pdf;
-    path.prev = Receiver::in_medium(p);
+    path.prev = Receiver::in_medium(p).sky_by_bsdf();
     path.prev_delta = false;
     path.data = Chain::Open;
     wave.next.push(path);

@@ -205,6 +205,13 @@ impl EnvMap {
         EnvMap::new(image, 1.0, Mat3::IDENTITY)
     }
 
+    /// Whether the map sends the same radiance from every direction (a constant `L`, or an
+    /// image of one colour) with no portal: pbrt-v4's `UniformInfiniteLight`, which its path
+    /// tracers leave to BSDF sampling ([`super::Receiver::sky_by_bsdf`]).
+    pub fn is_uniform(&self) -> bool {
+        self.portal.is_none() && self.texels.iter().all(|&t| t == self.texels[0])
+    }
+
     /// Texels per side.
     pub fn resolution(&self) -> usize {
         self.res

@@ -104,13 +104,10 @@ pub struct Lights {
     select: AliasTable,
     /// Each light's bounds when it has a position (area, point, spot): see [`select`].
     bounds: Vec<Option<select::Bounds>>,
-    /// The lights with bounds, when there are at most [`EXHAUSTIVE_MAX`] of them (else empty:
-    /// every light is picked by power).
-    bounded: Vec<usize>,
-    /// The lights without a position (distant, infinite) by power among them, and their
-    /// share of the total power.
-    unbounded: AliasTable,
-    p_unbounded: f32,
+    /// How shadow rays pick lights ([`select`]): every light, and every light but the uniform
+    /// skies (for receivers that leave those to the BSDF, [`Receiver::sky_by_bsdf`]).
+    nee: select::Selection,
+    nee_bsdf_sky: select::Selection,
     /// The lights without a surface (point, spot, distant, infinite) alone, by power: what
     /// final-gather hits take direct light from by shadow rays ([`Self::sample_surfaceless`]).
     surfaceless: AliasTable,
@@ -158,9 +155,8 @@ impl Lights {
             envs,
             select: AliasTable::default(),
             bounds,
-            bounded: Vec::new(),
-            unbounded: AliasTable::default(),
-            p_unbounded: 0.0,
+            nee: select::Selection::default(),
+            nee_bsdf_sky: select::Selection::default(),
             surfaceless: AliasTable::default(),
             center,
             radius,
@@ -172,31 +168,14 @@ impl Lights {
             .map(|(&w, l)| if l.is_surfaceless() { w } else { 0.0 })
             .collect();
         out.select = AliasTable::new(&powers);
-        let bounded: Vec<usize> = (0..powers.len())
-            .filter(|&i| out.bounds[i].is_some_and(|b| b.phi > 0.0))
+        out.nee = select::Selection::new(&powers, &out.bounds);
+        let non_uniform: Vec<f32> = (0..powers.len())
+            .map(|i| match &out.emitters[i] {
+                Emitter::Infinite(map) if map.is_uniform() => 0.0,
+                _ => powers[i],
+            })
             .collect();
-        if bounded.len() <= EXHAUSTIVE_MAX {
-            let unbounded: Vec<f32> = (0..powers.len())
-                .map(|i| {
-                    if out.bounds[i].is_none() {
-                        powers[i]
-                    } else {
-                        0.0
-                    }
-                })
-                .collect();
-            out.p_unbounded = (0..powers.len())
-                .filter(|&i| out.bounds[i].is_none())
-                .map(|i| out.select.pmf(i))
-                .sum::<f32>()
-                .min(1.0);
-            if unbounded.iter().any(|&w| w > 0.0) {
-                out.unbounded = AliasTable::new(&unbounded);
-            } else {
-                out.p_unbounded = 0.0;
-            }
-            out.bounded = bounded;
-        }
+        out.nee_bsdf_sky = select::Selection::new(&non_uniform, &out.bounds);
         if surfaceless.iter().any(|&w| w > 0.0) {
             out.surfaceless = AliasTable::new(&surfaceless);
         }
@@ -277,80 +256,27 @@ impl Lights {
         self.sample_by(meshes, (i, pmf), r.p, u, true)
     }
 
-    /// The importance of each positioned light at `r` ([`select`]) into `imp` (in the order of
-    /// `self.bounded`), and their sum.
-    fn importances(&self, r: Receiver, imp: &mut [f32; EXHAUSTIVE_MAX]) -> f32 {
-        let mut sum = 0.0;
-        for (k, &i) in self.bounded.iter().enumerate() {
-            imp[k] = self.bounds[i].map_or(0.0, |b| b.importance(r));
-            sum += imp[k];
-        }
-        sum
-    }
-
-    /// The share of the lights without a position when the positioned ones' importances at
-    /// the receiver sum to `sum`: their share of the power, or everything where no positioned
-    /// light can reach the receiver.
-    fn unbounded_share(&self, sum: f32) -> f32 {
-        if sum > 0.0 && sum.is_finite() {
-            self.p_unbounded
-        } else if self.unbounded.is_empty() {
-            0.0
+    /// The selection that receiver `r` picks by.
+    fn selection(&self, r: Receiver) -> &select::Selection {
+        if r.bsdf_sky {
+            &self.nee_bsdf_sky
         } else {
-            1.0
+            &self.nee
         }
     }
 
     /// Picks a light for a shadow ray from `r` (`u` in `[0, 1)`): the lights without a
     /// position by power within their share of the power, the rest by importance at `r`
     /// (see [`select`]); by power alone when there are more than [`EXHAUSTIVE_MAX`] positioned
-    /// lights. `None` when no light can reach `r`.
+    /// lights; never a uniform sky when `r` leaves those to the BSDF
+    /// ([`Receiver::sky_by_bsdf`]). `None` when no light can reach `r`.
     pub fn pick_at(&self, r: Receiver, u: f32) -> Option<(usize, f32)> {
-        if self.bounded.is_empty() {
-            return self.select.sample(u);
-        }
-        let mut imp = [0.0; EXHAUSTIVE_MAX];
-        let sum = self.importances(r, &mut imp);
-        let share = self.unbounded_share(sum);
-        if u < share {
-            let (i, pmf) = self.unbounded.sample((u / share).min(ONE_MINUS_EPSILON))?;
-            return Some((i, pmf * share));
-        }
-        if !(sum > 0.0 && sum.is_finite()) {
-            return None;
-        }
-        let target = ((u - share) / (1.0 - share)).min(ONE_MINUS_EPSILON) * sum;
-        let mut acc = 0.0;
-        let mut last = None;
-        for (k, &i) in self.bounded.iter().enumerate() {
-            if imp[k] <= 0.0 {
-                continue;
-            }
-            last = Some((i, imp[k]));
-            acc += imp[k];
-            if target < acc {
-                break;
-            }
-        }
-        let (i, w) = last?;
-        Some((i, (1.0 - share) * w / sum))
+        self.selection(r).pick(&self.bounds, r, u)
     }
 
     /// The probability that [`Self::pick_at`] picks light `i` for `r`.
     pub fn pmf_at(&self, r: Receiver, i: usize) -> f32 {
-        if self.bounded.is_empty() {
-            return self.select.pmf(i);
-        }
-        let mut imp = [0.0; EXHAUSTIVE_MAX];
-        let sum = self.importances(r, &mut imp);
-        let share = self.unbounded_share(sum);
-        if self.bounds.get(i).is_some_and(|b| b.is_none()) {
-            return share * self.unbounded.pmf(i);
-        }
-        match self.bounded.iter().position(|&j| j == i) {
-            Some(k) if sum > 0.0 && sum.is_finite() => (1.0 - share) * imp[k] / sum,
-            _ => 0.0,
-        }
+        self.selection(r).pmf(&self.bounds, r, i)
     }
 
     /// Picks a light in proportion to power: its index and probability.

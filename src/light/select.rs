@@ -21,26 +21,51 @@
 //! built). The bidirectional integrators pick by power: their partial sums need a density that
 //! does not depend on the receiving point.
 use crate::math::Vec3;
+use crate::sampling::alias::AliasTable;
+use crate::sampling::ONE_MINUS_EPSILON;
 
 /// Positioned lights beyond which selection falls back to power alone.
 pub const EXHAUSTIVE_MAX: usize = 64;
 
 /// Where a light is picked for: the receiving point and the unit normal there (the shading
-/// normal on a surface; zero in a medium, where every direction counts).
+/// normal on a surface; zero in a medium, where every direction counts), and whether uniform
+/// skies are left to the BSDF there.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Receiver {
     pub p: Vec3,
     pub n: Vec3,
+    /// Whether uniform infinite lights ([`super::EnvMap::is_uniform`]) get no shadow rays here:
+    /// see [`Receiver::sky_by_bsdf`].
+    pub bsdf_sky: bool,
 }
 
 impl Receiver {
     pub fn new(p: Vec3, n: Vec3) -> Receiver {
-        Receiver { p, n }
+        Receiver {
+            p,
+            n,
+            bsdf_sky: false,
+        }
     }
 
     /// A point in a medium.
     pub fn in_medium(p: Vec3) -> Receiver {
-        Receiver { p, n: Vec3::ZERO }
+        Receiver::new(p, Vec3::ZERO)
+    }
+
+    /// This receiver for a tracer whose every non-delta vertex also continues by sampling its
+    /// BSDF or phase function (the path tracer): uniform infinite lights are then never picked
+    /// for shadow rays (their density in [`super::Lights::pmf_at`] is 0, so a sampled ray that
+    /// leaves the scene sees them with full weight) and the other lights share all the picks.
+    /// pbrt-v4's path tracers do the same (`UniformInfiniteLight::SampleLi` with
+    /// `allowIncompletePDF`): for a uniform sky a cosine-weighted or glossy BSDF sample beats
+    /// a uniform sphere sample, half of which lands behind the surface. Measured on spaceship
+    /// (path, variance between two seeds at 640 spp): see BENCHMARKS.md.
+    pub fn sky_by_bsdf(self) -> Receiver {
+        Receiver {
+            bsdf_sky: true,
+            ..self
+        }
     }
 }
 
@@ -149,6 +174,130 @@ pub fn normal_cone(ns: &[Vec3], weights: &[f32]) -> (Vec3, f32) {
     // Rounding must not exclude a normal of the set.
     let cos = (cos - 1e-4).max(-1.0);
     (w, cos)
+}
+
+/// One way of picking lights for shadow rays: by power alone, or (at most [`EXHAUSTIVE_MAX`]
+/// positioned lights) the positioned ones by importance and the others by power within their
+/// share. [`super::Lights`] keeps one over every light and one without the uniform skies
+/// ([`Receiver::sky_by_bsdf`]).
+#[derive(Clone, Debug, Default)]
+pub(super) struct Selection {
+    /// Every light by power (what is picked when `bounded` is empty).
+    power: AliasTable,
+    /// The positioned lights (empty: pick by power).
+    bounded: Vec<usize>,
+    /// The lights without a position by power among them, and their share of the power.
+    unbounded: AliasTable,
+    p_unbounded: f32,
+}
+
+impl Selection {
+    /// Picks light `i` with power `powers[i]` (0: never), `bounds[i]` its bounds when it has a
+    /// position.
+    pub(super) fn new(powers: &[f32], bounds: &[Option<Bounds>]) -> Selection {
+        let mut out = Selection {
+            power: AliasTable::new(powers),
+            ..Selection::default()
+        };
+        let bounded: Vec<usize> = (0..powers.len())
+            .filter(|&i| powers[i] > 0.0 && bounds[i].is_some_and(|b| b.phi > 0.0))
+            .collect();
+        if bounded.len() > EXHAUSTIVE_MAX {
+            return out;
+        }
+        let unbounded: Vec<f32> = (0..powers.len())
+            .map(|i| if bounds[i].is_none() { powers[i] } else { 0.0 })
+            .collect();
+        if unbounded.iter().any(|&w| w > 0.0) {
+            out.unbounded = AliasTable::new(&unbounded);
+            out.p_unbounded = (0..powers.len())
+                .filter(|&i| bounds[i].is_none())
+                .map(|i| out.power.pmf(i))
+                .sum::<f32>()
+                .min(1.0);
+        }
+        out.bounded = bounded;
+        out
+    }
+
+    /// The importance of each positioned light at `r` into `imp` (in the order of
+    /// `self.bounded`), and their sum.
+    fn importances(&self, bounds: &[Option<Bounds>], r: Receiver, imp: &mut [f32]) -> f32 {
+        let mut sum = 0.0;
+        for (k, &i) in self.bounded.iter().enumerate() {
+            imp[k] = bounds[i].map_or(0.0, |b| b.importance(r));
+            sum += imp[k];
+        }
+        sum
+    }
+
+    /// The share of the lights without a position when the positioned ones' importances at
+    /// the receiver sum to `sum`: their share of the power, or everything where no positioned
+    /// light can reach the receiver.
+    fn unbounded_share(&self, sum: f32) -> f32 {
+        if sum > 0.0 && sum.is_finite() {
+            self.p_unbounded
+        } else if self.unbounded.is_empty() {
+            0.0
+        } else {
+            1.0
+        }
+    }
+
+    /// Picks a light for a shadow ray from `r` (`u` in `[0, 1)`): its index and probability;
+    /// `None` when no light can reach `r`.
+    pub(super) fn pick(
+        &self,
+        bounds: &[Option<Bounds>],
+        r: Receiver,
+        u: f32,
+    ) -> Option<(usize, f32)> {
+        if self.bounded.is_empty() {
+            return self.power.sample(u);
+        }
+        let mut imp = [0.0; EXHAUSTIVE_MAX];
+        let sum = self.importances(bounds, r, &mut imp);
+        let share = self.unbounded_share(sum);
+        if u < share {
+            let (i, pmf) = self.unbounded.sample((u / share).min(ONE_MINUS_EPSILON))?;
+            return Some((i, pmf * share));
+        }
+        if !(sum > 0.0 && sum.is_finite()) {
+            return None;
+        }
+        let target = ((u - share) / (1.0 - share)).min(ONE_MINUS_EPSILON) * sum;
+        let mut acc = 0.0;
+        let mut last = None;
+        for (k, &i) in self.bounded.iter().enumerate() {
+            if imp[k] <= 0.0 {
+                continue;
+            }
+            last = Some((i, imp[k]));
+            acc += imp[k];
+            if target < acc {
+                break;
+            }
+        }
+        let (i, w) = last?;
+        Some((i, (1.0 - share) * w / sum))
+    }
+
+    /// The probability that [`Self::pick`] picks light `i` for `r`.
+    pub(super) fn pmf(&self, bounds: &[Option<Bounds>], r: Receiver, i: usize) -> f32 {
+        if self.bounded.is_empty() {
+            return self.power.pmf(i);
+        }
+        let mut imp = [0.0; EXHAUSTIVE_MAX];
+        let sum = self.importances(bounds, r, &mut imp);
+        let share = self.unbounded_share(sum);
+        if bounds.get(i).is_some_and(|b| b.is_none()) {
+            return share * self.unbounded.pmf(i);
+        }
+        match self.bounded.iter().position(|&j| j == i) {
+            Some(k) if sum > 0.0 && sum.is_finite() => (1.0 - share) * imp[k] / sum,
+            _ => 0.0,
+        }
+    }
 }
 
 #[cfg(test)]
