@@ -36,9 +36,12 @@
 //! projection of the vertex onto the emission plane). `--aimed-photons=false` turns it off.
 //!
 //! Conventions: path lengths count segments (a camera ray that hits an emitter is a path of
-//! length 1), so `maxdepth` bounces allow `maxdepth + 1` segments. Russian roulette continues
-//! a subpath with probability `min(1, max reflectance)` of the BSDF, folded into both pdfs as
-//! the technical report does. Light subpaths carry importance: their BSDF values take pbrt-v4's
+//! length 1), so `maxdepth` bounces allow `maxdepth + 1` segments. Russian roulette is the
+//! path tracer's, on each subpath's throughput relative to its start, from bounce
+//! `RR_MIN_BOUNCES + 1` on, and left out of the MIS densities as pbrt-v4's bdpt does
+//! ([`roulette`]; the technical report's roulette on the BSDF's albedo at every bounce, folded
+//! into the densities, ended 73% of the camera subpaths at material-testball's dark coated
+//! ball, whose coat reflects the bright sky: bdpt 17x the path tracer's relMSE per sample). Light subpaths carry importance: their BSDF values take pbrt-v4's
 //! correction for shading normals. The coated BSDFs' stochastic `f` and `pdf` are used as they
 //! are (their estimates are unbiased; the weights then sum to one only in expectation).
 //!
@@ -57,6 +60,7 @@
 //! passes through it, with the importance `1 / A` per unit area of the plane
 //! ([`crate::camera::Camera::project_through_lens`]), and a camera subpath's first segment
 //! does not count in its partial sums (as a distant light's).
+use super::path::RR_MIN_BOUNCES;
 use super::RenderContext;
 use crate::accel::{Hit, RayKind};
 use crate::bsdf::{Bsdf, TransportMode};
@@ -217,6 +221,10 @@ struct SubPath {
     beta: Vec3,
     /// Segments so far (1 after the first ray).
     len: u32,
+    /// `1 / max(beta)` at the subpath's start, times `eta^2` for each delta refraction of a
+    /// camera subpath (the path tracer's `eta_scale`): Russian roulette weighs the throughput
+    /// by it ([`roulette`]).
+    beta_scale: f32,
     /// Every bounce so far was a delta one.
     specular: bool,
     /// Starts at a perspective camera or a light with a position (not an orthographic camera,
@@ -267,8 +275,7 @@ struct Vertex {
 }
 
 /// A BSDF evaluation towards a world direction (`cos` with the shading normal; `pdf` of
-/// sampling that direction, `pdf_rev` of sampling `wo` from it; both times the roulette's
-/// continuation probability).
+/// sampling that direction, `pdf_rev` of sampling `wo` from it).
 struct Eval {
     f: Vec3,
     cos: f32,
@@ -296,12 +303,11 @@ impl Vertex {
         if f.max_element() <= 0.0 || !f.is_finite() {
             return None;
         }
-        let cont = continuation(&self.bsdf);
         Some(Eval {
             f,
             cos: wi.z.abs(),
-            pdf: self.bsdf.pdf(self.wo, wi) * cont,
-            pdf_rev: self.bsdf.pdf(wi, self.wo) * cont,
+            pdf: self.bsdf.pdf(self.wo, wi),
+            pdf_rev: self.bsdf.pdf(wi, self.wo),
         })
     }
 }
@@ -316,9 +322,24 @@ fn shading_correction(wo: Vec3, wi: Vec3, ns: Vec3, ng: Vec3) -> f32 {
     wo.dot(ns).abs() * wi.dot(ng).abs() / den
 }
 
-/// The probability Russian roulette continues a subpath at a surface with this BSDF.
-fn continuation(bsdf: &Bsdf) -> f32 {
-    bsdf.reflectance_estimate().max_element().clamp(0.05, 1.0)
+/// Russian roulette for a subpath about to take its bounce `bounce` with throughput `beta`
+/// (`u` uniform in [0, 1)): the path tracer's rule (`path::roulette`) on the
+/// throughput relative to the subpath's start (`beta_scale`): none for the first
+/// [`RR_MIN_BOUNCES`] bounces, then survival with probability `min(1, max(beta) beta_scale)`,
+/// dividing `beta` by it. `false` when the subpath ends. The MIS weights leave the survival
+/// probability out (as pbrt-v4's bdpt does): every technique weighs a path by the same
+/// densities, so the weights still sum to one.
+fn roulette(beta: &mut Vec3, beta_scale: f32, bounce: u32, u: f32) -> bool {
+    if bounce > RR_MIN_BOUNCES {
+        let survive = beta.max_element() * beta_scale;
+        if survive < 1.0 {
+            if u >= survive {
+                return false;
+            }
+            *beta /= survive;
+        }
+    }
+    beta.max_element() > 0.0 && beta.is_finite()
 }
 
 /// A light vertex's film contributions: `(raster position, value, component)`.
@@ -718,7 +739,6 @@ fn scatter(
     let Some(s) = v.bsdf.sample(v.wo, uc, u, mode) else {
         return false;
     };
-    let cont = continuation(&v.bsdf);
     // The roulette's number: a hash of the sample, so that it needs no dimension of its own.
     let u_rr = crate::sampling::to_unit(crate::sampling::hash(&[
         uc.to_bits() as u64,
@@ -726,17 +746,18 @@ fn scatter(
         u.y.to_bits() as u64,
         path.len as u64,
     ]));
-    if u_rr >= cont {
-        return false;
-    }
     let wi_world = v.frame.to_world(s.wi);
     let cos_out = s.wi.z.abs();
     let mut f = s.f.rgb();
     if mode == TransportMode::Importance {
         f *= shading_correction(v.wo_world, wi_world, v.frame.n, v.ng);
     }
-    let beta = path.beta * f * (cos_out / (s.pdf * cont));
-    if !beta.is_finite() || beta.max_element() <= 0.0 {
+    let mut beta = path.beta * f * (cos_out / s.pdf);
+    if s.specular && s.transmission && mode == TransportMode::Radiance {
+        // Radiance scales by 1 / eta^2 into glass: the roulette must not end paths for it.
+        path.beta_scale *= s.eta * s.eta;
+    }
+    if !roulette(&mut beta, path.beta_scale, path.len, u_rr) {
         return false;
     }
     let specular_only = v.bsdf.flags().is_specular_only();
@@ -761,8 +782,8 @@ fn scatter(
         path.dvc *= cos_out;
         path.dvm *= cos_out;
     } else {
-        let pdf = v.bsdf.mis_pdf(v.wo, &s) * cont;
-        let pdf_rev = v.bsdf.pdf(s.wi, v.wo) * cont;
+        let pdf = v.bsdf.mis_pdf(v.wo, &s);
+        let pdf_rev = v.bsdf.pdf(s.wi, v.wo);
         if pdf <= 0.0 {
             return false;
         }
@@ -846,6 +867,7 @@ fn trace_light(ctx: &RenderContext, wt: &Weights, k: u64, it: u32, out: &mut Chu
         ray: Ray::new(o, e.dir),
         beta: e.flux / pmf,
         len: 1,
+        beta_scale: 1.0 / (e.flux / pmf).max_element(),
         specular: true,
         finite,
         dvcm: direct_pdf / emission_pdf,
@@ -1003,6 +1025,7 @@ fn trace_camera(
         ray,
         beta: Vec3::ONE,
         len: 1,
+        beta_scale: 1.0,
         specular: true,
         finite,
         dvcm: wt.n_light / density,
