@@ -41,7 +41,8 @@
 //! `RR_MIN_BOUNCES + 1` on, and left out of the MIS densities as pbrt-v4's bdpt does
 //! ([`roulette`]; the technical report's roulette on the BSDF's albedo at every bounce, folded
 //! into the densities, ended 73% of the camera subpaths at material-testball's dark coated
-//! ball, whose coat reflects the bright sky: bdpt 17x the path tracer's relMSE per sample). Light subpaths carry importance: their BSDF values take pbrt-v4's
+//! ball, whose coat reflects the bright sky: bdpt 17x the path tracer's relMSE per sample).
+//! Light subpaths carry importance: their BSDF values take pbrt-v4's
 //! correction for shading normals. The coated BSDFs' stochastic `f` and `pdf` are used as they
 //! are (their estimates are unbiased; the weights then sum to one only in expectation).
 //!
