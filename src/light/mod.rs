@@ -101,10 +101,10 @@ pub struct Lights {
     emitters: Vec<Emitter>,
     /// The infinite lights: (index in the scene's lights, map).
     envs: Vec<(usize, Arc<EnvMap>)>,
-    select: AliasTable,
     /// Each light's bounds when it has a position (area, point, spot): see [`select`].
     bounds: Vec<Option<select::Bounds>>,
-    /// How shadow rays pick lights ([`select`]): every light, and every light but the uniform
+    /// How shadow rays pick lights ([`select`]): every light (whose power table is also the
+    /// photons' and the bidirectional integrators' choice), and every light but the uniform
     /// skies (for receivers that leave those to the BSDF, [`Receiver::sky_by_bsdf`]).
     nee: select::Selection,
     nee_bsdf_sky: select::Selection,
@@ -153,7 +153,6 @@ impl Lights {
         let mut out = Lights {
             emitters,
             envs,
-            select: AliasTable::default(),
             bounds,
             nee: select::Selection::default(),
             nee_bsdf_sky: select::Selection::default(),
@@ -167,7 +166,6 @@ impl Lights {
             .zip(lights)
             .map(|(&w, l)| if l.is_surfaceless() { w } else { 0.0 })
             .collect();
-        out.select = AliasTable::new(&powers);
         out.nee = select::Selection::new(&powers, &out.bounds);
         let non_uniform: Vec<f32> = (0..powers.len())
             .map(|i| match &out.emitters[i] {
@@ -214,11 +212,11 @@ impl Lights {
 
     /// Probability that `sample` picks light `i`.
     pub fn selection_pmf(&self, i: usize) -> f32 {
-        self.select.pmf(i)
+        self.nee.by_power().pmf(i)
     }
 
     pub fn is_empty(&self) -> bool {
-        self.select.is_empty()
+        self.nee.by_power().is_empty()
     }
 
     /// Whether the scene has infinite lights (rays that leave it carry radiance).
@@ -281,7 +279,7 @@ impl Lights {
 
     /// Picks a light in proportion to power: its index and probability.
     pub fn pick(&self, u_sel: f32) -> Option<(usize, f32)> {
-        self.select.sample(u_sel)
+        self.nee.by_power().sample(u_sel)
     }
 
     /// Whether light `i` is an area light, point or spot light (a position a bidirectional

@@ -220,6 +220,12 @@ impl Selection {
         out
     }
 
+    /// Every light of the selection by power alone (the photons' and the bidirectional
+    /// integrators' choice, [`super::Lights::pick`]).
+    pub(super) fn by_power(&self) -> &AliasTable {
+        &self.power
+    }
+
     /// The importance of each positioned light at `r` into `imp` (in the order of
     /// `self.bounded`), and their sum.
     fn importances(&self, bounds: &[Option<Bounds>], r: Receiver, imp: &mut [f32]) -> f32 {
