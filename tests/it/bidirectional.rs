@@ -44,20 +44,26 @@ fn block_means(pixels: &[[f32; 3]], w: usize, h: usize) -> Vec<f64> {
 /// light is 4.6% too bright at 4 spp.
 const RADIUS: f32 = 0.003;
 
-/// Renders `scene` with `kind` at `w x h`, `spp` samples, seed `seed`; VCM with a merge
-/// radius of `radius` of the scene's radius.
+/// VCM's merging in these tests: the merge radius (of the scene's radius) and whether it
+/// merges at every vertex (`--all-merges`).
+#[derive(Clone, Copy)]
+struct Merging(f32, bool);
+
+/// Renders `scene` with `kind` at `w x h`, `spp` samples, seed `seed`; VCM merging as
+/// `merging` says.
 fn render_small(
     scene: &Scene,
     kind: IntegratorKind,
     (w, h, spp): (u32, u32, u32),
     seed: u64,
-    radius: f32,
+    Merging(radius, all_merges): Merging,
 ) -> RgbImage {
     let overrides = photon::tools::job::Overrides {
         res: Some((w, h)),
         spp: Some(spp),
         seed,
         merge_radius: Some(MergeRadius::Scene(radius)),
+        all_merges,
         ..Default::default()
     };
     let job = common::job(scene, kind, BackendKind::Embree).with(&overrides);
@@ -73,11 +79,11 @@ fn blocks(
     kind: IntegratorKind,
     (w, h, spp): (u32, u32, u32),
     seeds: u64,
-    radius: f32,
+    merging: Merging,
 ) -> Vec<(f64, f64)> {
     let runs: Vec<Vec<f64>> = (0..seeds)
         .map(|seed| {
-            let image = render_small(scene, kind, (w, h, spp), 1000 + seed, radius);
+            let image = render_small(scene, kind, (w, h, spp), 1000 + seed, merging);
             block_means(&image.pixels, w as usize, h as usize)
         })
         .collect();
@@ -103,11 +109,16 @@ fn worst_sigma(a: &[(f64, f64)], b: &[(f64, f64)], scale: f64) -> f64 {
 }
 
 fn agree_with_path(file: &str, kinds: &[(IntegratorKind, u32)], path_spp: u32) {
-    agree_with_path_at(file, kinds, path_spp, RADIUS)
+    agree_with_path_at(file, kinds, path_spp, Merging(RADIUS, false))
 }
 
-/// [`agree_with_path`] with VCM's merge radius `radius` (of the scene's radius).
-fn agree_with_path_at(file: &str, kinds: &[(IntegratorKind, u32)], path_spp: u32, radius: f32) {
+/// [`agree_with_path`] with VCM merging as `merging` says.
+fn agree_with_path_at(
+    file: &str,
+    kinds: &[(IntegratorKind, u32)],
+    path_spp: u32,
+    merging: Merging,
+) {
     let scene = loader::load(std::path::Path::new(file)).expect("scene loads");
     let (w, h) = (48, 48);
     let path = blocks(
@@ -115,10 +126,10 @@ fn agree_with_path_at(file: &str, kinds: &[(IntegratorKind, u32)], path_spp: u32
         IntegratorKind::Path,
         (w, h, path_spp),
         SEEDS,
-        radius,
+        merging,
     );
     for &(kind, spp) in kinds {
-        let got = blocks(&scene, kind, (w, h, spp), SEEDS, radius);
+        let got = blocks(&scene, kind, (w, h, spp), SEEDS, merging);
         let worst = worst_sigma(&got, &path, 1.0);
         let rel: Vec<String> = got
             .iter()
@@ -155,6 +166,19 @@ fn bidirectional_agree_with_path_on_the_cornell_box() {
             (IntegratorKind::Bpm, 64),
         ],
         32,
+    );
+}
+
+/// VCM merging at every vertex (`--all-merges`) against the path tracer. The radius is
+/// small here, so merges take a small share: this checks their weights at diffuse
+/// vertices, not the merges' own bias (`direct_light` checks merges of direct light).
+#[test]
+fn vcm_with_all_merges_agrees_with_path_on_the_cornell_box() {
+    agree_with_path_at(
+        CORNELL,
+        &[(IntegratorKind::Vcm, 4)],
+        32,
+        Merging(RADIUS, true),
     );
 }
 
@@ -233,8 +257,20 @@ fn worst_relative(a: &RgbImage, b: &RgbImage) -> f64 {
 #[test]
 fn vcm_without_specular_surfaces_is_bdpt() {
     let scene = loader::load(std::path::Path::new(CORNELL)).expect("scene loads");
-    let vcm = render_small(&scene, IntegratorKind::Vcm, (32, 32, 4), 5, RADIUS);
-    let bdpt = render_small(&scene, IntegratorKind::Bdpt, (32, 32, 4), 5, RADIUS);
+    let vcm = render_small(
+        &scene,
+        IntegratorKind::Vcm,
+        (32, 32, 4),
+        5,
+        Merging(RADIUS, false),
+    );
+    let bdpt = render_small(
+        &scene,
+        IntegratorKind::Bdpt,
+        (32, 32, 4),
+        5,
+        Merging(RADIUS, false),
+    );
     let worst = worst_relative(&vcm, &bdpt);
     println!("vcm against bdpt on the Cornell box: worst relative pixel difference {worst:.2e}");
     assert!(worst < 1e-5, "vcm differs from bdpt by {worst:.2e}");

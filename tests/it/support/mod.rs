@@ -715,10 +715,23 @@ pub fn render_floor(
     photon::scene::Scene,
     Vec<(photon::math::Vec3, photon::math::Vec3)>,
 ) {
+    let kind = photon::integrator::IntegratorKind::Direct;
+    render_floor_with(path, backend, kind, |_| {})
+}
+
+/// [`render_floor`] with integrator `kind` and the file's settings changed by `tweak`.
+pub fn render_floor_with(
+    path: &Path,
+    backend: photon::accel::BackendKind,
+    kind: photon::integrator::IntegratorKind,
+    tweak: impl FnOnce(&mut photon::integrator::RenderSettings),
+) -> (
+    photon::scene::Scene,
+    Vec<(photon::math::Vec3, photon::math::Vec3)>,
+) {
     use photon::math::{Vec2, Vec3};
     let scene = photon::scene::loader::load(path).unwrap_or_else(|e| panic!("{e}"));
-    let settings = scene_settings(&scene, |_| {});
-    let kind = photon::integrator::IntegratorKind::Direct;
+    let settings = scene_settings(&scene, tweak);
     let out = render_on(&scene, kind, backend, &settings);
     let cam = photon::camera::Camera::new(&scene.camera, settings.width, settings.height);
     let mut px = Vec::new();
