@@ -315,7 +315,7 @@ fn guide_through(
 /// The albedo guide of a ray leaving the scene: the environment's radiance, clamped to [0, 1].
 fn environment_albedo(ctx: &RenderContext, ray: &Ray) -> Vec3 {
     let d = ray.d.normalize_or_zero();
-    let le = ctx.lights.escaped(ray.o, d, Pick::Power, |_| 1.0);
+    let le = ctx.lights.escaped(ray.o, d, Pick::Power, |_, _| 1.0);
     match le.is_finite() {
         true => le.clamp(Vec3::ZERO, Vec3::ONE),
         false => Vec3::ZERO,

@@ -1205,7 +1205,10 @@ fn emitted(
     weight: impl Fn(f32) -> f32,
 ) -> Spectrum {
     let Some(h) = hit else {
-        return lambda.illuminant(ctx.lights.escaped(ray.o, ray.d, Pick::At(from), weight));
+        return lambda.illuminant(
+            ctx.lights
+                .escaped(ray.o, ray.d, Pick::At(from), |_, pdf| weight(pdf)),
+        );
     };
     let mesh = &ctx.scene.meshes[h.mesh as usize];
     let Some(li) = mesh.area_light else {

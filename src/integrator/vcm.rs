@@ -17,7 +17,9 @@
 //! balance heuristic through the recursive partial sums `dVCM`, `dVC`, `dVM` of each subpath,
 //! so no technique's path is counted twice, with one exception to the balance heuristic:
 //! direct light (light, surface, camera) is left to light samples and emission hits, light
-//! tracing's density counting 0 in its weights ([`DIRECT_LIGHT_TRACING`]). The merge
+//! tracing's density counting 0 in its weights ([`DIRECT_LIGHT_TRACING`]). Light samples
+//! leave uniform skies to BSDF sampling, as the path tracer does
+//! ([`crate::light::Lights::pick_bsdf_sky`]): their density there is 0. The merge
 //! radius shrinks with the iteration `i` as `r_i = r_0 / (i + 1)^((1 - alpha) / 2)`
 //! (progressive photon mapping), so the estimate converges; `r_0` is `--merge-radius`: by
 //! default 2 pixel footprints (a footprint is the median width of a pixel where the camera
@@ -876,15 +878,17 @@ fn trace_light(ctx: &RenderContext, wt: &Weights, k: u64, it: u32, out: &mut Chu
     let point = lights.is_delta_position(i);
     let delta = point || lights.is_delta_direction(i);
     // The density of the light's first vertex as next-event estimation picks it: by area
-    // for an area light, by solid angle for an infinite one, 1 for a delta light.
+    // for an area light, by solid angle for an infinite one, 1 for a delta light; its
+    // choice by light samples' own table (0 for a uniform sky, left to BSDF sampling).
+    let nee = lights.pmf_bsdf_sky(i);
     // (A distant light is a delta light: 1, not its disc's density, which made bdpt and vcm
     // weigh the light's techniques too high and render too bright, ~30% on an open box.)
     let direct_pdf = if delta {
-        pmf
+        nee
     } else if !finite {
-        pmf * pdf_dir
+        nee * pdf_dir
     } else {
-        pmf * pdf_pos
+        nee * pdf_pos
     };
     let cos_light = if !finite || point {
         1.0
@@ -1159,16 +1163,15 @@ fn emitted(
         // Merging alone: paths of delta bounces only get here, the rest is merged.
         return if path.specular { le } else { Vec3::ZERO };
     }
-    let pmf = ctx.lights.selection_pmf(li);
     let (pdf_pos, pdf_dir) = ctx.lights.emit_pdfs(li, si.p, si.ng, si.wo_world, None);
-    let direct_pdf = pmf * pdf_pos;
-    let emission_pdf = direct_pdf * pdf_dir;
+    let direct_pdf = ctx.lights.pmf_bsdf_sky(li) * pdf_pos;
+    let emission_pdf = ctx.lights.selection_pmf(li) * pdf_pos * pdf_dir;
     let w_camera = direct_pdf * path.dvcm + emission_pdf * camera_dvc(path);
     le / (1.0 + w_camera)
 }
 
 /// Radiance of the infinite lights along a camera subpath's ray that leaves the scene,
-/// MIS-weighted.
+/// MIS-weighted (a uniform sky takes no light samples: its density there is 0).
 fn escaped(ctx: &RenderContext, wt: &Weights, path: &SubPath) -> Vec3 {
     if !ctx.lights.has_infinite() {
         return Vec3::ZERO;
@@ -1176,7 +1179,7 @@ fn escaped(ctx: &RenderContext, wt: &Weights, path: &SubPath) -> Vec3 {
     let d = path.ray.d.normalize();
     let disc_pdf = ctx.lights.disc_pdf(-d, path.ray.o, wt.aim.as_ref());
     ctx.lights
-        .escaped(path.ray.o, d, Pick::Power, |direct_pdf| {
+        .escaped(path.ray.o, d, Pick::Power, |i, power_pdf| {
             if path.len == 1 {
                 1.0
             } else if !wt.use_vc {
@@ -1186,7 +1189,14 @@ fn escaped(ctx: &RenderContext, wt: &Weights, path: &SubPath) -> Vec3 {
                     0.0
                 }
             } else {
-                let emission_pdf = direct_pdf * disc_pdf;
+                // power_pdf: the light's choice by power (the light subpaths') times the
+                // direction's density.
+                let sel = ctx.lights.selection_pmf(i);
+                let direct_pdf = match sel > 0.0 {
+                    true => power_pdf * ctx.lights.pmf_bsdf_sky(i) / sel,
+                    false => 0.0,
+                };
+                let emission_pdf = power_pdf * disc_pdf;
                 1.0 / (1.0 + direct_pdf * path.dvcm + emission_pdf * camera_dvc(path))
             }
         })
@@ -1205,7 +1215,8 @@ fn light_sample(
 ) -> Vec3 {
     let (u_sel, u) = (sampler.next_1d(), sampler.next_2d());
     let lights = ctx.lights;
-    let Some((i, pmf)) = lights.pick(u_sel) else {
+    // Uniform skies are left to BSDF sampling, as the path tracer leaves them.
+    let Some((i, pmf)) = lights.pick_bsdf_sky(u_sel) else {
         return Vec3::ZERO;
     };
     let Some(s) = lights.sample_light(&ctx.scene.meshes, i, pmf, si.p, u) else {
@@ -1235,7 +1246,10 @@ fn light_sample(
     } else {
         path.dvcm
     };
-    let w_camera = (pdf_pos * pdf_dir * ev.cos / (direct_pdf_w * cos_at_light))
+    // Light subpaths choose the light by power among all lights, light samples without the
+    // uniform skies.
+    let choice = lights.selection_pmf(i) / pmf;
+    let w_camera = (choice * pdf_pos * pdf_dir * ev.cos / (direct_pdf_w * cos_at_light))
         * (camera_vm(wt, path) + dvcm + path.dvc * ev.pdf_rev);
     let w = 1.0 / (w_light + 1.0 + w_camera);
     let c = s.li * ev.f * (w * ev.cos / s.pdf);

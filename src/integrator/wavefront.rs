@@ -569,7 +569,7 @@ pub fn escaped<T>(ctx: &RenderContext, path: &PathState<T>) -> Spectrum {
     let d = path.ray.d.normalize_or_zero();
     let le = ctx
         .lights
-        .escaped(path.ray.o, d, Pick::At(path.prev), |light_pdf| {
+        .escaped(path.ray.o, d, Pick::At(path.prev), |_, light_pdf| {
             if path.prev_pdf > 0.0 {
                 crate::sampling::power_heuristic(path.prev_pdf, light_pdf)
             } else {

@@ -229,7 +229,14 @@ impl Lights {
     /// leaves through its portal), each times `weight(pdf)` where `pdf` is the density with
     /// which a shadow ray from `o` would have taken that direction from that light, its
     /// selection counted as `pick` says, for MIS; `weight` returns 1 where there is no MIS.
-    pub fn escaped(&self, o: Vec3, d: Vec3, pick: Pick, weight: impl Fn(f32) -> f32) -> Vec3 {
+    /// `weight(i, pdf)` also gets the light's index `i`.
+    pub fn escaped(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        pick: Pick,
+        weight: impl Fn(usize, f32) -> f32,
+    ) -> Vec3 {
         self.envs.iter().fold(Vec3::ZERO, |acc, (i, map)| {
             if !map.admits(o, d) {
                 return acc;
@@ -242,7 +249,7 @@ impl Lights {
                 Pick::At(r) => self.pmf_at(r, *i),
                 Pick::Power => self.selection_pmf(*i),
             };
-            acc + le * weight(pmf * map.pdf(d))
+            acc + le * weight(*i, pmf * map.pdf(d))
         })
     }
 
@@ -280,6 +287,18 @@ impl Lights {
     /// Picks a light in proportion to power: its index and probability.
     pub fn pick(&self, u_sel: f32) -> Option<(usize, f32)> {
         self.nee.by_power().sample(u_sel)
+    }
+
+    /// Picks a light in proportion to power among those a shadow ray takes from a vertex that
+    /// leaves uniform skies to its BSDF ([`Receiver::sky_by_bsdf`]): the bidirectional
+    /// integrators' light samples. Without a uniform sky, [`Self::pick`]'s choice.
+    pub fn pick_bsdf_sky(&self, u_sel: f32) -> Option<(usize, f32)> {
+        self.nee_bsdf_sky.by_power().sample(u_sel)
+    }
+
+    /// The probability that [`Self::pick_bsdf_sky`] picks light `i` (0 for a uniform sky).
+    pub fn pmf_bsdf_sky(&self, i: usize) -> f32 {
+        self.nee_bsdf_sky.by_power().pmf(i)
     }
 
     /// Whether light `i` is an area light, point or spot light (a position a bidirectional
