@@ -156,7 +156,8 @@ impl Default for VcmSettings {
 pub const DEFAULT_PIXELS: f32 = 2.0;
 
 /// The factor on light tracing's density in the MIS weights of direct light (paths of two
-/// segments: light, surface, camera), where light samples and emission hits are its rivals.
+/// segments: light, surface, camera) at a surface without glossy or specular lobes, where
+/// light samples and emission hits are its rivals.
 /// The balance heuristic weighs techniques by density alone, and light subpaths aimed at
 /// what the camera sees are dense there, so it handed light tracing most of the direct
 /// light of a diffuse scene (74% of dragon's image under its distant light), but its
@@ -168,8 +169,12 @@ pub const DEFAULT_PIXELS: f32 = 2.0;
 /// relMSE against pbrt-v4's converged render for 1 / 0.1 / 0: dragon 1.08e-5 / 3.9e-6 /
 /// 2.3e-6, cornell-box 9.7e-4 / 9.0e-4 / 8.4e-4, veach-bidir 0.019 / 0.0092 / 0.0073,
 /// glass-of-water 0.016 / 0.014 / 0.014, teapot 3.3e-4 / 2.8e-4 / 3.0e-4; bathroom2,
-/// bathroom, veach-ajar and living-room-3 within their run-to-run noise. `lighttracer`
-/// keeps its direct light (it has no other technique).
+/// bathroom, veach-ajar and living-room-3 within their run-to-run noise. But veach-mis
+/// (glossy plates under sphere lights; 20 s, seeds 0 / 1) 0.00122 / 0.00126 at 1, 0.00167 /
+/// 0.00157 at 0: a glossy surface's direct light is where the three techniques each win
+/// somewhere, so glossy and specular surfaces keep light tracing (veach-mis 0.00147 / 0.00137
+/// then; coffee, veach-bidir, bathroom2, bathroom, veach-ajar unchanged within noise).
+/// `lighttracer` keeps its direct light (it has no other technique).
 const DIRECT_LIGHT_TRACING: f32 = 0.0;
 
 /// Light subpaths traced together; their splats reach the film in chunk order.
@@ -210,7 +215,7 @@ struct Weights {
     /// mixture's.
     aim: Option<crate::light::Aim>,
     /// What light tracing's density is scaled by in the weights of paths of two segments
-    /// (direct light): see [`DIRECT_LIGHT_TRACING`].
+    /// (direct light) through a diffuse surface: see [`DIRECT_LIGHT_TRACING`].
     direct_lt: f32,
 }
 
@@ -241,6 +246,18 @@ impl Weights {
             } else {
                 DIRECT_LIGHT_TRACING
             },
+        }
+    }
+
+    /// What light tracing's density is scaled by in the weights of a path of two segments
+    /// whose surface has `bsdf`: [`DIRECT_LIGHT_TRACING`] where it has no glossy or
+    /// specular lobe, else 1 (a function of the path, so every technique weighs it alike).
+    fn direct_lt(&self, bsdf: &Bsdf) -> f32 {
+        let f = bsdf.flags();
+        if f.has_glossy() || f.has_specular() {
+            1.0
+        } else {
+            self.direct_lt
         }
     }
 }
@@ -824,7 +841,8 @@ fn scatter(
         let k = cos_out / pdf;
         if mode == TransportMode::Radiance && path.len == 1 {
             // dvc is 0 at the camera's first vertex and dvcm is light tracing's term.
-            path.direct_dvc = k * (path.dvcm * wt.direct_lt + wt.vm_factor * merge_here);
+            let lt = wt.direct_lt(&v.bsdf);
+            path.direct_dvc = k * (path.dvcm * lt + wt.vm_factor * merge_here);
         }
         path.dvc = k * (path.dvc * pdf_rev + path.dvcm + wt.vm_factor * merge_here);
         path.dvm = k * (path.dvm * pdf_rev + path.dvcm * wt.vc_factor + merge_here);
@@ -1014,7 +1032,11 @@ fn connect_to_camera(
     out: &mut ChunkOut,
 ) {
     // Light tracing's density scale in the weights (direct light: `DIRECT_LIGHT_TRACING`).
-    let lt = if lv.len == 1 { wt.direct_lt } else { 1.0 };
+    let lt = if lv.len == 1 {
+        wt.direct_lt(&lv.bsdf)
+    } else {
+        1.0
+    };
     if lt <= 0.0 {
         return;
     }
@@ -1242,7 +1264,7 @@ fn light_sample(
     let (pdf_pos, pdf_dir) = lights.emit_pdfs(i, si.p, s.n, -s.wi, wt.aim.as_ref());
     // At the camera's first vertex dvcm is light tracing's term (dvc is 0).
     let dvcm = if path.len == 1 {
-        path.dvcm * wt.direct_lt
+        path.dvcm * wt.direct_lt(&v.bsdf)
     } else {
         path.dvcm
     };
@@ -1365,7 +1387,7 @@ fn merge(
         // Direct light (both subpaths one segment long): the camera's dvcm is light
         // tracing's term.
         let lt = if path.len == 1 && lv.len == 1 {
-            wt.direct_lt
+            wt.direct_lt(&v.bsdf)
         } else {
             1.0
         };
