@@ -16,15 +16,17 @@
 //! estimation, from a hash grid). Multiple importance sampling weighs every technique by the
 //! balance heuristic through the recursive partial sums `dVCM`, `dVC`, `dVM` of each subpath,
 //! so no technique's path is counted twice, with one exception to the balance heuristic:
-//! direct light (light, surface, camera) is left to light samples and emission hits, light
-//! tracing's density counting 0 in its weights ([`DIRECT_LIGHT_TRACING`]). Light samples
-//! leave uniform skies to BSDF sampling, as the path tracer does
-//! ([`crate::light::Lights::pick_bsdf_sky`]): their density there is 0. The merge
-//! radius shrinks with the iteration `i` as `r_i = r_0 / (i + 1)^((1 - alpha) / 2)`
-//! (progressive photon mapping), so the estimate converges; `r_0` is `--merge-radius`: by
-//! default 2 pixel footprints (a footprint is the median width of a pixel where the camera
-//! sees the scene), `Npx` for N of them, or a number F for F times the radius of the
-//! scene's bounding sphere (SmallVCM's convention, 0.003 there).
+//! direct light (light, surface, camera) at a surface without glossy or specular lobes is
+//! left to light samples and emission hits, light tracing's density counting 0 in its
+//! weights ([`DIRECT_LIGHT_TRACING`]). Light samples are the path tracer's: a light picked
+//! by its importance at the point, a sphere light sampled by its cone, uniform skies left to
+//! BSDF sampling (their density there is 0); light subpaths pick lights by power. The
+//! merge radius shrinks with the iteration `i` as
+//! `r_i = r_0 / (i + 1)^((1 - alpha) / 2)` (progressive photon mapping), so the estimate
+//! converges; `r_0` is `--merge-radius`: by default 2 pixel footprints (a footprint is the
+//! median width of a pixel where the camera sees the scene), `Npx` for N of them, or a
+//! number F for F times the radius of the scene's bounding sphere (SmallVCM's convention,
+//! 0.003 there).
 //!
 //! `bdpt` turns merging off (the weights then are bidirectional path tracing's), `bpm` turns
 //! connections, light samples and light tracing off (merging alone, with emission only along
@@ -72,7 +74,7 @@ use crate::accel::{Hit, RayKind};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::film::{Component, Radiance};
 use crate::interaction::SurfaceInteraction;
-use crate::light::Pick;
+use crate::light::{Pick, Receiver};
 use crate::math::{spawn_origin, Frame, Ray, Vec2, Vec3};
 use crate::sampling::Sampler;
 use rayon::prelude::*;
@@ -281,6 +283,9 @@ struct SubPath {
     dvcm: f32,
     dvc: f32,
     dvm: f32,
+    /// Camera subpaths: the last vertex a light sample was taken from, for the density of
+    /// that light sample in the weights of an emission hit (see [`nee_pmf_area`]).
+    prev: Receiver,
     /// Camera subpaths after one bounce: `dvc` with light tracing's term scaled by
     /// `Weights::direct_lt` (what an emission hit there weighs by).
     direct_dvc: f32,
@@ -895,19 +900,8 @@ fn trace_light(ctx: &RenderContext, wt: &Weights, k: u64, it: u32, out: &mut Chu
     let finite = lights.is_finite(i);
     let point = lights.is_delta_position(i);
     let delta = point || lights.is_delta_direction(i);
-    // The density of the light's first vertex as next-event estimation picks it: by area
-    // for an area light, by solid angle for an infinite one, 1 for a delta light; its
-    // choice by light samples' own table (0 for a uniform sky, left to BSDF sampling).
-    let nee = lights.pmf_bsdf_sky(i);
-    // (A distant light is a delta light: 1, not its disc's density, which made bdpt and vcm
-    // weigh the light's techniques too high and render too bright, ~30% on an open box.)
-    let direct_pdf = if delta {
-        nee
-    } else if !finite {
-        nee * pdf_dir
-    } else {
-        nee * pdf_pos
-    };
+    // The density of the light's first vertex as a light sample from the subpath's first
+    // surface picks it ([`nee_pmf_area`]): known once that surface is, below.
     let cos_light = if !finite || point {
         1.0
     } else {
@@ -929,15 +923,20 @@ fn trace_light(ctx: &RenderContext, wt: &Weights, k: u64, it: u32, out: &mut Chu
         beta_scale: 1.0 / (e.flux / pmf).max_element(),
         specular: true,
         finite,
-        dvcm: direct_pdf / emission_pdf,
+        dvcm: 0.0,
         dvc,
         dvm: dvc * wt.vc_factor,
+        prev: Receiver::in_medium(e.p),
         direct_dvc: 0.0,
         after_specular: false,
         pending_vc: 0.0,
         pending_vm: 0.0,
     };
     while let Some((hit, si, bsdf)) = next_vertex(ctx, RayKind::Photon, &path.ray) {
+        if path.len == 1 {
+            let r = si.receiver().sky_by_bsdf();
+            path.dvcm = nee_pmf_area(ctx, i, r, (e.p, e.n), pdf_dir) / emission_pdf;
+        }
         arrive(&mut path, hit.t, si.wo.z.abs());
         path.beta *= crate::accel::transmittance(ctx.scene, Some(&hit), &path.ray);
         let v = Vertex {
@@ -1100,6 +1099,7 @@ fn trace_camera(
         dvcm: wt.n_light / density,
         dvc: 0.0,
         dvm: 0.0,
+        prev: Receiver::in_medium(ray.o),
         direct_dvc: 0.0,
         after_specular: false,
         pending_vc: 0.0,
@@ -1162,6 +1162,7 @@ fn trace_camera(
         if !scatter(&mut path, &v, wt, &mut sampler, TransportMode::Radiance) {
             break;
         }
+        path.prev = si.receiver().sky_by_bsdf();
         path.ray = si.spawn_ray(path.ray.d);
         ctx.counters.secondary_rays.fetch_add(1, Ordering::Relaxed);
     }
@@ -1186,7 +1187,7 @@ fn emitted(
         return if path.specular { le } else { Vec3::ZERO };
     }
     let (pdf_pos, pdf_dir) = ctx.lights.emit_pdfs(li, si.p, si.ng, si.wo_world, None);
-    let direct_pdf = ctx.lights.pmf_bsdf_sky(li) * pdf_pos;
+    let direct_pdf = nee_pmf_area(ctx, li, path.prev, (si.p, si.ng), pdf_dir);
     let emission_pdf = ctx.lights.selection_pmf(li) * pdf_pos * pdf_dir;
     let w_camera = direct_pdf * path.dvcm + emission_pdf * camera_dvc(path);
     le / (1.0 + w_camera)
@@ -1215,7 +1216,7 @@ fn escaped(ctx: &RenderContext, wt: &Weights, path: &SubPath) -> Vec3 {
                 // direction's density.
                 let sel = ctx.lights.selection_pmf(i);
                 let direct_pdf = match sel > 0.0 {
-                    true => power_pdf * ctx.lights.pmf_bsdf_sky(i) / sel,
+                    true => power_pdf * ctx.lights.pmf_at(path.prev, i) / sel,
                     false => 0.0,
                 };
                 let emission_pdf = power_pdf * disc_pdf;
@@ -1237,11 +1238,12 @@ fn light_sample(
 ) -> Vec3 {
     let (u_sel, u) = (sampler.next_1d(), sampler.next_2d());
     let lights = ctx.lights;
-    // Uniform skies are left to BSDF sampling, as the path tracer leaves them.
-    let Some((i, pmf)) = lights.pick_bsdf_sky(u_sel) else {
+    // By importance at this point, as the path tracer picks, uniform skies left to BSDF
+    // sampling; a sphere light by its cone.
+    let Some((i, pmf)) = lights.pick_at(si.receiver().sky_by_bsdf(), u_sel) else {
         return Vec3::ZERO;
     };
-    let Some(s) = lights.sample_light(&ctx.scene.meshes, i, pmf, si.p, u) else {
+    let Some(s) = lights.sample_chosen(&ctx.scene.meshes, (i, pmf), si.p, u) else {
         return Vec3::ZERO;
     };
     let Some(ev) = v.eval(s.wi, TransportMode::Radiance) else {
@@ -1284,6 +1286,34 @@ fn light_sample(
         return Vec3::ZERO;
     }
     c
+}
+
+/// The density (choice included) with which a light sample from receiver `r` picks the
+/// point `y` (normal `n`; zero off a surface) of light `i`: per unit area on an area light
+/// (its cone's density for a sphere), `dir_pdf` times the choice for an infinite light
+/// (`dir_pdf`: the direction's solid-angle density), the choice alone for a delta light.
+/// Light samples pick by importance at the receiver ([`crate::light::Lights::pick_at`]) and
+/// never pick a uniform sky.
+fn nee_pmf_area(
+    ctx: &RenderContext,
+    i: usize,
+    r: Receiver,
+    (y, n): (Vec3, Vec3),
+    dir_pdf: f32,
+) -> f32 {
+    let lights = ctx.lights;
+    if lights.is_delta_position(i) || lights.is_delta_direction(i) {
+        return lights.pmf_at(r, i);
+    }
+    if !lights.is_finite(i) {
+        return lights.pmf_at(r, i) * dir_pdf;
+    }
+    let d = r.p - y;
+    let d2 = d.length_squared();
+    if d2 <= 0.0 {
+        return 0.0;
+    }
+    lights.pdf_area(i, r, y, n) * n.dot(d).abs() / (d2 * d2.sqrt())
 }
 
 /// The camera subpath's `dvc` as an emission hit weighs by it: after one bounce, with light

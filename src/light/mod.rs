@@ -14,10 +14,10 @@
 //! ```
 //! One file per variant; [`Lights`] dispatches over the closed set.
 //!
-//! Photons and the bidirectional integrators pick a light in proportion to its power through an
-//! alias table (pbrt-v4's `PowerLightSampler`); next-event estimation in the path tracer, the
-//! direct integrator and the photon mapper picks by what each light can send to the receiving
-//! point ([`select`], pbrt-v4's light bounds); rays that leave the scene see the infinite lights
+//! Photons and the bidirectional integrators' light subpaths pick a light in proportion to its
+//! power through an alias table (pbrt-v4's `PowerLightSampler`); next-event estimation (in
+//! every integrator) picks by what each light can send to the receiving point ([`select`],
+//! pbrt-v4's light bounds); rays that leave the scene see the infinite lights
 //! ([`Lights::escaped`]).
 mod area;
 mod distant;
@@ -289,18 +289,6 @@ impl Lights {
         self.nee.by_power().sample(u_sel)
     }
 
-    /// Picks a light in proportion to power among those a shadow ray takes from a vertex that
-    /// leaves uniform skies to its BSDF ([`Receiver::sky_by_bsdf`]): the bidirectional
-    /// integrators' light samples. Without a uniform sky, [`Self::pick`]'s choice.
-    pub fn pick_bsdf_sky(&self, u_sel: f32) -> Option<(usize, f32)> {
-        self.nee_bsdf_sky.by_power().sample(u_sel)
-    }
-
-    /// The probability that [`Self::pick_bsdf_sky`] picks light `i` (0 for a uniform sky).
-    pub fn pmf_bsdf_sky(&self, i: usize) -> f32 {
-        self.nee_bsdf_sky.by_power().pmf(i)
-    }
-
     /// Whether light `i` is an area light, point or spot light (a position a bidirectional
     /// path can start from); distant and infinite lights are not.
     pub fn is_finite(&self, i: usize) -> bool {
@@ -357,8 +345,20 @@ impl Lights {
         matches!(self.emitters[i], Emitter::Distant(_))
     }
 
+    /// [`Self::sample`] with the light chosen already (`i`, with probability `pmf`): a
+    /// sphere light by its cone, [`Self::pdf_area`] its density.
+    pub fn sample_chosen(
+        &self,
+        meshes: &[Mesh],
+        (i, pmf): (usize, f32),
+        p: Vec3,
+        u: Vec2,
+    ) -> Option<LightSample> {
+        self.sample_by(meshes, (i, pmf), p, u, true)
+    }
+
     /// A point `u` on light `i`, chosen with probability `pmf`, as seen from `p`; area lights
-    /// by area (the density the bidirectional integrators' partial sums assume).
+    /// by area.
     pub fn sample_light(
         &self,
         meshes: &[Mesh],

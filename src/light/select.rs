@@ -18,8 +18,9 @@
 //! Lights without a position (distant, infinite) keep their share of the power, split among
 //! them by power; the rest goes to the positioned lights by importance. With more than
 //! [`EXHAUSTIVE_MAX`] positioned lights every light is picked by power (pbrt-v4's BVH is not
-//! built). The bidirectional integrators pick by power: their partial sums need a density that
-//! does not depend on the receiving point.
+//! built). The bidirectional integrators' light subpaths pick by power; their light samples
+//! pick by importance, and their partial sums take that density once the receiving point is
+//! known (`integrator/vcm.rs`).
 use crate::math::Vec3;
 use crate::sampling::alias::AliasTable;
 use crate::sampling::ONE_MINUS_EPSILON;
@@ -70,8 +71,8 @@ impl Receiver {
 }
 
 /// How a light's selection probability is counted (for MIS weights): by importance at the
-/// receiver, as next-event estimation in path, direct and the photon mapper picks, or by
-/// power, as the bidirectional integrators pick.
+/// receiver, as next-event estimation picks, or by power, as photons and light subpaths
+/// pick.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Pick {
     At(Receiver),

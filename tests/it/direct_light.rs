@@ -203,10 +203,8 @@ fn lights_facing_away_take_no_shadow_rays() {
     let lights = "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [ 5 5 5 ]\nShape \"trianglemesh\" \"point3 P\" [ -0.05 1 -0.35  0.45 1 -0.35  0.45 1 0.15  -0.05 1 0.15 ] \"integer indices\" [ 0 1 2 0 2 3 ]\nAttributeEnd
 AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [ 25 25 25 ]\nShape \"trianglemesh\" \"point3 P\" [ -0.5 2 0.5  0.5 2 0.5  0.5 2 -0.5  -0.5 2 -0.5 ] \"integer indices\" [ 0 1 2 0 2 3 ]\nAttributeEnd
 LightSource \"spot\" \"rgb I\" [ 200 200 200 ] \"point3 from\" [ 0 0.8 0 ] \"point3 to\" [ 0 2 0 ] \"float coneangle\" [ 30 ] \"float conedeltaangle\" [ 10 ]";
-    let (scene, px) = render(
-        &write_scene("facing-away", 0.5, 24, 256, lights),
-        BackendKind::Embree,
-    );
+    let file = write_scene("facing-away", 0.5, 24, 256, lights);
+    let (scene, px) = render(&file, BackendKind::Embree);
     let lights = scene.emitters();
     let powers = lights.powers();
     assert!(
@@ -244,6 +242,20 @@ LightSource \"spot\" \"rgb I\" [ 200 200 200 ] \"point3 from\" [ 0 0.8 0 ] \"poi
     println!("quad beside lights facing away: mean relative error {mean_err:.2e}, worst pixel {err:.2e} over {n} pixels");
     assert!(mean_err < 0.01, "mean {mean_err}");
     assert!(err < 0.05, "worst pixel {err}");
+    // bdpt's and vcm's light samples pick by the same importance (their light subpaths by
+    // power): on this diffuse floor their direct light is light samples and emission hits
+    // alone, as exact as the path tracer's.
+    use photon::integrator::IntegratorKind;
+    for kind in [IntegratorKind::Bdpt, IntegratorKind::Vcm] {
+        let (_, px) = common::render_floor_with(&file, BackendKind::Embree, kind, |_| {});
+        let mean_err = mean_error(&px, expected);
+        let (err, n) = worst(&px, expected, 0.0);
+        println!(
+            "{kind:?}: mean relative error {mean_err:.2e}, worst pixel {err:.2e} over {n} pixels"
+        );
+        assert!(mean_err < 0.01, "{kind:?}: mean {mean_err}");
+        assert!(err < 0.05, "{kind:?}: worst pixel {err}");
+    }
 }
 
 /// The chromaticity (x, y) of a linear sRGB value, by the IEC 61966-2-1 sRGB-to-XYZ matrix.
