@@ -287,19 +287,20 @@ fn sample_does_not_depend_on_threads() {
     }
 }
 
-/// A sample that does not fit the memory budget is an error before the render starts.
+/// A sample that does not fit the memory budget is an error before the render starts: the
+/// memory model's refusal, naming the recorded rays (no timing here: tests never fail on
+/// time, and a busy machine once took over a second for it).
 #[test]
 fn oversized_recording_is_refused() {
     let scene = loader::load(Path::new(CORNELL)).unwrap();
     let embree = Accel::build(&scene, BackendKind::Embree, AccelOptions::default()).unwrap();
     let settings = RenderSettings::from_scene(&scene).unwrap();
-    let t = std::time::Instant::now();
     let Err(e) = recorded::record(&scene, embree, &settings, 100_000_000, 0) else {
         panic!("10^8 rays per kind fit the budget");
     };
     println!("{e}");
     assert!(e.contains("recorded rays"), "{e}");
-    assert!(t.elapsed().as_secs_f64() < 1.0);
+    assert!(e.contains("over the limit"), "{e}");
 }
 
 const ALPHA: &str = "scenes/alpha-cutouts.pbrt";
