@@ -216,9 +216,6 @@ struct Weights {
     /// mixture, [`crate::photon::aim`]); every emission density of such a light is the
     /// mixture's.
     aim: Option<crate::light::Aim>,
-    /// What light tracing's density is scaled by in the weights of paths of two segments
-    /// (direct light) through a diffuse surface: see [`DIRECT_LIGHT_TRACING`].
-    direct_lt: f32,
 }
 
 impl Weights {
@@ -243,23 +240,19 @@ impl Weights {
             max_len: max_depth + 1,
             sds: use_vc && use_vm && !all,
             aim: None,
-            direct_lt: if light_only {
-                1.0
-            } else {
-                DIRECT_LIGHT_TRACING
-            },
         }
     }
 
     /// What light tracing's density is scaled by in the weights of a path of two segments
     /// whose surface has `bsdf`: [`DIRECT_LIGHT_TRACING`] where it has no glossy or
-    /// specular lobe, else 1 (a function of the path, so every technique weighs it alike).
+    /// specular lobe, else 1 (a function of the path, so every technique weighs it alike);
+    /// 1 for `lighttracer`, whose only technique it is.
     fn direct_lt(&self, bsdf: &Bsdf) -> f32 {
         let f = bsdf.flags();
-        if f.has_glossy() || f.has_specular() {
+        if self.light_only || f.has_glossy() || f.has_specular() {
             1.0
         } else {
-            self.direct_lt
+            DIRECT_LIGHT_TRACING
         }
     }
 }
