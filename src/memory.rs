@@ -162,16 +162,16 @@ pub fn estimate(
     }
     if let (Some(_), Some(per)) = (kind.technique(), landings) {
         // One light subpath per pixel of the crop window, each keeping the vertices a pilot
-        // trace measured (with the photon maps' margin; plus the hash grid's 8 bytes and a
-        // splat of 32 bytes per vertex), and the iteration's film, sum and camera rows.
+        // trace measured (with the photon maps' margin; plus the hash grid's 8-byte id and
+        // 4-byte key and a splat of 32 bytes per vertex), and the iteration's film and sum.
         let (w, h) = settings.image_size();
         let paths = w as u64 * h as u64;
         let vertices = paths as f64 * per.subpath * PILOT_MARGIN;
-        let bytes = vertices * (crate::integrator::vcm::LIGHT_VERTEX_BYTES + 8 + 32) as f64;
+        let bytes = vertices * (crate::integrator::vcm::LIGHT_VERTEX_BYTES + 12 + 32) as f64;
         e.parts.push((
             "light vertices",
             (bytes.min(u64::MAX as f64) as u64)
-                .saturating_add(paths.saturating_mul(4 + 3 * RADIANCE_BYTES + 48)),
+                .saturating_add(paths.saturating_mul(4 + 2 * RADIANCE_BYTES)),
         ));
         e.what += &format!(
             ", {paths} light subpaths x{:.2} vertices x {} B",

@@ -421,6 +421,11 @@ struct Tally {
     merged: u64,
     /// Shadow rays cast by each technique (same order as `sums`; emission hits cast none).
     rays: [u64; 5],
+    /// Camera rays and the camera subpaths' bounce rays, counted here and added to the
+    /// render's shared counters once per iteration (an atomic add per ray, contended by
+    /// every thread, was 5% of vcm's time).
+    camera_rays: u64,
+    secondary_rays: u64,
 }
 
 impl Tally {
@@ -436,6 +441,17 @@ impl Tally {
         for (a, b) in self.rays.iter_mut().zip(o.rays) {
             *a += b;
         }
+        self.camera_rays += o.camera_rays;
+        self.secondary_rays += o.secondary_rays;
+    }
+
+    /// Adds this tally's rays to the render's counters.
+    fn count_rays(&self, c: &super::Counters) {
+        c.camera_rays.fetch_add(self.camera_rays, Ordering::Relaxed);
+        c.secondary_rays
+            .fetch_add(self.secondary_rays, Ordering::Relaxed);
+        c.shadow_rays
+            .fetch_add(self.rays.iter().sum(), Ordering::Relaxed);
     }
 }
 
@@ -466,6 +482,8 @@ pub fn render(
     let mut tally = Tally::default();
     let (mut light_s, mut camera_s, mut stored, mut radii) = (0.0, 0.0, 0u64, (0.0f32, 0.0f32));
     let mut done = 0u32;
+    // The film of one iteration, reused by the next.
+    let mut film = vec![Radiance::default(); n];
     for it in 0..iterations {
         if crate::interrupt::requested().is_some() {
             break;
@@ -484,7 +502,7 @@ pub fn render(
         };
         radii = (if it == 0 { radius } else { radii.0 }, radius);
         let t0 = std::time::Instant::now();
-        // Light subpaths, chunk by chunk in parallel; assembled in chunk order.
+        // Light subpaths, chunk by chunk in parallel.
         let chunks: Vec<ChunkOut> = (0..n.div_ceil(CHUNK))
             .into_par_iter()
             .map(|c| {
@@ -493,51 +511,48 @@ pub fn render(
                     trace_light(ctx, &wt, k as u64, it, &mut out);
                     out.ends.push(out.vertices.len() as u32);
                 }
-                // Exact sizes: every chunk is alive until the assembly below.
+                // Exact sizes: every chunk is alive until the iteration's end.
                 out.vertices.shrink_to_fit();
                 out.splats.shrink_to_fit();
                 out
             })
             .collect();
-        // One store of the exact size, each chunk freed as soon as it is copied in.
-        let total: usize = chunks.iter().map(|c| c.vertices.len()).sum();
-        let mut vertices = Vec::with_capacity(total);
-        let mut ends = Vec::with_capacity(n);
-        let mut film = vec![Radiance::default(); n];
-        for c in chunks {
-            let base = vertices.len() as u32;
-            ends.extend(c.ends.iter().map(|e| e + base));
-            vertices.extend_from_slice(&c.vertices);
+        film.fill(Radiance::default());
+        for c in &chunks {
             for &(p, v, comp) in &c.splats {
                 splat(ctx, &mut film, (bx0, by0, w, h), p, v, comp);
                 tally.add(4, v);
             }
             tally.absorb(&c.tally);
         }
-        stored += vertices.len() as u64;
+        let store = Store { chunks };
+        stored += store.len() as u64;
         light_s += t0.elapsed().as_secs_f64();
         let t1 = std::time::Instant::now();
-        let grid = wt.use_vm.then(|| Grid::new(&vertices, radius));
+        // Built by the first merge that needs it (none may: see `merges_at`).
+        let grid = std::sync::OnceLock::new();
+        let grid = wt.use_vm.then_some(Merging {
+            store: &store,
+            grid: &grid,
+            radius,
+        });
         if !wt.light_only {
-            let rows: Vec<Vec<(Radiance, Tally)>> = (0..h)
-                .into_par_iter()
-                .map(|y| {
-                    (0..w)
-                        .map(|x| {
-                            let k = y * w + x;
-                            let start = if k == 0 { 0 } else { ends[k - 1] as usize };
-                            let own = &vertices[start..ends[k] as usize];
-                            let (px, py) = (bx0 + x as u32, by0 + y as u32);
-                            trace_camera(ctx, &wt, (px, py), it, own, &vertices, grid.as_ref())
-                        })
-                        .collect()
+            // Each row adds into its own pixels; the rows' tallies are summed in row order.
+            let rows: Vec<Tally> = film
+                .par_chunks_mut(w)
+                .enumerate()
+                .map(|(y, row)| {
+                    let mut t = Tally::default();
+                    for (x, px) in row.iter_mut().enumerate() {
+                        let own = store.own(y * w + x);
+                        let p = (bx0 + x as u32, by0 + y as u32);
+                        *px += trace_camera(ctx, &wt, p, it, own, grid.as_ref(), &mut t);
+                    }
+                    t
                 })
                 .collect();
-            for (y, row) in rows.into_iter().enumerate() {
-                for (x, (r, t)) in row.into_iter().enumerate() {
-                    film[y * w + x] += r;
-                    tally.absorb(&t);
-                }
+            for t in &rows {
+                tally.absorb(t);
             }
         }
         camera_s += t1.elapsed().as_secs_f64();
@@ -547,6 +562,7 @@ pub fn render(
         done += 1;
         progress.tile_done(it as u64 + 1, iterations as u64);
     }
+    tally.count_rays(&ctx.counters);
     let scale = 1.0 / iterations as f32;
     let total: f64 = tally.sums.iter().sum::<f64>().max(f64::MIN_POSITIVE);
     let shares: Vec<String> = TECHNIQUES
@@ -769,7 +785,6 @@ fn visible(ctx: &RenderContext, a: (Vec3, Vec3, Vec3), b: (Vec3, Vec3, Vec3)) ->
     } else {
         spawn_origin(b.0, b.1, side(b.2, -d))
     };
-    ctx.counters.shadow_rays.fetch_add(1, Ordering::Relaxed);
     !ctx.accel
         .occluded(RayKind::Shadow, &Ray::segment(o, t - o, 1.0 - 1e-4))
 }
@@ -1061,23 +1076,22 @@ fn connect_to_camera(
 }
 
 /// Traces the camera subpath of pixel `(x, y)` in iteration `it`: emission it hits, light
-/// samples, connections to `own` (its light subpath's vertices) and merges with `all`.
+/// samples, connections to `own` (its light subpath's vertices) and merges.
 fn trace_camera(
     ctx: &RenderContext,
     wt: &Weights,
     (x, y): (u32, u32),
     it: u32,
     own: &[LightVertex],
-    all: &[LightVertex],
-    grid: Option<&Grid>,
-) -> (Radiance, Tally) {
+    merging: Option<&Merging>,
+    tally: &mut Tally,
+) -> Radiance {
     let mut out = Radiance::default();
-    let mut tally = Tally::default();
     let (ray, mut sampler) = super::camera_sample(ctx, x, y, it);
-    ctx.counters.camera_rays.fetch_add(1, Ordering::Relaxed);
+    tally.camera_rays += 1;
     let cos = ctx.camera.cos_to_axis(ray.d.normalize());
     if cos <= 0.0 {
-        return (out, tally);
+        return out;
     }
     // Per unit solid angle (perspective) or per unit area across the ray (orthographic: the
     // first segment's length does not count, as after a distant light).
@@ -1131,20 +1145,20 @@ fn trace_camera(
         sampler.set_dimension(base + (path.len - 1) * CAMERA_DIMS_PER_VERTEX);
         if bsdf.flags().has_non_specular() {
             if wt.use_vc {
-                let c = path.beta * light_sample(ctx, wt, &path, &v, &si, &mut sampler, &mut tally);
+                let c = path.beta * light_sample(ctx, wt, &path, &v, &si, &mut sampler, tally);
                 out[component(path.len)] += c;
                 tally.add(1, c);
                 for lv in own {
                     if lv.len + path.len + 1 > wt.max_len {
                         break;
                     }
-                    let c = path.beta * lv.beta * connect(ctx, wt, &path, &v, &si, lv, &mut tally);
+                    let c = path.beta * lv.beta * connect(ctx, wt, &path, &v, &si, lv, tally);
                     out[Component::Indirect] += c;
                     tally.add(2, c);
                 }
             }
-            if let (Some(g), true) = (grid, merges_at(wt, &path)) {
-                let (c, found) = merge(wt, &path, &v, si.p, all, g);
+            if let (Some(m), true) = (merging, merges_at(wt, &path)) {
+                let (c, found) = merge(wt, &path, &v, si.p, m);
                 let c = path.beta * c * wt.vm_norm;
                 out[component(path.len)] += c;
                 tally.add(3, c);
@@ -1157,9 +1171,9 @@ fn trace_camera(
         }
         path.prev = si.receiver().sky_by_bsdf();
         path.ray = si.spawn_ray(path.ray.d);
-        ctx.counters.secondary_rays.fetch_add(1, Ordering::Relaxed);
+        tally.secondary_rays += 1;
     }
-    (out, tally)
+    out
 }
 
 /// Radiance of area light `li` that a camera subpath hits, MIS-weighted (the report's
@@ -1273,7 +1287,6 @@ fn light_sample(
     if !c.is_finite() || c.max_element() <= 0.0 {
         return Vec3::ZERO;
     }
-    ctx.counters.shadow_rays.fetch_add(1, Ordering::Relaxed);
     tally.rays[1] += 1;
     if ctx.accel.occluded(RayKind::Shadow, &si.shadow_ray(&s)) {
         return Vec3::ZERO;
@@ -1388,17 +1401,11 @@ fn connect(
 /// The merges of camera vertex `v` at `p` with the light vertices within the radius (the
 /// report's range query), before the `1 / (pi r^2 N)` normalisation, and how many light
 /// vertices were within the radius.
-fn merge(
-    wt: &Weights,
-    path: &SubPath,
-    v: &Vertex,
-    p: Vec3,
-    all: &[LightVertex],
-    g: &Grid,
-) -> (Vec3, u64) {
+fn merge(wt: &Weights, path: &SubPath, v: &Vertex, p: Vec3, m: &Merging) -> (Vec3, u64) {
     let (mut sum, mut found) = (Vec3::ZERO, 0);
-    g.query(p, |k| {
-        let lv = &all[k as usize];
+    let g = m.grid.get_or_init(|| Grid::new(m.store, m.radius));
+    g.query(p, |id| {
+        let lv = m.store.get(id);
         if (lv.p - p).length_squared() > wt.radius2 || lv.len + path.len > wt.max_len {
             return;
         }
@@ -1420,41 +1427,87 @@ fn merge(
     (sum, found)
 }
 
+/// One iteration's light vertices, left in the chunks that traced them (copying 240-byte
+/// vertices into one array cost 5% of vcm's time on one thread).
+struct Store {
+    chunks: Vec<ChunkOut>,
+}
+
+impl Store {
+    /// The vertices of light subpath `k`.
+    fn own(&self, k: usize) -> &[LightVertex] {
+        let c = &self.chunks[k / CHUNK];
+        let j = k % CHUNK;
+        let start = if j == 0 { 0 } else { c.ends[j - 1] as usize };
+        &c.vertices[start..c.ends[j] as usize]
+    }
+
+    /// The vertex with id `chunk << 32 | index`.
+    fn get(&self, id: u64) -> &LightVertex {
+        &self.chunks[(id >> 32) as usize].vertices[id as u32 as usize]
+    }
+
+    fn len(&self) -> usize {
+        self.chunks.iter().map(|c| c.vertices.len()).sum()
+    }
+}
+
+/// What merging at a camera vertex reads: the light vertices and their grid, built on
+/// first use.
+struct Merging<'a> {
+    store: &'a Store,
+    grid: &'a std::sync::OnceLock<Grid>,
+    radius: f32,
+}
+
 /// A uniform grid of cell size `2r` hashed into as many buckets as there are vertices
 /// (the report's hash grid), built by a counting sort so that queries visit vertices in a
 /// fixed order.
 struct Grid {
     lo: Vec3,
     inv_cell: f32,
-    /// Bucket `b` holds `order[starts[b]..starts[b + 1]]`.
+    /// Bucket `b` holds `order[starts[b]..starts[b + 1]]` (vertex ids, see [`Store::get`]).
     starts: Vec<u32>,
-    order: Vec<u32>,
+    order: Vec<u64>,
 }
 
 impl Grid {
-    fn new(vertices: &[LightVertex], radius: f32) -> Grid {
-        let lo = vertices
+    fn new(store: &Store, radius: f32) -> Grid {
+        let lo = store
+            .chunks
             .iter()
+            .flat_map(|c| &c.vertices)
             .fold(Vec3::splat(f32::INFINITY), |a, v| a.min(v.p));
         let inv_cell = 1.0 / (2.0 * radius);
-        let buckets = vertices.len().max(1);
+        let len = store.len();
         let mut g = Grid {
             lo,
             inv_cell,
-            starts: vec![0; buckets + 1],
-            order: vec![0; vertices.len()],
+            starts: vec![0; len.max(1) + 1],
+            order: vec![0; len],
         };
-        let keys: Vec<usize> = vertices.iter().map(|v| g.bucket(g.cell(v.p))).collect();
-        for &b in &keys {
-            g.starts[b + 1] += 1;
+        let keys: Vec<Vec<u32>> = store
+            .chunks
+            .par_iter()
+            .map(|c| {
+                c.vertices
+                    .iter()
+                    .map(|v| g.bucket(g.cell(v.p)) as u32)
+                    .collect()
+            })
+            .collect();
+        for &b in keys.iter().flatten() {
+            g.starts[b as usize + 1] += 1;
         }
-        for b in 0..buckets {
+        for b in 0..len.max(1) {
             g.starts[b + 1] += g.starts[b];
         }
         let mut next = g.starts.clone();
-        for (k, &b) in keys.iter().enumerate() {
-            g.order[next[b] as usize] = k as u32;
-            next[b] += 1;
+        for (c, ks) in keys.iter().enumerate() {
+            for (k, &b) in ks.iter().enumerate() {
+                g.order[next[b as usize] as usize] = (c as u64) << 32 | k as u64;
+                next[b as usize] += 1;
+            }
         }
         g
     }
@@ -1473,7 +1526,7 @@ impl Grid {
 
     /// Calls `f` with every vertex of the (up to 8) cells that a sphere of radius `r` about
     /// `p` touches, and possibly others sharing their buckets.
-    fn query(&self, p: Vec3, mut f: impl FnMut(u32)) {
+    fn query(&self, p: Vec3, mut f: impl FnMut(u64)) {
         if self.order.is_empty() {
             return;
         }
