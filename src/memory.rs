@@ -174,7 +174,7 @@ pub fn estimate(
                 .saturating_add(paths.saturating_mul(4 + 2 * RADIANCE_BYTES)),
         ));
         e.what += &format!(
-            ", {paths} light subpaths x{:.2} vertices x {} B",
+            ", {paths} pixels x{:.2} light vertices x {} B",
             per.subpath * PILOT_MARGIN,
             crate::integrator::vcm::LIGHT_VERTEX_BYTES
         );

@@ -8,10 +8,11 @@
 //! Georgiev, Křivánek, Davidovič & Slusallek, "Light transport simulation with vertex
 //! connection and merging" (2012), in the formulation of their technical report
 //! ("Implementing vertex connection and merging"): each iteration (one per sample per pixel)
-//! traces one light subpath per pixel of the image, keeps its non-delta vertices, and splats
-//! each of them to the camera (light tracing); then every pixel traces one camera subpath
-//! that, at each non-delta vertex, takes a light sample (next-event estimation), connects to
-//! every vertex of the light subpath with its own index (bidirectional connections) and
+//! traces light subpaths, one per pixel or a fraction of that (`--light-paths`, else chosen
+//! by a pilot: [`light_fraction`]), keeps their non-delta vertices, and splats each of them
+//! to the camera (light tracing); then every pixel traces one camera subpath that, at each
+//! non-delta vertex, takes a light sample (next-event estimation), connects to every vertex
+//! of light subpath `k mod m` (`k` the pixel's index, `m` the light subpaths) and
 //! merges with the light vertices of all subpaths within the merge radius (photon density
 //! estimation, from a hash grid). Multiple importance sampling weighs every technique by the
 //! balance heuristic through the recursive partial sums `dVCM`, `dVC`, `dVM` of each subpath,
@@ -138,6 +139,9 @@ pub struct VcmSettings {
     /// VCM merges at every non-delta vertex (`--all-merges`), not only where connections
     /// cannot reach (the default, see [`merges_at`]).
     pub all_merges: bool,
+    /// Light subpaths per iteration as a fraction of the pixels (`--light-paths`), in
+    /// (0, 1]; `None`: chosen by a pilot ([`light_fraction`]).
+    pub light_paths: Option<f32>,
 }
 
 impl Default for VcmSettings {
@@ -147,6 +151,7 @@ impl Default for VcmSettings {
             alpha: 0.75,
             first: 0,
             all_merges: false,
+            light_paths: None,
         }
     }
 }
@@ -475,6 +480,9 @@ pub fn render(
     let [bx0, bx1, by0, by1] = s.pixel_bounds();
     let (w, h) = ((bx1 - bx0) as usize, (by1 - by0) as usize);
     let n = w * h;
+    // Light subpaths per iteration; camera subpath k connects to light subpath k mod m.
+    let fraction = light_fraction(ctx.scene, ctx.accel, ctx.lights, &ctx.settings, technique);
+    let m = ((n as f64 * fraction as f64).ceil() as usize).clamp(1, n);
     let iterations = s.spp.max(1);
     let mut sum = vec![Radiance::default(); n];
     let r0 = initial_radius(ctx).max(1e-7);
@@ -495,7 +503,7 @@ pub fn render(
             ..Weights::new(
                 technique,
                 radius.max(1e-7),
-                n,
+                m,
                 s.max_depth,
                 s.vcm.all_merges,
             )
@@ -503,11 +511,11 @@ pub fn render(
         radii = (if it == 0 { radius } else { radii.0 }, radius);
         let t0 = std::time::Instant::now();
         // Light subpaths, chunk by chunk in parallel.
-        let chunks: Vec<ChunkOut> = (0..n.div_ceil(CHUNK))
+        let chunks: Vec<ChunkOut> = (0..m.div_ceil(CHUNK))
             .into_par_iter()
             .map(|c| {
                 let mut out = ChunkOut::default();
-                for k in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                for k in c * CHUNK..((c + 1) * CHUNK).min(m) {
                     trace_light(ctx, &wt, k as u64, it, &mut out);
                     out.ends.push(out.vertices.len() as u32);
                 }
@@ -544,7 +552,7 @@ pub fn render(
                 .map(|(y, row)| {
                     let mut t = Tally::default();
                     for (x, px) in row.iter_mut().enumerate() {
-                        let own = store.own(y * w + x);
+                        let own = store.own((y * w + x) % m);
                         let p = (bx0 + x as u32, by0 + y as u32);
                         *px += trace_camera(ctx, &wt, p, it, own, grid.as_ref(), &mut t);
                     }
@@ -572,10 +580,11 @@ pub fn render(
         .collect();
     let paths = (n as u64 * done.max(1) as u64) as f64;
     let mut notes = vec![format!(
-        "{technique:?}: {done} iterations of {n} light and {n} camera subpaths; {:.2} light \
-         vertices kept per subpath; light subpaths {light_s:.2} s, camera subpaths \
-         {camera_s:.2} s",
-        stored as f64 / paths
+        "{technique:?}: {done} iterations of {m} light ({:.3} of the pixels) and {n} camera \
+         subpaths; {:.2} light vertices kept per light subpath; light subpaths {light_s:.2} s, \
+         camera subpaths {camera_s:.2} s",
+        m as f64 / n as f64,
+        stored as f64 / (m as f64 * done.max(1) as f64)
     )];
     notes.push(format!(
         "{technique:?}: share of the image: {}",
@@ -719,7 +728,122 @@ pub fn pilot(
             out.vertices.len()
         })
         .sum();
-    kept as f64 / PILOT_SUBPATHS as f64
+    // Per pixel: the render traces a fraction of a light subpath per pixel.
+    let fraction = light_fraction(scene, accel, &lights, settings, technique) as f64;
+    fraction * kept as f64 / PILOT_SUBPATHS as f64
+}
+
+/// Camera subpaths (and as many light subpaths) of the pilot that [`light_fraction`] runs.
+const SHARE_PILOT_PIXELS: usize = 4096;
+
+/// Light subpaths per pixel are this many times the share of the image that the light
+/// subpaths' techniques carry (light tracing, connections, merges), within
+/// [[`MIN_LIGHT_FRACTION`], 1].
+const LIGHT_SHARE_GAIN: f64 = 2.0;
+const MIN_LIGHT_FRACTION: f64 = 1.0 / 16.0;
+
+/// Light subpaths per iteration as a fraction of the pixels: `--light-paths` if given,
+/// 1 for `lighttracer` and `bpm` (their light subpaths are everything), else chosen by a
+/// pilot, a VCM iteration of [`SHARE_PILOT_PIXELS`] camera subpaths spread over the image
+/// and as many light subpaths (weighted as the full render's), as [`LIGHT_SHARE_GAIN`]
+/// times the share of its image that light tracing, connections and merges carry.
+/// Every light subpath costs as much as a camera subpath whether its techniques count or
+/// not: material-testball (a ball under a uniform sky, which BSDF sampling takes) gets
+/// none of its image from them, dragon 2.5% (a diffuse scene under a distant light, whose
+/// light samples are exact up to visibility), the Cornell box 19%, veach-bidir most.
+/// The pilot's seed is fixed, so every pass of a render and its memory estimate agree.
+pub fn light_fraction(
+    scene: &crate::scene::Scene,
+    accel: &crate::accel::Accel,
+    lights: &crate::light::Lights,
+    settings: &super::RenderSettings,
+    technique: Technique,
+) -> f32 {
+    if let Some(f) = settings.vcm.light_paths {
+        return f;
+    }
+    if !matches!(technique, Technique::Vcm | Technique::Bdpt) {
+        return 1.0;
+    }
+    let mut s = settings.clone();
+    s.seed = crate::sampling::hash(&[0x7368_6172_6520_7069]);
+    s.spp = 1;
+    let ctx = RenderContext {
+        scene,
+        accel,
+        lights,
+        camera: crate::camera::Camera::new(&scene.camera, s.width, s.height),
+        filter: crate::film::Filter::new(&scene.filter),
+        settings: s,
+        counters: super::Counters::default(),
+        photons: None,
+        variance: None,
+    };
+    let [bx0, bx1, by0, by1] = ctx.settings.pixel_bounds();
+    let w = (bx1 - bx0) as usize;
+    let n = w * (by1 - by0) as usize;
+    let p = n.min(SHARE_PILOT_PIXELS);
+    if p == 0 {
+        return 1.0;
+    }
+    let r0 = initial_radius(&ctx).max(1e-7);
+    let mut wt = Weights {
+        aim: light_aim(&ctx),
+        ..Weights::new(
+            technique,
+            r0,
+            n,
+            ctx.settings.max_depth,
+            ctx.settings.vcm.all_merges,
+        )
+    };
+    // Merges find the vertices of p light subpaths, not of n.
+    wt.vm_norm = 1.0 / (std::f32::consts::PI * r0 * r0 * p as f32);
+    let chunks: Vec<ChunkOut> = (0..p.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let mut out = ChunkOut::default();
+            for k in c * CHUNK..((c + 1) * CHUNK).min(p) {
+                trace_light(&ctx, &wt, k as u64, 0, &mut out);
+                out.ends.push(out.vertices.len() as u32);
+            }
+            out
+        })
+        .collect();
+    // Splats divide by n light subpaths and camera subpaths cover p pixels: over p light
+    // subpaths, both sums are p / n of the full render's.
+    let mut tally = Tally::default();
+    for c in &chunks {
+        for &(_, v, _) in &c.splats {
+            tally.add(4, v);
+        }
+    }
+    let store = Store { chunks };
+    let grid = std::sync::OnceLock::new();
+    let merging = wt.use_vm.then_some(Merging {
+        store: &store,
+        grid: &grid,
+        radius: r0,
+    });
+    let tallies: Vec<Tally> = (0..p)
+        .into_par_iter()
+        .map(|j| {
+            let k = j * n / p;
+            let px = (bx0 + (k % w) as u32, by0 + (k / w) as u32);
+            let mut t = Tally::default();
+            trace_camera(&ctx, &wt, px, 0, store.own(j), merging.as_ref(), &mut t);
+            t
+        })
+        .collect();
+    for t in &tallies {
+        tally.absorb(t);
+    }
+    let total: f64 = tally.sums.iter().sum();
+    if !(total > 0.0 && total.is_finite()) {
+        return 1.0;
+    }
+    let share = (tally.sums[2] + tally.sums[3] + tally.sums[4]) / total;
+    (LIGHT_SHARE_GAIN * share).clamp(MIN_LIGHT_FRACTION, 1.0) as f32
 }
 
 /// Adds `v` at continuous raster position `p` to the pixels whose filter covers it, each

@@ -42,6 +42,8 @@ pub struct Overrides {
     pub merge_radius: Option<crate::integrator::vcm::MergeRadius>,
     /// VCM merges at every non-delta vertex.
     pub all_merges: bool,
+    /// VCM's and bdpt's light subpaths per pixel (`None`: chosen by a pilot).
+    pub light_paths: Option<f32>,
     /// Progressive photon mapping (also switched on by the file).
     pub progressive: bool,
     /// Samples per pixel of each pass.
@@ -154,6 +156,9 @@ impl<'a> Job<'a> {
             s.vcm.radius = r;
         }
         s.vcm.all_merges |= o.all_merges;
+        if o.light_paths.is_some() {
+            s.vcm.light_paths = o.light_paths;
+        }
         s.photon.progressive |= o.progressive;
         if let Some(n) = o.pass_spp {
             s.pass_spp = n.max(1);

@@ -117,6 +117,12 @@ pub struct RenderOptions {
     /// vertices seen through a purely specular surface (paths no connection samples).
     #[arg(long)]
     pub all_merges: bool,
+    /// VCM's and bdpt's light subpaths per iteration as a fraction of the pixels, in (0, 1]
+    /// (camera subpath k connects to light subpath k mod their number); default: chosen by a
+    /// pilot iteration from the share of the image that light tracing, connections and
+    /// merges carry (twice it, at least 1/16).
+    #[arg(long, value_parser = super::float_in(0.0, 1.0, true))]
+    pub light_paths: Option<f32>,
     /// Data channels to write beside the image (EXR only), comma-separated or repeated:
     /// `alpha` (A), `albedo` and `normal` (the denoiser's guides, at the first surface that is
     /// not a mirror or smooth glass), `depth` (Z, camera space), `position` (P, world space).
@@ -231,6 +237,7 @@ impl RenderOptions {
             alpha: self.passes.alpha,
             merge_radius: self.merge_radius,
             all_merges: self.all_merges,
+            light_paths: self.light_paths,
             progressive: self.passes.progressive,
             pass_spp: self.passes.pass_spp,
             crop: self.pixelbounds.or(self.cropwindow),
