@@ -324,6 +324,28 @@ pub struct RenderContext<'a> {
     pub variance: Option<std::sync::Mutex<Vec<[f32; 6]>>>,
 }
 
+impl<'a> RenderContext<'a> {
+    /// A context for `settings` without photon maps or a variance buffer (pilots, AOVs).
+    pub fn new(
+        scene: &'a Scene,
+        accel: &'a Accel,
+        lights: &'a Lights,
+        settings: RenderSettings,
+    ) -> Self {
+        RenderContext {
+            scene,
+            accel,
+            lights,
+            camera: Camera::new(&scene.camera, settings.width, settings.height),
+            filter: Filter::new(&scene.filter),
+            settings,
+            counters: Counters::default(),
+            photons: None,
+            variance: None,
+        }
+    }
+}
+
 /// Whether `kind` renders `scene` right: the path tracer and the direct integrator track the
 /// medium each ray is in (the photon mapper renders such scenes with the path tracer, adding
 /// its volume map's beam estimates), so scenes whose media need that
@@ -567,18 +589,12 @@ pub fn render_prepared(
         crate::spectrum::fit_table();
     }
     let ctx = RenderContext {
-        scene,
-        accel,
-        lights,
-        camera: Camera::new(&scene.camera, settings.width, settings.height),
-        filter: Filter::new(&scene.filter),
-        settings: settings.clone(),
-        counters: Counters::default(),
         photons,
         variance: (settings.aovs.gbuffer.is_some() && kind.technique().is_none()).then(|| {
             let (w, h) = settings.image_size();
             std::sync::Mutex::new(vec![[0.0; 6]; w as usize * h as usize])
         }),
+        ..RenderContext::new(scene, accel, lights, settings.clone())
     };
     let [bx0, w, by0, h] = settings.pixel_bounds();
     let tiles: Vec<(u32, u32)> = (by0..h)
@@ -697,17 +713,7 @@ pub fn render_aovs(
     out: &RenderOutput,
 ) -> aov::Channels {
     let lights = scene.emitters();
-    let ctx = RenderContext {
-        scene,
-        accel,
-        lights: &lights,
-        camera: Camera::new(&scene.camera, settings.width, settings.height),
-        filter: Filter::new(&scene.filter),
-        settings: settings.clone(),
-        counters: Counters::default(),
-        photons: None,
-        variance: None,
-    };
+    let ctx = RenderContext::new(scene, accel, &lights, settings.clone());
     let mut channels = aov::render(&ctx, &settings.aovs);
     if let (Some(_), Some(v)) = (settings.aovs.gbuffer, &out.variance) {
         let names = [

@@ -695,17 +695,7 @@ pub fn pilot(
     let lights = scene.emitters();
     let mut s = settings.clone();
     s.seed = crate::sampling::hash(&[settings.seed, 0x0070_696c_6f74]);
-    let ctx = RenderContext {
-        scene,
-        accel,
-        lights: &lights,
-        camera: crate::camera::Camera::new(&scene.camera, s.width, s.height),
-        filter: crate::film::Filter::new(&scene.filter),
-        settings: s,
-        counters: super::Counters::default(),
-        photons: None,
-        variance: None,
-    };
+    let ctx = RenderContext::new(scene, accel, &lights, s);
     let (_, radius) = lights.scene_sphere();
     let all = settings.vcm.all_merges;
     let wt = Weights {
@@ -768,17 +758,7 @@ pub fn light_fraction(
     let mut s = settings.clone();
     s.seed = crate::sampling::hash(&[0x7368_6172_6520_7069]);
     s.spp = 1;
-    let ctx = RenderContext {
-        scene,
-        accel,
-        lights,
-        camera: crate::camera::Camera::new(&scene.camera, s.width, s.height),
-        filter: crate::film::Filter::new(&scene.filter),
-        settings: s,
-        counters: super::Counters::default(),
-        photons: None,
-        variance: None,
-    };
+    let ctx = RenderContext::new(scene, accel, lights, s);
     let [bx0, bx1, by0, by1] = ctx.settings.pixel_bounds();
     let w = (bx1 - bx0) as usize;
     let n = w * (by1 - by0) as usize;
