@@ -269,6 +269,63 @@ fn worst_relative(a: &RgbImage, b: &RgbImage) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// A panel 0.02 above a floor, in the shadow of a black blocker out of view, under a
+/// distant light: nothing lights the panel's top (the floor is below its plane, the blocker
+/// is black), so its image is exactly black, while the floor around it is lit. Merging with
+/// a radius of 0.3 (fifteen times the gap) must not take the floor's light vertices for the
+/// panel's: before they had to lie on the camera vertex's surface, bpm's panel was lit
+/// within the merge radius of its edges.
+#[test]
+fn merges_stay_on_their_surface() {
+    let text = r#"LookAt 0 3 0  0 0 0  0 0 1
+Camera "perspective" "float fov" [ 40 ]
+Film "rgb" "integer xresolution" [ 32 ] "integer yresolution" [ 32 ]
+WorldBegin
+LightSource "distant" "point3 from" [ 2 1 0 ] "point3 to" [ 0 0 0 ] "rgb L" [ 3 3 3 ]
+Material "diffuse" "rgb reflectance" [ 0.5 0.5 0.5 ]
+Shape "trianglemesh" "point3 P" [ -3 0 -3  3 0 -3  3 0 3  -3 0 3 ] "integer indices" [ 0 2 1 0 3 2 ]
+Shape "trianglemesh" "point3 P" [ -0.5 0.02 -0.5  0.5 0.02 -0.5  0.5 0.02 0.5  -0.5 0.02 0.5 ]
+  "integer indices" [ 0 2 1 0 3 2 ]
+Material "diffuse" "rgb reflectance" [ 0 0 0 ]
+Shape "trianglemesh" "point3 P" [ 1.44 1 -0.52  2.48 1 -0.52  2.48 1 0.52  1.44 1 0.52 ]
+  "integer indices" [ 0 2 1 0 3 2 ]
+"#;
+    let file = common::write_scene("bidirectional", "panel-above-floor", text);
+    let scene = loader::load(&file).expect("scene loads");
+    // 0.3 in scene units (of the scene's bounding sphere's radius, about 4.3).
+    let (lo, hi) = scene.bounds();
+    let radius = 0.3 / ((hi - lo).length() / 2.0);
+    let image = render_small(
+        &scene,
+        IntegratorKind::Bpm,
+        (32, 32, 4),
+        7,
+        Merging(radius, false, None),
+    );
+    let mean = |x0: usize, x1: usize, y0: usize, y1: usize| {
+        let mut sum = 0.0f64;
+        for y in y0..y1 {
+            for x in x0..x1 {
+                sum += image.pixels[y * 32 + x]
+                    .iter()
+                    .map(|&v| v as f64)
+                    .sum::<f64>()
+                    / 3.0;
+            }
+        }
+        sum / ((x1 - x0) * (y1 - y0)) as f64
+    };
+    // Pixels 10..22 see the panel within 0.41 of its centre (the path tracer: exactly 0
+    // there, 0.0008 over 9..23, whose pixels straddle its edges); 0..4 see the lit floor.
+    let (panel, floor) = (mean(10, 22, 10, 22), mean(0, 32, 0, 4));
+    println!("bpm, merge radius 0.3: panel {panel:.5}, floor {floor:.4}");
+    assert!(floor > 0.1, "the floor is lit: {floor}");
+    assert!(
+        panel < 0.002 * floor,
+        "the panel took the floor's light: {panel} against the floor's {floor}"
+    );
+}
+
 /// Without a purely specular surface VCM makes no merge by default, and its weights count
 /// none: its image is bdpt's (Cornell box, 32x32, 4 spp; to rounding).
 #[test]
