@@ -14,9 +14,10 @@
 //! non-delta vertex, takes a light sample (next-event estimation), connects to every vertex
 //! of light subpath `k mod m` (`k` the pixel's index, `m` the light subpaths) and
 //! merges with the light vertices of all subpaths within the merge radius that lie on its
-//! surface (photon density estimation, from a hash grid; see `on_surface`). Multiple importance sampling weighs every technique by the
-//! balance heuristic through the recursive partial sums `dVCM`, `dVC`, `dVM` of each subpath,
-//! so no technique's path is counted twice, with one exception to the balance heuristic:
+//! surface (photon density estimation, from a hash grid; see `on_surface`). Multiple
+//! importance sampling weighs every technique by the balance heuristic through the
+//! recursive partial sums `dVCM`, `dVC`, `dVM` of each subpath, so no technique's path is
+//! counted twice, with one exception to the balance heuristic:
 //! direct light (light, surface, camera) at a surface without glossy or specular lobes is
 //! left to light samples and emission hits, light tracing's density counting 0 in its
 //! weights ([`DIRECT_LIGHT_TRACING`]). Light samples are the path tracer's: a light picked
