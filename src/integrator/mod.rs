@@ -56,7 +56,8 @@ pub enum IntegratorKind {
     /// Russian roulette after 3 bounces (`direct` and `indirect` components).
     Path,
     /// Vertex connection and merging: bidirectional connections and photon merging weighed
-    /// by multiple importance sampling; light subpaths per sample chosen by a pilot (`--light-paths`).
+    /// by multiple importance sampling; light subpaths per sample chosen by a pilot
+    /// (`--light-paths`).
     Vcm,
     /// Bidirectional path tracing (VCM without merging).
     Bdpt,

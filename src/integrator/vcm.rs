@@ -1536,8 +1536,6 @@ fn merge(wt: &Weights, path: &SubPath, v: &Vertex, p: Vec3, m: &Merging) -> (Vec
     (sum, found)
 }
 
-/// One iteration's light vertices, left in the chunks that traced them (copying 240-byte
-/// vertices into one array cost 5% of vcm's time on one thread).
 /// How far from a camera vertex's tangent plane, as a fraction of the merge radius, a light
 /// vertex on a surface of the same orientation is still merged there (see [`on_surface`]).
 const MERGE_THICKNESS: f32 = 0.05;
@@ -1555,6 +1553,8 @@ fn on_surface(d: Vec3, n: Vec3, n_light: Vec3, radius: f32) -> bool {
     d.dot(n).abs() <= MERGE_THICKNESS * radius + d.length() * n.cross(n_light).length()
 }
 
+/// One iteration's light vertices, left in the chunks that traced them (copying 240-byte
+/// vertices into one array cost 5% of vcm's time on one thread).
 struct Store {
     chunks: Vec<ChunkOut>,
 }
