@@ -512,20 +512,7 @@ pub fn render(
         radii = (if it == 0 { radius } else { radii.0 }, radius);
         let t0 = std::time::Instant::now();
         // Light subpaths, chunk by chunk in parallel.
-        let chunks: Vec<ChunkOut> = (0..m.div_ceil(CHUNK))
-            .into_par_iter()
-            .map(|c| {
-                let mut out = ChunkOut::default();
-                for k in c * CHUNK..((c + 1) * CHUNK).min(m) {
-                    trace_light(ctx, &wt, k as u64, it, &mut out);
-                    out.ends.push(out.vertices.len() as u32);
-                }
-                // Exact sizes: every chunk is alive until the iteration's end.
-                out.vertices.shrink_to_fit();
-                out.splats.shrink_to_fit();
-                out
-            })
-            .collect();
+        let chunks = trace_lights(ctx, &wt, m, it);
         film.fill(Radiance::default());
         for c in &chunks {
             for &(p, v, comp) in &c.splats {
@@ -780,17 +767,7 @@ pub fn light_fraction(
     };
     // Merges find the vertices of p light subpaths, not of n.
     wt.vm_norm = 1.0 / (std::f32::consts::PI * r0 * r0 * p as f32);
-    let chunks: Vec<ChunkOut> = (0..p.div_ceil(CHUNK))
-        .into_par_iter()
-        .map(|c| {
-            let mut out = ChunkOut::default();
-            for k in c * CHUNK..((c + 1) * CHUNK).min(p) {
-                trace_light(&ctx, &wt, k as u64, 0, &mut out);
-                out.ends.push(out.vertices.len() as u32);
-            }
-            out
-        })
-        .collect();
+    let chunks = trace_lights(&ctx, &wt, p, 0);
     // Splats divide by n light subpaths and camera subpaths cover p pixels: over p light
     // subpaths, both sums are p / n of the full render's.
     let mut tally = Tally::default();
@@ -990,6 +967,25 @@ fn arrive(path: &mut SubPath, hit_t: f32, cos_in: f32) {
     path.direct_dvc /= c;
     path.pending_vc /= c;
     path.pending_vm /= c;
+}
+
+/// Traces light subpaths `0..m` of iteration `it`, chunk by chunk in parallel (the render's
+/// and the pilot's).
+fn trace_lights(ctx: &RenderContext, wt: &Weights, m: usize, it: u32) -> Vec<ChunkOut> {
+    (0..m.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let mut out = ChunkOut::default();
+            for k in c * CHUNK..((c + 1) * CHUNK).min(m) {
+                trace_light(ctx, wt, k as u64, it, &mut out);
+                out.ends.push(out.vertices.len() as u32);
+            }
+            // Exact sizes: every chunk is alive until the iteration's end.
+            out.vertices.shrink_to_fit();
+            out.splats.shrink_to_fit();
+            out
+        })
+        .collect()
 }
 
 /// Traces light subpath `k` of iteration `it`: keeps its non-delta vertices in `out` and
